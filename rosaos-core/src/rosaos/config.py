@@ -1,0 +1,192 @@
+"""Configuration: ``rosaos.toml`` plus ``ROSAOS_*`` environment variables, via pydantic-settings.
+
+The file is found in this order: ``--config PATH``, then ``$ROSAOS_CONFIG``, then
+``./rosaos.toml``, then ``<user config dir>/rosaos/rosaos.toml``. No file is fine: the demo world
+is used. Environment variables override the file; nested keys use ``__``
+(``ROSAOS_KERNEL__PORT=9000``).
+
+A bad file fails at start with :class:`ConfigError`, naming the file, the key and the reason.
+"""
+
+from __future__ import annotations
+
+import os
+import tomllib
+from contextvars import ContextVar
+from pathlib import Path
+from typing import Any, Literal
+
+import platformdirs
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic_settings import (
+    BaseSettings,
+    PydanticBaseSettingsSource,
+    SettingsConfigDict,
+    TomlConfigSettingsSource,
+)
+
+CONFIG_ENV = "ROSAOS_CONFIG"
+CONFIG_FILENAME = "rosaos.toml"
+DEFAULT_KERNEL_PORT = 8765
+
+
+class ConfigError(Exception):
+    """Configuration that cannot be used. The message names the file, the key and the reason."""
+
+
+class DeviceConfig(BaseModel):
+    """One ``[devices.NAME]`` table. Keys not listed here are the driver's own settings."""
+
+    model_config = ConfigDict(extra="allow")
+
+    driver: str
+    backend: Literal["sim", "real"] = "sim"
+    """``sim`` unless you say otherwise: rosaOS never actuates hardware you did not opt into."""
+    description: str | None = None
+    """Overrides the driver's description; the kernel reads it to pick devices."""
+    url: str | None = None
+    """A remote instance served elsewhere by ``rosaos serve-device``; no local process is started."""
+    token: str | None = None
+    """Bearer token of a remote instance; defaults to this machine's token."""
+    port: int | None = Field(default=None, ge=1, le=65535)
+    """Fixed loopback port for a local instance; a free port is chosen when unset."""
+    sim: dict[str, Any] = Field(default_factory=dict)
+    """Initial simulator state and sim-only settings."""
+
+    def driver_settings(self) -> dict[str, Any]:
+        """The keys that belong to the driver's own settings model."""
+        return dict(self.model_extra or {})
+
+
+class KernelConfig(BaseModel):
+    """``[kernel]``: the event queue, the kernel agent and the worker pool."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    host: str = "127.0.0.1"
+    port: int = Field(default=DEFAULT_KERNEL_PORT, ge=1, le=65535)
+    pool_size: int = Field(default=2, ge=0, le=32)
+    """Warm worker subprocesses kept ready. A one-off worker is spawned when all are busy."""
+    job_timeout: float = Field(default=120.0, gt=0, le=3600)
+    """Seconds a process agent may run before it is killed and its leases released."""
+    request_limit: int = Field(default=30, ge=1, le=1000)
+    """Model requests one process agent may make (pydantic-ai usage limit)."""
+    history_messages: int = Field(default=40, ge=2, le=1000)
+    """Kernel conversation budget: older messages are trimmed beyond this many."""
+    kernel_prompt: str | None = None
+    """Replaces the built-in kernel prompt; ``{devices}`` is filled with the device list."""
+    process_prompt: str | None = None
+    """Replaces the built-in base process prompt."""
+
+
+class ModelConfig(BaseModel):
+    """``[models]``: which model the kernel and the process agents use.
+
+    ``kernel``/``process`` take any pydantic-ai model string (``openai:gpt-5.2``,
+    ``anthropic:...``, ``google-gla:...``, ``groq:...``), or ``openai-compatible`` together with
+    ``base_url`` and ``model_name`` (vLLM, Ollama, llama.cpp). Unset means the offline default.
+    Keys come from the provider's usual environment variable (``OPENAI_API_KEY``, ...).
+    """
+
+    model_config = ConfigDict(extra="forbid")
+
+    kernel: str | None = None
+    process: str | None = None
+    base_url: str | None = None
+    api_key: str | None = None
+    model_name: str | None = None
+    prefer_local: bool = True
+    language: str = "en"
+
+
+def default_data_dir() -> Path:
+    return Path(platformdirs.user_data_dir("rosaos", appauthor=False))
+
+
+def user_config_file() -> Path:
+    return Path(platformdirs.user_config_dir("rosaos", appauthor=False)) / CONFIG_FILENAME
+
+
+_config_file: ContextVar[Path | None] = ContextVar("rosaos_config_file", default=None)
+
+
+class RosaosConfig(BaseSettings):
+    """The whole configuration. Build it with :func:`load_config`."""
+
+    model_config = SettingsConfigDict(env_prefix="ROSAOS_", env_nested_delimiter="__", extra="forbid")
+
+    data_dir: Path = Field(default_factory=default_data_dir)
+    """Event store, token, caches and images. Default: the user data directory."""
+    devices: dict[str, DeviceConfig] = Field(default_factory=dict)
+    kernel: KernelConfig = Field(default_factory=KernelConfig)
+    models: ModelConfig = Field(default_factory=ModelConfig)
+
+    @classmethod
+    def settings_customise_sources(
+        cls,
+        settings_cls: type[BaseSettings],
+        init_settings: PydanticBaseSettingsSource,
+        env_settings: PydanticBaseSettingsSource,
+        dotenv_settings: PydanticBaseSettingsSource,
+        file_secret_settings: PydanticBaseSettingsSource,
+    ) -> tuple[PydanticBaseSettingsSource, ...]:
+        sources: list[PydanticBaseSettingsSource] = [init_settings, env_settings]
+        path = _config_file.get()
+        if path is not None:
+            sources.append(TomlConfigSettingsSource(settings_cls, toml_file=path))
+        return tuple(sources)
+
+    # Where the configuration came from; None for "no file, demo world".
+    source: Path | None = Field(default=None, exclude=True)
+
+    @property
+    def token_file(self) -> Path:
+        return self.data_dir / "token"
+
+
+def find_config_file(explicit: Path | None = None) -> Path | None:
+    """Locate ``rosaos.toml``: explicit path, ``$ROSAOS_CONFIG``, working dir, user config dir."""
+    if explicit is not None:
+        if not explicit.is_file():
+            raise ConfigError(f"{explicit}: no such config file")
+        return explicit
+    from_env = os.environ.get(CONFIG_ENV)
+    if from_env:
+        path = Path(from_env)
+        if not path.is_file():
+            raise ConfigError(f"{path}: no such config file (from ${CONFIG_ENV})")
+        return path
+    for candidate in (Path.cwd() / CONFIG_FILENAME, user_config_file()):
+        if candidate.is_file():
+            return candidate
+    return None
+
+
+def load_config(explicit: Path | None = None, **overrides: Any) -> RosaosConfig:
+    """Find, read and validate the configuration. ``overrides`` win over file and env."""
+    path = find_config_file(explicit)
+    where = str(path) if path else "environment"
+    if path is not None:
+        try:
+            tomllib.loads(path.read_text(encoding="utf-8"))
+        except tomllib.TOMLDecodeError as error:
+            raise ConfigError(f"{path}: not valid TOML: {error}") from None
+    token = _config_file.set(path)
+    try:
+        config = RosaosConfig(**overrides)
+    except ValidationError as error:
+        raise ConfigError(format_validation_error(where, error)) from None
+    finally:
+        _config_file.reset(token)
+    config.source = path
+    return config
+
+
+def format_validation_error(where: str, error: ValidationError, prefix: str = "") -> str:
+    """One line per problem: ``file: key.path: reason``."""
+    lines = []
+    for problem in error.errors():
+        key = ".".join(str(part) for part in problem["loc"])
+        key = f"{prefix}.{key}" if prefix and key else (prefix or key)
+        lines.append(f"{where}: {key}: {problem['msg']}")
+    return "\n".join(lines)

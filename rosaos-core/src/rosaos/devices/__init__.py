@@ -1,0 +1,1 @@
+"""Hosting device instances: serve, supervise, health-check, and reach remote ones."""

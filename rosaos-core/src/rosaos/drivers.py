@@ -1,0 +1,166 @@
+"""What a driver declares: :class:`DriverSpec`, and the types its factories receive and return.
+
+A driver is three factories and some data:
+
+- ``settings``: a pydantic model for one device instance (host, credentials, profile, ...).
+- ``backends``: ``{"sim": ..., "real": ...}``, each building a :class:`DeviceBackend` from a
+  :class:`DeviceContext`. ``sim`` is mandatory: every driver runs with no hardware.
+- ``server``: builds the instance's FastMCP server from the context and the backend.
+
+The hosting layer (:mod:`rosaos.devices`) owns the lifecycle: it validates settings, builds the
+backend, calls ``await backend.start()``, builds the server, serves it, and on shutdown calls
+``await backend.close()``. An emergency stop calls ``spec.safe_stop(backend)``, also exposed to
+clients as the ``safe_stop`` tool that the hosting layer adds to every device server.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Awaitable, Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+from fastmcp import FastMCP
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+Concurrency = Literal["exclusive", "shared"]
+"""How many live processes may hold one instance: ``exclusive`` means one, ``shared`` any."""
+
+BackendName = Literal["sim", "real"]
+
+DRIVER_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
+
+
+class DeviceSettings(BaseModel):
+    """Base class for a driver's per-instance settings. Unknown keys are an error, not ignored."""
+
+    model_config = ConfigDict(extra="forbid")
+
+
+class DeviceBackend:
+    """Base class for a driver backend: the object that talks to the device (or simulates it).
+
+    Override :meth:`start` and :meth:`close` when the backend holds a connection or a subprocess.
+    Blocking SDK calls belong in a thread (``asyncio.to_thread``), never on the event loop.
+    """
+
+    simulated: bool = False
+    """True for the ``sim`` backend; shown by ``rosaos devices list``."""
+
+    async def start(self) -> None:
+        """Connect or start the simulator. Raise :class:`DeviceError` with a fix-it message."""
+
+    async def close(self) -> None:
+        """Release connections and subprocesses. Called once, also after a failed start."""
+
+
+class DeviceError(Exception):
+    """A device-level failure whose message says what happened and what to try.
+
+    Tools let it propagate (FastMCP turns it into a tool error the model can read); the CLI
+    prints it without a traceback.
+    """
+
+
+@dataclass(frozen=True)
+class DeviceContext:
+    """Everything a backend or server factory gets to know about the instance it builds."""
+
+    instance: str
+    """The instance name the kernel sees, e.g. ``kitchen_light``."""
+    description: str
+    settings: BaseModel
+    """The validated ``spec.settings`` model for this instance."""
+    backend: BackendName
+    sim: Mapping[str, Any] = field(default_factory=dict)
+    """Initial simulator state and sim-only settings (the ``sim`` table of the instance)."""
+    data_dir: Path = Path(".")
+    """The rosaOS data directory; per-driver caches go in ``data_dir / "drivers" / <driver>``."""
+
+    @property
+    def images_dir(self) -> Path:
+        """Shared directory for images (camera captures) that tools return by relative path."""
+        return self.data_dir / "images"
+
+
+BackendFactory = Callable[[DeviceContext], DeviceBackend]
+ServerFactory = Callable[[DeviceContext, Any], FastMCP]
+SafeStop = Callable[[Any], Awaitable[None]]
+
+
+async def no_safe_stop(backend: Any) -> None:
+    """A ``safe_stop`` for devices whose emergency stop has nothing to do."""
+
+
+class DemoInstance(BaseModel):
+    """An instance this driver contributes to the built-in demo world (no config file)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    description: str
+    settings: dict[str, Any] = Field(default_factory=dict)
+    sim: dict[str, Any] = Field(default_factory=dict)
+
+
+class DriverSpec(BaseModel):
+    """The declaration a driver plugin hands to ``register`` in :func:`register_drivers`."""
+
+    model_config = ConfigDict(arbitrary_types_allowed=True, frozen=True)
+
+    name: str
+    """Driver name, as written in ``rosaos.toml``: lowercase letters, digits and underscores."""
+    title: str
+    """Human title, e.g. ``TP-Link Tapo smart bulb``."""
+    description: str
+    """What the device can do. The kernel reads it when choosing devices for a task."""
+    concurrency: Concurrency
+    """``exclusive``: one live process at a time. ``shared``: any number. Enforced by leases."""
+    always_attached: bool = False
+    """Granted to every process without being asked. True only for the user-interface device."""
+    prompt: str
+    """The device prompt appended to a process agent's system prompt when it holds the device."""
+    settings: type[BaseModel] = DeviceSettings
+    server: ServerFactory
+    backends: Mapping[BackendName, BackendFactory]
+    intents: Path | None = None
+    """Optional hassil-format ``intents.yaml`` mapping sentence templates to tool calls."""
+    safe_stop: SafeStop = no_safe_stop
+    """Awaitable called with the backend on an emergency stop: stop motion, cancel goals."""
+    demo: Mapping[str, DemoInstance] = Field(default_factory=dict)
+    """Instances this driver adds to the demo world; defaults to one instance named after it."""
+    implemented: bool = True
+    """False for a placeholder driver: listed, never served. Not an error."""
+
+    @field_validator("name")
+    @classmethod
+    def _valid_name(cls, value: str) -> str:
+        if not DRIVER_NAME.match(value):
+            raise ValueError(f"driver name {value!r} must match {DRIVER_NAME.pattern}")
+        return value
+
+    @field_validator("prompt", "title", "description")
+    @classmethod
+    def _not_blank(cls, value: str) -> str:
+        if not value.strip():
+            raise ValueError("must not be empty")
+        return value
+
+    @model_validator(mode="after")
+    def _needs_sim(self) -> DriverSpec:
+        if "sim" not in self.backends:
+            raise ValueError(f"driver {self.name!r} declares no 'sim' backend; every driver must have one")
+        if self.intents is not None and not self.intents.is_file():
+            raise ValueError(f"intents file {self.intents} does not exist")
+        return self
+
+    def demo_instances(self) -> dict[str, DemoInstance]:
+        """The instances this driver contributes to the demo world."""
+        if self.demo:
+            return dict(self.demo)
+        return {self.name: DemoInstance(description=self.description)}
+
+
+def read_packaged_text(package_file: str, name: str) -> str:
+    """Read a text file that ships next to ``package_file`` (pass ``__file__``)."""
+    return (Path(package_file).parent / name).read_text(encoding="utf-8")

@@ -1,0 +1,1 @@
+"""Front ends: the web page, the CLI chat and the voice pipeline."""

@@ -1,0 +1,1 @@
+"""Processes: the worker pool, worker main, device leases and process prompts."""
