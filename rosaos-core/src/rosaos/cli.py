@@ -101,8 +101,9 @@ def new_driver(
     concurrency: Annotated[str | None, typer.Option(help="exclusive or shared.")] = None,
     author: Annotated[str | None, typer.Option(help="Author name for the package metadata.")] = None,
     dest: Annotated[
-        Path, typer.Option(help="Where to write rosaos-<name>/ (default: ./plugins if it exists, else .).")
-    ] = Path(),
+        Path | None,
+        typer.Option(help="Where to write rosaos-<name>/ (default: ./plugins if it exists, else .)."),
+    ] = None,
     defaults: Annotated[
         bool, typer.Option("--defaults", help="Use defaults for every unanswered question.")
     ] = False,

@@ -17,7 +17,7 @@ from pathlib import Path
 from typing import Any, Literal
 
 import platformdirs
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError
 from pydantic_settings import (
     BaseSettings,
     PydanticBaseSettingsSource,
@@ -35,7 +35,11 @@ class ConfigError(Exception):
 
 
 class DeviceConfig(BaseModel):
-    """One ``[devices.NAME]`` table. Keys not listed here are the driver's own settings."""
+    """One ``[devices.NAME]`` table. Keys not listed here are the driver's own settings.
+
+    The keys below are reserved for rosaOS: a driver's settings model must not use them (the
+    conformance kit checks), because the driver would never see their values.
+    """
 
     model_config = ConfigDict(extra="allow")
 
@@ -44,6 +48,10 @@ class DeviceConfig(BaseModel):
     """``sim`` unless you say otherwise: rosaOS never actuates hardware you did not opt into."""
     description: str | None = None
     """Overrides the driver's description; the kernel reads it to pick devices."""
+    aliases: list[str] = Field(default_factory=list)
+    """Other names people use for it ("the lamp"); the instance name with spaces is always one."""
+    area: str | None = None
+    """Room it is in ("kitchen"), for "turn off the kitchen lights"; guessed from the description when unset."""
     url: str | None = None
     """A remote instance served elsewhere by ``rosaos serve-device``; no local process is started."""
     token: str | None = None
@@ -136,8 +144,12 @@ class RosaosConfig(BaseSettings):
             sources.append(TomlConfigSettingsSource(settings_cls, toml_file=path))
         return tuple(sources)
 
-    # Where the configuration came from; None for "no file, demo world".
-    source: Path | None = Field(default=None, exclude=True)
+    _source: Path | None = PrivateAttr(default=None)
+
+    @property
+    def source(self) -> Path | None:
+        """The config file this came from; None when there was none (the demo world)."""
+        return self._source
 
     @property
     def token_file(self) -> Path:
@@ -178,7 +190,7 @@ def load_config(explicit: Path | None = None, **overrides: Any) -> RosaosConfig:
         raise ConfigError(format_validation_error(where, error)) from None
     finally:
         _config_file.reset(token)
-    config.source = path
+    config._source = path
     return config
 
 

@@ -101,6 +101,8 @@ class DemoInstance(BaseModel):
     description: str
     settings: dict[str, Any] = Field(default_factory=dict)
     sim: dict[str, Any] = Field(default_factory=dict)
+    aliases: list[str] = Field(default_factory=list)
+    area: str | None = None
 
 
 class DriverSpec(BaseModel):

@@ -24,6 +24,8 @@ class DeviceInstance:
     description: str
     settings: BaseModel
     sim: dict[str, Any] = field(default_factory=dict)
+    aliases: tuple[str, ...] = ()
+    area: str | None = None
     url: str | None = None
     """Set for a remote instance; local instances get their URL when served."""
     token: str | None = None
@@ -102,6 +104,8 @@ def demo_devices(registry: DriverRegistry) -> dict[str, DeviceConfig]:
                 backend="sim",
                 description=demo.description,
                 sim=dict(demo.sim),
+                aliases=list(demo.aliases),
+                area=demo.area,
                 **demo.settings,
             )
     return devices
@@ -129,6 +133,8 @@ def _resolve(name: str, device: DeviceConfig, registry: DriverRegistry, where: s
         description=device.description or spec.description,
         settings=settings,
         sim=dict(device.sim),
+        aliases=tuple(device.aliases),
+        area=device.area,
         url=device.url,
         token=device.token,
         port=device.port,

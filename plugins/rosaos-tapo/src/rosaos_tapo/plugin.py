@@ -1,0 +1,120 @@
+"""The ``tapo`` driver: what it declares to rosaOS, and how its backends are built.
+
+Registered under the ``rosaos.drivers`` entry point as ``tapo`` (see ``pyproject.toml``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Annotated
+
+from pydantic import Field, SecretStr
+
+from rosaos import hookimpl
+from rosaos.drivers import (
+    DemoInstance,
+    DeviceContext,
+    DeviceError,
+    DeviceSettings,
+    DriverSpec,
+    read_packaged_text,
+)
+from rosaos_tapo.backend import Connection, TapoBackend
+from rosaos_tapo.server import build_server
+from rosaos_tapo.simulator import SimState
+
+
+class TapoSettings(DeviceSettings):
+    """One bulb's settings: the keys of ``[devices.NAME]`` besides driver, backend and sim.
+
+    Only the ``real`` backend uses them; the simulator needs none. The password can come from
+    the environment instead of the file: ``ROSAOS_DEVICES__NAME__PASSWORD``.
+    """
+
+    host: str | None = Field(default=None, description="IP address or hostname of the bulb.")
+    username: str | None = Field(
+        default=None, description="Email of the TP-Link cloud account that set the bulb up in the Tapo app."
+    )
+    password: SecretStr | None = Field(default=None, description="Password of that TP-Link account.")
+    timeout: Annotated[float, Field(gt=0, le=120)] = Field(
+        default=10.0, description="Seconds one operation (connect, command, read) may take."
+    )
+    # Not "port": [devices.NAME] port is rosaOS's own, the loopback port of the device server.
+    bulb_port: Annotated[int, Field(ge=1, le=65535)] | None = Field(
+        default=None, description="The bulb's HTTP port, if not 80 (port forwarding)."
+    )
+    connection: Connection = Field(
+        default="klap",
+        description='"klap" (current firmware) or "discover" (ask the bulb by UDP; old firmware, same LAN).',
+    )
+
+
+def real_backend(ctx: DeviceContext) -> TapoBackend:
+    """The ``real`` backend: a bulb on the LAN, reached with the owner's TP-Link account."""
+    settings = ctx.settings
+    if not isinstance(settings, TapoSettings):  # the hosting layer validates with spec.settings
+        raise DeviceError(f"{ctx.instance}: expected TapoSettings, got {type(settings).__name__}")
+    where = f"[devices.{ctx.instance}]"
+    if not settings.host:
+        raise DeviceError(
+            f'{where} needs host = "<bulb IP>" for the real backend (see the Tapo app: Device info)'
+        )
+    if not settings.username or settings.password is None:
+        raise DeviceError(
+            f"{where} needs username and password for the real backend: "
+            "the email and password of your TP-Link cloud (Tapo app) account"
+        )
+    return TapoBackend.real(
+        ctx.instance,
+        settings.host,
+        settings.username,
+        settings.password.get_secret_value(),
+        timeout=settings.timeout,
+        port=settings.bulb_port,
+        connection=settings.connection,
+    )
+
+
+def sim_backend(ctx: DeviceContext) -> TapoBackend:
+    """The ``sim`` backend: an in-process L530E that starts in the state ``ctx.sim`` gives."""
+    return TapoBackend.simulated_bulb(ctx.instance, SimState.from_sim(ctx.instance, dict(ctx.sim)))
+
+
+async def leave_light_as_is(backend: TapoBackend) -> None:
+    """Emergency stop for a bulb: do nothing.
+
+    A light cannot hurt anyone, and switching it off in an emergency would leave people in the
+    dark while they deal with a robot. So an emergency stop leaves every bulb as it is.
+    """
+
+
+SPEC = DriverSpec(
+    name="tapo",
+    title="TP-Link Tapo smart bulb",
+    description=(
+        "A TP-Link Tapo smart light bulb: turn it on or off or toggle it, set its brightness, "
+        "its white colour temperature (warm to cool) or any colour by name or hue, "
+        "and read whether it is on and how it is set."
+    ),
+    concurrency="exclusive",
+    prompt=read_packaged_text(__file__, "prompt.md"),
+    settings=TapoSettings,
+    server=build_server,
+    backends={"sim": sim_backend, "real": real_backend},
+    intents=Path(__file__).parent / "intents.yaml",
+    safe_stop=leave_light_as_is,
+    demo={
+        "kitchen_light": DemoInstance(description="Ceiling light in the kitchen", sim={"on": False}),
+        "living_room_lamp": DemoInstance(
+            description="Floor lamp in the living room",
+            sim={"on": True, "brightness": 60, "color_temp": 2700},
+        ),
+    },
+)
+
+
+@hookimpl
+def register_drivers(register: Callable[[DriverSpec], None]) -> None:
+    """Register the ``tapo`` driver."""
+    register(SPEC)

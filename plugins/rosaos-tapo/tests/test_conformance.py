@@ -1,0 +1,5 @@
+from rosaos.testing import DriverConformance
+
+
+class TestTapoDriver(DriverConformance):
+    driver = "tapo"

@@ -1,0 +1,98 @@
+"""intents.yaml: the offline engine's sentence templates for the bulb, read by core's loader."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+from hassil import recognize
+from hassil.intents import TextSlotList
+
+from rosaos.models.intents_file import IntentsFile, load_intents_file
+from rosaos_tapo.colors import NAMED_COLORS
+from rosaos_tapo.plugin import SPEC
+
+# Instance names as the engine would fill the {device} list: spoken form in, instance out.
+DEVICES = TextSlotList.from_tuples(
+    [
+        ("kitchen light", "kitchen_light"),
+        ("living room lamp", "living_room_lamp"),
+        ("bedroom light", "bedroom_light"),
+    ]
+)
+
+
+@pytest.fixture(scope="module")
+def intents_file() -> IntentsFile:
+    assert SPEC.intents is not None
+    return load_intents_file(SPEC.intents)
+
+
+def tool_call(intents_file: IntentsFile, sentence: str) -> tuple[str, str, dict[str, Any]] | None:
+    """``(device, tool, args)`` for a sentence, filling ``"{slot}"`` args as the engine does."""
+    result = recognize(sentence, intents_file.intents(), slot_lists={"device": DEVICES})
+    if result is None:
+        return None
+    action = intents_file.actions[result.intent.name]
+    slots = {name: entity.value for name, entity in result.entities.items()}
+    args = {
+        name: slots[action.slot_arguments()[name]] if name in action.slot_arguments() else value
+        for name, value in action.args.items()
+    }
+    return slots["device"], action.tool, args
+
+
+@pytest.mark.parametrize(
+    ("sentence", "expected"),
+    [
+        # The light tasks of the bench (../shared/bench/tasks/home.yaml), one device each.
+        ("Turn on the kitchen light", ("kitchen_light", "turn_on", {})),
+        ("Switch off the living room lamp", ("living_room_lamp", "turn_off", {})),
+        (
+            "Set the living room lamp to 20 percent",
+            ("living_room_lamp", "set_brightness", {"brightness": 20}),
+        ),
+        ("Make the bedroom light green", ("bedroom_light", "set_color_name", {"name": "green"})),
+        ("Set the kitchen light to warm white", ("kitchen_light", "set_color_name", {"name": "warm white"})),
+        ("Dim the living room lamp", ("living_room_lamp", "adjust_brightness", {"change": -25})),
+        ("Toggle the bedroom light", ("bedroom_light", "toggle", {})),
+        # Other phrasings the templates cover.
+        ("turn the kitchen light off", ("kitchen_light", "turn_off", {})),
+        ("set the kitchen light to 35%", ("kitchen_light", "set_brightness", {"brightness": 35})),
+        ("make the bedroom light brighter", ("bedroom_light", "adjust_brightness", {"change": 25})),
+        (
+            "set the colour of the kitchen light to sky blue",
+            ("kitchen_light", "set_color_name", {"name": "sky blue"}),
+        ),
+        ("set the kitchen light to 3000 kelvin", ("kitchen_light", "set_color_temp", {"kelvin": 3000})),
+    ],
+)
+def test_sentence_maps_to_tool_call(
+    intents_file: IntentsFile, sentence: str, expected: tuple[str, str, dict[str, Any]]
+) -> None:
+    assert tool_call(intents_file, sentence) == expected
+
+
+@pytest.mark.parametrize(
+    "sentence", ["Turn off the light", "Turn on the garage light", "Is the kitchen light on?"]
+)
+def test_ambiguous_unknown_or_question_sentences_do_not_match(
+    intents_file: IntentsFile, sentence: str
+) -> None:
+    # bench: these must change nothing, so the offline engine must not act on them.
+    assert tool_call(intents_file, sentence) is None
+
+
+def test_color_list_holds_exactly_the_named_colours(intents_file: IntentsFile) -> None:
+    values = [
+        value if isinstance(value, str) else value["in"]
+        for value in intents_file.hassil["lists"]["color"]["values"]
+    ]
+    assert values == list(NAMED_COLORS)
+
+
+def test_every_intent_template_uses_the_device_slot(intents_file: IntentsFile) -> None:
+    for name, intent in intents_file.hassil["intents"].items():
+        for data in intent["data"]:
+            for sentence in data["sentences"]:
+                assert "{device}" in sentence, f"{name}: {sentence!r} names no device"
