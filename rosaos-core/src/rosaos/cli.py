@@ -78,6 +78,31 @@ def devices_check(
     raise typer.Exit(check_device(name, config, json_output=json_output, timeout=timeout))
 
 
+@devices_app.command("login")
+def devices_login(
+    name: Annotated[str, typer.Argument(help="Instance name, e.g. spotify.")],
+    config: ConfigOption = None,
+) -> None:
+    """Log an instance in to its cloud account (e.g. spotify): prints a URL, reads the pasted answer."""
+    from rosaos.config import ConfigError, load_config
+    from rosaos.devices.world import build_world
+    from rosaos.plugins import load_drivers
+
+    try:
+        settings = load_config(config)
+        instance = build_world(settings, load_drivers()).get(name)
+    except (ConfigError, KeyError) as error:
+        typer.echo(f"error: {error.args[0] if error.args else error}", err=True)
+        raise typer.Exit(2) from None
+    if instance.spec.login is None:
+        typer.echo(f"driver {instance.spec.name!r} needs no login; {name} is ready as configured")
+        raise typer.Exit(0)
+    if instance.is_remote:
+        typer.echo(f"error: {name} is served on another machine; log in there", err=True)
+        raise typer.Exit(1)
+    raise typer.Exit(instance.spec.login(instance.context(settings.data_dir)))
+
+
 @app.command("serve-device")
 def serve_device(
     name: Annotated[str, typer.Argument(help="Instance name from the config (or the demo world).")],
@@ -122,6 +147,105 @@ def new_driver(
             defaults=defaults,
         )
     )
+
+
+ModelOption = Annotated[
+    str | None,
+    typer.Option(
+        "--model",
+        "-m",
+        help="Kernel model: any pydantic-ai model string (openai:gpt-5.2, anthropic:…, google-gla:…, groq:…) "
+        "or 'openai-compatible' with --base-url and --model-name.",
+    ),
+]
+UrlOption = Annotated[
+    str | None, typer.Option("--url", help="Kernel URL (default: from [kernel] host/port in the config).")
+]
+
+
+@app.command("up")
+def up(
+    config: ConfigOption = None,
+    model: ModelOption = None,
+    process_model: Annotated[
+        str | None, typer.Option(help="Model for process agents (default: the kernel's).")
+    ] = None,
+    base_url: Annotated[
+        str | None, typer.Option(help="OpenAI-compatible endpoint, e.g. http://127.0.0.1:11434/v1.")
+    ] = None,
+    model_name: Annotated[
+        str | None, typer.Option(help="Model name at the OpenAI-compatible endpoint, e.g. qwen3:8b.")
+    ] = None,
+    host: Annotated[
+        str | None, typer.Option(help="Address for the API and web page (default 127.0.0.1).")
+    ] = None,
+    port: Annotated[
+        int | None, typer.Option(help="Port for the API and web page (default 8765).", min=0)
+    ] = None,
+    pool_size: Annotated[int | None, typer.Option(help="Warm worker processes (default 2).", min=0)] = None,
+) -> None:
+    """Start the devices, the kernel, the worker pool and the web page; print the page's URL."""
+    from rosaos.kernel.commands import model_overrides, up_command
+
+    models = model_overrides(model, process_model, base_url, model_name)
+    raise typer.Exit(up_command(config, host=host, port=port, pool_size=pool_size, models=models))
+
+
+@app.command("chat")
+def chat(
+    message: Annotated[
+        str | None, typer.Option("--message", "-m", help="Send one message and exit (scripts).")
+    ] = None,
+    wait: Annotated[
+        bool,
+        typer.Option(
+            "--wait",
+            help="With -m: wait for the reply and every process it starts; exit 0 only if all succeed.",
+        ),
+    ] = False,
+    timeout: Annotated[
+        float, typer.Option(help="With --wait: seconds to wait before giving up (exit 3).")
+    ] = 60.0,
+    json_output: JsonOption = False,
+    config: ConfigOption = None,
+    url: UrlOption = None,
+) -> None:
+    """Chat with the running kernel: a REPL, or one message with -m."""
+    from rosaos.frontends.chat import chat_command
+    from rosaos.kernel.client import KernelClient
+
+    def client() -> KernelClient:
+        from rosaos.config import load_config
+
+        return KernelClient.from_config(load_config(config), url=url)
+
+    raise typer.Exit(chat_command(client, message, wait, timeout, json_output))
+
+
+@app.command("ps")
+def ps(
+    config: ConfigOption = None,
+    url: UrlOption = None,
+    json_output: JsonOption = False,
+    all_processes: Annotated[bool, typer.Option("--all", "-a", help="Include ended processes.")] = False,
+) -> None:
+    """List the kernel's processes: id, state, devices held, age, task."""
+    from rosaos.kernel.commands import ps_command
+
+    raise typer.Exit(ps_command(config, url, json_output, all_processes))
+
+
+@app.command("kill")
+def kill(
+    process_id: Annotated[int, typer.Argument(help="Process id, as `rosaos ps` shows it.", min=1)],
+    config: ConfigOption = None,
+    url: UrlOption = None,
+    json_output: JsonOption = False,
+) -> None:
+    """Terminate a process; its device leases are released."""
+    from rosaos.kernel.commands import kill_command
+
+    raise typer.Exit(kill_command(config, url, process_id, json_output))
 
 
 def main() -> None:

@@ -72,7 +72,8 @@ class KernelConfig(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     host: str = "127.0.0.1"
-    port: int = Field(default=DEFAULT_KERNEL_PORT, ge=1, le=65535)
+    port: int = Field(default=DEFAULT_KERNEL_PORT, ge=0, le=65535)
+    """Port for the API and web page; 0 picks a free one (printed at start)."""
     pool_size: int = Field(default=2, ge=0, le=32)
     """Warm worker subprocesses kept ready. A one-off worker is spawned when all are busy."""
     job_timeout: float = Field(default=120.0, gt=0, le=3600)

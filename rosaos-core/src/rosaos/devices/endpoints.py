@@ -1,0 +1,29 @@
+"""The kernel's view of a device: what it can grant, and where a granted process reaches it."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from rosaos.devices.runtime import DeviceStatus
+from rosaos.drivers import Concurrency
+
+
+@dataclass(frozen=True)
+class DeviceEndpoint:
+    """One device instance as the process manager sees it."""
+
+    name: str
+    driver: str
+    concurrency: Concurrency
+    always_attached: bool
+    description: str
+    prompt: str
+    url: str | None
+    """Streamable-HTTP MCP URL, or None while the instance is not served."""
+    token: str
+    status: DeviceStatus
+
+    @property
+    def grantable(self) -> bool:
+        """Whether a process can be given this device now."""
+        return self.url is not None and self.status in ("healthy", "starting")

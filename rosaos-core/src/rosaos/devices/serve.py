@@ -1,0 +1,157 @@
+"""Serve one device instance: build its backend and FastMCP server, and expose it over HTTP.
+
+The lifecycle is the same everywhere a device runs (``rosaos serve-device``, the supervisor's
+host processes, the conformance kit): :func:`open_device` starts the backend and builds the
+server; :func:`serve_http` puts that server on streamable HTTP at ``/mcp`` behind the bearer
+token, on a socket bound before serving so port 0 works and the URL is known up front.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import socket
+from collections.abc import AsyncIterator
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import uvicorn
+from fastmcp import FastMCP
+from starlette.types import ASGIApp
+
+from rosaos.auth import BearerAuthMiddleware
+from rosaos.devices.world import DeviceInstance
+from rosaos.drivers import DeviceBackend, DeviceError
+
+MCP_PATH = "/mcp"
+HEALTH_PATH = "/health"
+
+
+@dataclass
+class OpenDevice:
+    """A started backend and the FastMCP server built on it."""
+
+    instance: DeviceInstance
+    backend: DeviceBackend
+    server: FastMCP
+
+
+@contextlib.asynccontextmanager
+async def open_device(instance: DeviceInstance, data_dir: Path) -> AsyncIterator[OpenDevice]:
+    """Start the instance's backend, build its server, and close the backend on exit.
+
+    Raises :class:`DeviceError` if the driver is a placeholder, the backend fails to start,
+    or the instance is remote (it is served elsewhere).
+    """
+    spec = instance.spec
+    if instance.is_remote:
+        raise DeviceError(f"{instance.name} is remote ({instance.url}); it is served on its own host")
+    if not spec.implemented:
+        raise DeviceError(f"driver {spec.name!r} is not implemented yet; it cannot be served")
+    ctx = instance.context(data_dir)
+    backend = spec.backends[instance.backend](ctx)
+    try:
+        await backend.start()
+        server = spec.server(ctx, backend)
+        _add_safe_stop(server, instance, backend)
+        yield OpenDevice(instance, backend, server)
+    finally:
+        await backend.close()
+
+
+def _add_safe_stop(server: FastMCP, instance: DeviceInstance, backend: DeviceBackend) -> None:
+    """Every device server gets ``safe_stop``: the driver's emergency-stop action, callable remotely."""
+    spec = instance.spec
+
+    async def safe_stop() -> str:
+        """Emergency stop: put this device in its safe state (stop motion, cancel goals)."""
+        await spec.safe_stop(backend)
+        return f"{instance.name}: safe stop done"
+
+    server.tool(
+        safe_stop,
+        name="safe_stop",
+        annotations={"readOnlyHint": False, "destructiveHint": False, "idempotentHint": True},
+    )
+
+
+def device_http_app(server: FastMCP, token: str) -> ASGIApp:
+    """The ASGI app for a device: MCP at ``/mcp``; ``/health`` open; everything else needs the token."""
+    mcp_app = server.http_app(path=MCP_PATH)
+    return BearerAuthMiddleware(_with_health(mcp_app), token=token, open_paths=[HEALTH_PATH])
+
+
+def _with_health(app: Any) -> ASGIApp:
+    async def wrapped(scope: Any, receive: Any, send: Any) -> None:
+        if scope["type"] == "http" and scope.get("path") == HEALTH_PATH:
+            body = b'{"status":"ok"}'
+            await send(
+                {
+                    "type": "http.response.start",
+                    "status": 200,
+                    "headers": [(b"content-type", b"application/json")],
+                }
+            )
+            await send({"type": "http.response.body", "body": body})
+            return
+        await app(scope, receive, send)
+
+    return wrapped
+
+
+def bind_socket(host: str, port: int) -> socket.socket:
+    """Bind (without listening) so the port is ours before the server starts; 0 picks a free one."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind((host, port))
+    except OSError as error:
+        sock.close()
+        raise DeviceError(f"cannot bind {host}:{port}: {error.strerror}; pick another --port") from None
+    return sock
+
+
+def url_for(sock: socket.socket) -> str:
+    host, port = sock.getsockname()[:2]
+    shown = f"[{host}]" if ":" in host else host
+    return f"http://{shown}:{port}{MCP_PATH}"
+
+
+@dataclass
+class ServedDevice:
+    """A device being served over HTTP in this process."""
+
+    url: str
+    server: uvicorn.Server
+    task: asyncio.Task[None]
+
+    async def stop(self) -> None:
+        self.server.should_exit = True
+        with contextlib.suppress(asyncio.CancelledError):
+            await self.task
+
+
+@contextlib.asynccontextmanager
+async def serve_http(
+    server: FastMCP, token: str, host: str = "127.0.0.1", port: int = 0
+) -> AsyncIterator[ServedDevice]:
+    """Serve ``server`` over streamable HTTP until the block exits. Yields once it accepts connections."""
+    sock = bind_socket(host, port)
+    config = uvicorn.Config(
+        device_http_app(server, token), log_level="warning", lifespan="on", timeout_graceful_shutdown=2
+    )
+    uv_server = uvicorn.Server(config)
+    task = asyncio.create_task(uv_server.serve(sockets=[sock]))
+    served = ServedDevice(url_for(sock), uv_server, task)
+    try:
+        while not uv_server.started:
+            if task.done():
+                task.result()  # re-raise the start-up failure
+                raise DeviceError(f"device server on {host}:{port} stopped during start-up")
+            await asyncio.sleep(0.01)
+        yield served
+    finally:
+        await served.stop()
+        sock.close()

@@ -1,0 +1,85 @@
+"""Live device state for the kernel's ``GET /devices`` and the web page's device cards.
+
+One poller reads every served device's ``get_state`` about once a second over a kept-open MCP
+session, so any number of open pages cost the devices nothing extra.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+from collections.abc import Callable, Mapping
+from typing import Any
+
+from rosaos.devices.client import DeviceClient
+from rosaos.devices.endpoints import DeviceEndpoint
+from rosaos.drivers import DeviceError
+
+log = logging.getLogger(__name__)
+
+
+class DeviceStateCache:
+    """The last ``get_state`` of every reachable device, refreshed in the background."""
+
+    def __init__(
+        self,
+        endpoints: Callable[[], Mapping[str, DeviceEndpoint]],
+        interval: float = 1.0,
+        timeout: float = 3.0,
+    ) -> None:
+        self._endpoints = endpoints
+        self.interval = interval
+        self.timeout = timeout
+        self._states: dict[str, dict[str, Any]] = {}
+        self._clients: dict[str, tuple[str, DeviceClient]] = {}
+
+    def get(self, name: str) -> dict[str, Any] | None:
+        """The last state read from ``name``, or None if it has not answered yet."""
+        return self._states.get(name)
+
+    async def refresh(self) -> None:
+        """Read every served device's state once, all at the same time."""
+        endpoints = {n: e for n, e in self._endpoints().items() if e.url is not None}
+        await asyncio.gather(*(self._read(endpoint) for endpoint in endpoints.values()))
+        for gone in set(self._states) - set(endpoints):
+            self._states.pop(gone, None)
+
+    async def run(self) -> None:
+        """Refresh until cancelled, then close the sessions."""
+        try:
+            while True:
+                await self.refresh()
+                await asyncio.sleep(self.interval)
+        finally:
+            for _, client in self._clients.values():
+                with contextlib.suppress(Exception):
+                    await client.__aexit__(None, None, None)
+            self._clients.clear()
+
+    async def _read(self, endpoint: DeviceEndpoint) -> None:
+        assert endpoint.url is not None
+        try:
+            client = await self._client(endpoint)
+            self._states[endpoint.name] = await asyncio.wait_for(client.get_state(), self.timeout)
+        except (DeviceError, TimeoutError) as error:
+            log.debug("%s: state not read: %s", endpoint.name, error)
+            self._states.pop(endpoint.name, None)
+            await self._drop(endpoint.name)
+
+    async def _client(self, endpoint: DeviceEndpoint) -> DeviceClient:
+        assert endpoint.url is not None
+        known = self._clients.get(endpoint.name)
+        if known is not None and known[0] == endpoint.url:
+            return known[1]
+        await self._drop(endpoint.name)
+        client = DeviceClient(endpoint.url, endpoint.token, self.timeout, endpoint.name)
+        await client.__aenter__()
+        self._clients[endpoint.name] = (endpoint.url, client)
+        return client
+
+    async def _drop(self, name: str) -> None:
+        known = self._clients.pop(name, None)
+        if known is not None:
+            with contextlib.suppress(Exception):
+                await known[1].__aexit__(None, None, None)

@@ -1,0 +1,218 @@
+"""``rosaos chat``: a REPL against the running kernel, and a one-shot mode for scripts.
+
+Both follow the updates stream by polling ``GET /updates?after=``: simple, resumable, and quick
+enough at 10 Hz for a human or a script.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import sys
+import time
+import uuid
+from dataclasses import dataclass, field
+from typing import Any
+
+from rich.console import Console
+
+from rosaos.kernel.client import KernelClient, KernelUnavailable
+
+POLL_SECONDS = 0.1
+
+EXIT_OK = 0
+EXIT_FAILED = 1
+EXIT_UNAVAILABLE = 2
+EXIT_TIMEOUT = 3
+
+_STYLE = {
+    "kernel_reply": "bold green",
+    "error": "bold red",
+    "process_launched": "cyan",
+    "process_ended": "cyan",
+    "notice": "yellow",
+}
+
+
+def format_update(update: dict[str, Any]) -> str | None:
+    """The line a chat shows for an update, or None for updates a chat hides."""
+    kind = update["kind"]
+    if kind == "kernel_reply":
+        return f"rosaos: {update['text']}"
+    if kind in ("process_launched", "process_ended", "notice", "error"):
+        return f"  · {update['text']}"
+    if kind == "event" and update.get("data", {}).get("kind") == "worker_callback":
+        return f"  · {update['text']}"
+    return None
+
+
+@dataclass
+class Conversation:
+    """What one message set in motion: its event, the processes it launched, their callbacks."""
+
+    event_id: int
+    replies: list[str] = field(default_factory=list)
+    errors: list[str] = field(default_factory=list)
+    processes: dict[int, dict[str, Any]] = field(default_factory=dict)
+    callback_events: dict[int, int] = field(default_factory=dict)
+    """callback event id → process id"""
+    unclaimed: dict[int, tuple[int, dict[str, Any]]] = field(default_factory=dict)
+    """Callbacks seen before the launch that explains them: process id → (event id, payload).
+    A fast worker can report before the kernel has finished the run that launched it."""
+
+    def absorb(self, update: dict[str, Any]) -> bool:
+        """Take in one update; True if it belongs to this conversation."""
+        kind, event_id, data = update["kind"], update.get("event_id"), update.get("data") or {}
+        if kind == "event" and data.get("kind") == "worker_callback" and event_id is not None:
+            payload = data.get("payload", {})
+            process_id = int(payload.get("worker_id", 0))
+            if process_id in self.processes:
+                self._claim(process_id, event_id, payload)
+                return True
+            self.unclaimed[process_id] = (event_id, payload)
+            return False
+        ours = event_id == self.event_id or event_id in self.callback_events
+        if not ours:
+            return False
+        if kind == "process_launched" and "process_id" in data:
+            process_id = int(data["process_id"])
+            self.processes.setdefault(process_id, {})
+            if process_id in self.unclaimed:
+                self._claim(process_id, *self.unclaimed.pop(process_id))
+        elif kind == "kernel_reply":
+            self.replies.append(update["text"])
+        elif kind == "error":
+            self.errors.append(update["text"])
+        return True
+
+    def _claim(self, process_id: int, event_id: int, payload: dict[str, Any]) -> None:
+        self.processes[process_id] = payload
+        self.callback_events[event_id] = process_id
+
+    @property
+    def succeeded(self) -> bool:
+        statuses = [p.get("status") for p in self.processes.values()]
+        return not self.errors and all(status == "ok" for status in statuses)
+
+    def summary(self) -> dict[str, Any]:
+        return {
+            "event_id": self.event_id,
+            "ok": self.succeeded,
+            "replies": self.replies,
+            "errors": self.errors,
+            "processes": [{"id": pid, **info} for pid, info in self.processes.items()],
+        }
+
+
+async def _handled(client: KernelClient, event_id: int) -> bool:
+    return bool((await client.event(event_id)).get("handled"))
+
+
+async def send_and_wait(
+    client: KernelClient, text: str, timeout: float, console: Console | None
+) -> tuple[int, Conversation]:
+    """Send ``text`` and follow it until it and every process it launched are handled."""
+    cursor = await client.last_update_id()
+    conversation = Conversation(await client.chat(text, idempotency_key=f"chat-{uuid.uuid4()}"))
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        updates, cursor = await client.updates_after(cursor)
+        for update in updates:
+            if conversation.absorb(update) and console is not None:
+                line = format_update(update)
+                if line:
+                    console.print(line, style=_STYLE.get(update["kind"]), markup=False, highlight=False)
+        if await _settled(client, conversation):
+            return (EXIT_OK if conversation.succeeded else EXIT_FAILED), conversation
+        await asyncio.sleep(POLL_SECONDS)
+    conversation.errors.append(f"gave up waiting after {timeout:g} s")
+    return EXIT_TIMEOUT, conversation
+
+
+async def _settled(client: KernelClient, conversation: Conversation) -> bool:
+    """The message, every process it launched, and every callback are handled by the kernel."""
+    if not await _handled(client, conversation.event_id):
+        return False
+    if any(not info.get("status") for info in conversation.processes.values()):
+        return False
+    for event_id in conversation.callback_events:
+        if not await _handled(client, event_id):
+            return False
+    return True
+
+
+async def one_shot(client: KernelClient, text: str, wait: bool, timeout: float, json_output: bool) -> int:
+    """``rosaos chat -m TEXT [--wait]``."""
+    console = None if json_output else Console(highlight=False)
+    if not wait:
+        event_id = await client.chat(text, idempotency_key=f"chat-{uuid.uuid4()}")
+        if json_output:
+            print(json.dumps({"event_id": event_id}))
+        else:
+            print(f"sent as event {event_id}")
+        return EXIT_OK
+    code, conversation = await send_and_wait(client, text, timeout, console)
+    if json_output:
+        print(json.dumps(conversation.summary(), indent=2, default=str))
+    elif code == EXIT_TIMEOUT:
+        print(f"rosaos chat: {conversation.errors[-1]}", file=sys.stderr)
+    return code
+
+
+async def repl(client: KernelClient) -> int:
+    """Interactive chat: type lines, see replies and callbacks as they come. Ctrl-D or /quit exits."""
+    console = Console(highlight=False)
+    health = await client.health()
+    console.print(f"Connected to rosaOS {health['version']} at {client.base_url} (model: {health['model']}).")
+    if health.get("model_notice"):
+        console.print(health["model_notice"], style="yellow", markup=False)
+    console.print("Type a message; /ps lists processes; /quit or Ctrl-D leaves.", style="dim")
+    cursor = await client.last_update_id()
+
+    async def follow() -> None:
+        nonlocal cursor
+        while True:
+            updates, cursor = await client.updates_after(cursor)
+            for update in updates:
+                line = format_update(update)
+                if line:
+                    console.print(line, style=_STYLE.get(update["kind"]), markup=False, highlight=False)
+            await asyncio.sleep(POLL_SECONDS)
+
+    follower = asyncio.create_task(follow())
+    try:
+        while True:
+            try:
+                line = await asyncio.to_thread(input, "you> ")
+            except EOFError:
+                return EXIT_OK
+            line = line.strip()
+            if not line:
+                continue
+            if line in ("/quit", "/exit"):
+                return EXIT_OK
+            if line == "/ps":
+                for process in await client.processes():
+                    console.print(f"  {process['id']:>4} {process['state']:<10} {process['task'][:60]}")
+                continue
+            await client.chat(line, idempotency_key=f"chat-{uuid.uuid4()}")
+    finally:
+        follower.cancel()
+
+
+def chat_command(
+    client_factory: Any, message: str | None, wait: bool, timeout: float, json_output: bool
+) -> int:
+    """Entry point for the CLI: builds the client, runs REPL or one-shot, maps errors to exit codes."""
+
+    async def run() -> int:
+        async with client_factory() as client:
+            if message is None:
+                return await repl(client)
+            return await one_shot(client, message, wait, timeout, json_output)
+
+    try:
+        return asyncio.run(run())
+    except KernelUnavailable as error:
+        print(f"rosaos chat: {error}", file=sys.stderr)
+        return EXIT_UNAVAILABLE

@@ -1,0 +1,108 @@
+// rosaOS web page: chat with the kernel, follow its updates, watch processes and devices.
+// Plain JavaScript modules, no framework, no build step. Every value from the server is shown
+// with textContent, never parsed as HTML.
+
+import { renderDevices, renderProcesses, terminate } from "./panels.js";
+import {
+  $, api, errorText, login, newKey, page, setConnection, setStatus, signOut, SignedOut, sleep, takeLoginCode,
+} from "./session.js";
+import { followUpdates } from "./stream.js";
+
+const POLL_MS = 1000;
+
+async function sendChat(event) {
+  event.preventDefault();
+  const input = $("#chat-input");
+  const button = $("#chat-send");
+  const status = $("#chat-status");
+  const text = input.value.trim();
+  if (!text) {
+    setStatus(status, "Type a message first.", "error");
+    input.focus();
+    return;
+  }
+  button.disabled = true;
+  setStatus(status, "Sending…");
+  // One key per message: a retry after a network error cannot enqueue it twice.
+  const body = { text, idempotency_key: newKey(), source: "web" };
+  try {
+    for (let attempt = 1; ; attempt += 1) {
+      try {
+        const response = await api("/chat", { method: "POST", json: body });
+        if (response.status === 202) {
+          input.value = "";
+          setStatus(status, "");
+        } else {
+          setStatus(status, `Not sent: ${await errorText(response)}`, "error");
+        }
+        break;
+      } catch (error) {
+        if (error instanceof SignedOut || attempt === 3) throw error;
+        await sleep(500 * attempt);
+      }
+    }
+  } catch (error) {
+    if (!(error instanceof SignedOut)) setStatus(status, "Not sent: the kernel cannot be reached. Try again.", "error");
+  } finally {
+    button.disabled = false;
+    input.focus();
+  }
+}
+
+async function pollForever(path, render) {
+  while (page.running) {
+    if (!document.hidden) {
+      try {
+        const response = await api(path);
+        if (response.ok) render(await response.json());
+      } catch (error) {
+        if (error instanceof SignedOut) return;
+      }
+    }
+    await sleep(POLL_MS);
+  }
+}
+
+async function showHealth() {
+  try {
+    const response = await fetch("/health", { cache: "no-store" });
+    const health = await response.json();
+    $("#model-name").textContent = health.model;
+    const notice = $("#model-notice");
+    notice.textContent = health.model_notice || "";
+    notice.hidden = !health.model_notice;
+  } catch (_) {
+    setConnection("offline", "The kernel cannot be reached");
+  }
+}
+
+function start() {
+  page.running = true;
+  $("#login-needed").hidden = true;
+  $("#app").hidden = false;
+  $("#sign-out").hidden = false;
+  followUpdates();
+  pollForever("/processes", renderProcesses);
+  pollForever("/devices", renderDevices);
+}
+
+async function main() {
+  $("#chat-form").addEventListener("submit", sendChat);
+  $("#processes").addEventListener("click", (event) => {
+    const button = event.target.closest("button[data-terminate]");
+    if (button) terminate(button);
+  });
+  $("#sign-out").addEventListener("click", () => signOut("Signed out."));
+  // A new login link pasted into this tab changes only the fragment, which does not reload the
+  // page: start over so the new code is used.
+  window.addEventListener("hashchange", () => {
+    if (location.hash.includes("login=")) location.reload();
+  });
+  showHealth();
+  const code = takeLoginCode();
+  if (code) await login(code);
+  if (page.token) start();
+  else signOut($("#login-error").textContent);
+}
+
+main();

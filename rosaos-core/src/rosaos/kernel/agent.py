@@ -1,0 +1,81 @@
+"""The kernel agent: its prompt, assembled from the world's devices, and the agent itself."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+
+from fastmcp import FastMCP
+from pydantic_ai import Agent
+from pydantic_ai.mcp import MCPToolset
+from pydantic_ai.messages import ModelMessage, ModelRequest, UserPromptPart
+from pydantic_ai.models import Model
+
+from rosaos.devices.endpoints import DeviceEndpoint
+
+DEFAULT_KERNEL_PROMPT = """\
+You are the kernel of rosaOS, an operating system for robots and smart devices. You read one
+event at a time: [User said] (speech), [User typed] (chat), [Worker callback] (a process you
+launched has finished), [Device notice] and [Error].
+
+You never touch a device yourself. To act, call launch_process(task, devices) with a complete,
+self-contained task and the instance names of the devices it needs; the process agent sees only
+that task and those devices. Launch one process per independent group of devices. When a device
+is held by another process you are told who holds it: wait for that process's callback, ask the
+user, or terminate it if the user asked for something that replaces it.
+
+When a [Worker callback] arrives, tell the user the outcome in one short sentence. If a request
+is ambiguous (which light?) or names a device that does not exist, ask or refuse, naming the
+devices that exist; never actuate on a guess. Answer questions you can answer from a callback
+without launching anything. Keep replies short: they may be spoken aloud.
+
+Devices:
+{devices}
+"""
+
+
+def describe_devices(devices: Iterable[DeviceEndpoint]) -> str:
+    """One line per device, as the kernel prompt lists them."""
+    lines = []
+    for device in devices:
+        flags = [device.driver, device.concurrency]
+        if device.always_attached:
+            flags.append("always attached")
+        if not device.grantable:
+            flags.append(f"unavailable: {device.status}")
+        lines.append(f"- {device.name} ({', '.join(flags)}): {device.description}")
+    return "\n".join(lines) or "- (no devices)"
+
+
+def kernel_prompt(devices: Iterable[DeviceEndpoint], template: str | None = None) -> str:
+    """The kernel's system prompt. ``template`` (from ``[kernel] kernel_prompt``) may use ``{devices}``."""
+    text = template or DEFAULT_KERNEL_PROMPT
+    listing = describe_devices(devices)
+    if "{devices}" in text:
+        return text.replace("{devices}", listing)
+    return f"{text.rstrip()}\n\nDevices:\n{listing}\n"
+
+
+def build_kernel_agent(model: Model, tools: FastMCP) -> Agent[None, str]:
+    """The kernel agent: one model, one toolset (the in-process process manager), text output.
+
+    Its instructions are given per run, because the device list they include changes as devices
+    come and go.
+    """
+    # "failed": a refused launch comes back as a failed tool result the model reads and acts on;
+    # "retry" would count refusals against a retry budget and end the run on the second one.
+    toolset = MCPToolset(tools, tool_error_behavior="failed")
+    return Agent(model, toolsets=[toolset], name="rosaos-kernel")
+
+
+def trim_history(messages: Sequence[ModelMessage], budget: int) -> list[ModelMessage]:
+    """Keep at most about ``budget`` recent messages, cutting only at a user turn.
+
+    Cutting elsewhere could orphan a tool return from its call, which models reject.
+    """
+    if len(messages) <= budget:
+        return list(messages)
+    for start in range(len(messages) - budget, len(messages)):
+        message = messages[start]
+        if isinstance(message, ModelRequest) and any(isinstance(p, UserPromptPart) for p in message.parts):
+            return list(messages[start:])
+    return []

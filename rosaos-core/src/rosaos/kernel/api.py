@@ -1,0 +1,423 @@
+"""The kernel's HTTP API: events in, updates out, processes and devices, and the web page.
+
+``create_app(runtime)`` builds the FastAPI app; ``rosaos up`` serves it with uvicorn on loopback.
+Events (``POST /chat``, ``POST /stt``, ``POST /event``) are answered ``202 {"id", "duplicate"}``
+only after the commit. Every route needs ``Authorization: Bearer <token>`` except ``/health``,
+the web page and its assets, ``/login``, and the API docs (``/docs``, ``/openapi.json``). Browser
+requests from another origin are refused with 403 before anything else runs.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import time
+from collections.abc import AsyncIterator, Iterable, Mapping, Sequence
+from datetime import datetime
+from pathlib import Path
+from typing import Annotated, Any, Literal, Protocol
+
+from fastapi import APIRouter, Depends, FastAPI, Header, HTTPException, Query, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import FileResponse, JSONResponse, Response
+from fastapi.security import HTTPBearer
+from fastapi.staticfiles import StaticFiles
+from pydantic import BaseModel, ConfigDict, Field
+from sse_starlette import EventSourceResponse, ServerSentEvent
+
+import rosaos
+from rosaos.auth import BearerAuthMiddleware
+from rosaos.kernel.events import (
+    Event,
+    EventStore,
+    IdempotencyKey,
+    NewEvent,
+    Source,
+    UserSaidEvent,
+    UserText,
+    UserTypedEvent,
+    WorkerCallbackEvent,
+)
+from rosaos.kernel.login import LoginCodes, SameOriginMiddleware, login_url
+from rosaos.kernel.updates import Update, UpdateStream
+from rosaos.processes.jobs import WorkerCallback
+
+log = logging.getLogger(__name__)
+
+WEB_DIR = Path(__file__).resolve().parent.parent / "frontends" / "web"
+SSE_PING_SECONDS = 15
+SSE_SEND_TIMEOUT = 30.0
+"""A client that takes longer than this to accept one message is dropped (it reconnects and resumes)."""
+SSE_RETRY_MS = 2000
+MAX_BODY_BYTES = 1_000_000
+"""Larger request bodies get 413; a worker's output is the biggest thing anyone posts."""
+
+
+class KernelRuntime(Protocol):
+    """What the HTTP API needs from the running kernel. ``rosaos up`` implements it."""
+
+    @property
+    def events(self) -> EventStore:
+        """The durable event queue."""
+
+    @property
+    def updates(self) -> UpdateStream:
+        """The updates stream (same SQLite file)."""
+
+    @property
+    def login_codes(self) -> LoginCodes:
+        """Login codes; ``rosaos up`` mints the first one and prints its link."""
+
+    @property
+    def token(self) -> str:
+        """The bearer token every protected route requires."""
+
+    @property
+    def model_description(self) -> str:
+        """``offline default``, or the model's name (``openai:gpt-5.2``); nothing secret."""
+
+    @property
+    def model_notice(self) -> str | None:
+        """Shown as a banner when no model is configured: how to set one. None otherwise."""
+
+    async def processes(self) -> Sequence[Any]:
+        """The processes to show: ``ProcessInfo`` models, or objects/dicts with the same fields."""
+
+    async def terminate(self, process_id: int) -> Any:
+        """Terminate a process and return its ``ProcessInfo``; raise ``KeyError`` for an unknown id."""
+
+    async def devices(self) -> Sequence[Mapping[str, Any]]:
+        """Every device with its live state: see :class:`DeviceView` for the keys."""
+
+    async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
+        """Called once a ``worker_callback`` is committed (also for a duplicate), so leases are
+        released at once. Must be idempotent, e.g. ``ProcessManager.record_callback``."""
+
+
+# --- bodies and answers ----------------------------------------------------------------------------
+
+
+class SayRequest(BaseModel):
+    """``POST /chat`` and ``POST /stt``: one thing the user typed or said."""
+
+    model_config = ConfigDict(extra="forbid", str_strip_whitespace=True)
+
+    text: str = Field(min_length=1, max_length=4000, description="Stripped; must not be blank.")
+    idempotency_key: IdempotencyKey | None = None
+    source: Source | None = Field(default=None, description="Defaults to 'chat' or 'stt'.")
+
+
+class Accepted(BaseModel):
+    """The event is committed: it will be handled even if the kernel restarts."""
+
+    id: int
+    duplicate: bool = Field(description="True when the idempotency key was seen: id is the first event's.")
+
+
+class ProcessView(BaseModel):
+    """One process agent and the devices it holds (its leases)."""
+
+    model_config = ConfigDict(from_attributes=True, extra="allow")
+
+    id: int
+    task: str
+    devices: list[str]
+    state: str
+    started_at: datetime | None = None
+    ended_at: datetime | None = None
+    worker_pid: int | None = None
+
+
+class DeviceView(BaseModel):
+    """One device instance with its live state as its ``get_state`` tool returns it."""
+
+    model_config = ConfigDict(from_attributes=True, extra="allow")
+
+    name: str
+    driver: str
+    concurrency: str
+    backend: str | None = None
+    status: str
+    url: str | None = None
+    state: dict[str, Any] | None = None
+    description: str = ""
+
+
+class Health(BaseModel):
+    """Open to anyone who can reach the port, so nothing secret."""
+
+    status: Literal["ok"] = "ok"
+    version: str
+    model: str
+    model_notice: str | None
+    uptime_seconds: float
+    pending_events: int
+
+
+class UpdatesPage(BaseModel):
+    """``GET /updates`` without ``Accept: text/event-stream``: poll with ``after=last_id``."""
+
+    updates: list[Update]
+    last_id: int = Field(description="Pass as ?after= next time; unchanged when there is nothing new.")
+
+
+class LoginRequest(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    code: str = Field(min_length=1, max_length=200)
+
+
+class LoginToken(BaseModel):
+    token: str
+    token_type: Literal["bearer"] = "bearer"
+
+
+class LoginLink(BaseModel):
+    code: str
+    url: str = Field(description="Open it in a browser: http://host:port/#login=<code>.")
+    expires_in: float = Field(description="Seconds until the code stops working. It works once.")
+
+
+# --- routes --------------------------------------------------------------------------------------------
+
+
+def _runtime(request: Request) -> KernelRuntime:
+    runtime: KernelRuntime = request.app.state.runtime
+    return runtime
+
+
+Runtime = Annotated[KernelRuntime, Depends(_runtime)]
+IdempotencyHeader = Annotated[str | None, Header(alias="Idempotency-Key", max_length=200)]
+
+# Documents the token in OpenAPI (the /docs "Authorize" button); BearerAuthMiddleware enforces it.
+_bearer_docs = HTTPBearer(auto_error=False, description="The token from <data_dir>/token.")
+public = APIRouter()
+protected = APIRouter(dependencies=[Depends(_bearer_docs)])
+
+
+@public.get("/health")
+async def health(request: Request, runtime: Runtime) -> Health:
+    """Liveness, version and model, for monitors and the web page before login. No token needed."""
+    return Health(
+        version=rosaos.__version__,
+        model=runtime.model_description,
+        model_notice=runtime.model_notice,
+        uptime_seconds=round(time.monotonic() - request.app.state.started, 3),
+        pending_events=await runtime.events.pending_count(),
+    )
+
+
+@public.post("/login")
+async def login(body: LoginRequest, runtime: Runtime, response: Response) -> LoginToken:
+    """Trade a one-time login code (from ``#login=`` in the printed link) for the bearer token."""
+    response.headers["Cache-Control"] = "no-store"
+    if not runtime.login_codes.redeem(body.code):
+        raise HTTPException(
+            401,
+            "this login link is unknown, expired or already used: "
+            "open the newest link printed by `rosaos up`, or mint one with POST /login-codes",
+        )
+    return LoginToken(token=runtime.token)
+
+
+@protected.post("/login-codes", status_code=201)
+async def mint_login_code(request: Request, runtime: Runtime) -> LoginLink:
+    """A new one-time login link for the web page (the CLI prints it)."""
+    code = runtime.login_codes.mint()
+    base = str(request.base_url)
+    return LoginLink(code=code, url=login_url(base, code), expires_in=runtime.login_codes.lifetime)
+
+
+@protected.post("/chat", status_code=202)
+async def chat(body: SayRequest, runtime: Runtime, idempotency_key: IdempotencyHeader = None) -> Accepted:
+    """The user typed something: enqueue a ``user_typed`` event."""
+    event = UserTypedEvent(
+        kind="user_typed",
+        source=body.source or "chat",
+        payload=UserText(text=body.text),
+        idempotency_key=_key(body.idempotency_key, idempotency_key),
+    )
+    return await _accept(runtime, event)
+
+
+@protected.post("/stt", status_code=202)
+async def speech(body: SayRequest, runtime: Runtime, idempotency_key: IdempotencyHeader = None) -> Accepted:
+    """The voice front end heard the user: enqueue a ``user_said`` event."""
+    event = UserSaidEvent(
+        kind="user_said",
+        source=body.source or "stt",
+        payload=UserText(text=body.text),
+        idempotency_key=_key(body.idempotency_key, idempotency_key),
+    )
+    return await _accept(runtime, event)
+
+
+@protected.post("/event", status_code=202)
+async def post_event(
+    event: NewEvent, runtime: Runtime, idempotency_key: IdempotencyHeader = None
+) -> Accepted:
+    """Enqueue any event, told apart by ``kind``; workers post their ``worker_callback`` here."""
+    key = _key(event.idempotency_key, idempotency_key)
+    return await _accept(runtime, event.model_copy(update={"idempotency_key": key}))
+
+
+@protected.get("/events/{event_id}")
+async def get_event(event_id: int, runtime: Runtime) -> Event:
+    """One event, and whether the kernel has handled it."""
+    event = await runtime.events.get(event_id)
+    if event is None:
+        raise HTTPException(404, f"no event {event_id}: ids come from the 202 answer of POST /event")
+    return event
+
+
+@protected.get(
+    "/updates",
+    responses={200: {"content": {"text/event-stream": {"schema": {"type": "string"}}}}},
+)
+async def get_updates(
+    request: Request,
+    runtime: Runtime,
+    after: Annotated[int | None, Query(ge=0, description="Only updates with a larger id.")] = None,
+    limit: Annotated[int, Query(ge=1, le=1000, description="At most this many (per page or backlog).")] = 100,
+    last_event_id: Annotated[str | None, Header(alias="Last-Event-ID")] = None,
+) -> Any:
+    """The updates stream: server-sent events with ``Accept: text/event-stream``, else one JSON page.
+
+    Both start after ``Last-Event-ID`` (SSE reconnects), else after ``?after=``, else with the
+    last ``limit`` updates. The SSE stream then follows new updates until the client leaves.
+    """
+    if last_event_id is not None:
+        try:
+            after = int(last_event_id)
+        except ValueError:
+            raise HTTPException(400, "Last-Event-ID must be an update id (an integer)") from None
+    updates = runtime.updates
+    newest = await updates.last_id()
+    if after is not None and after > newest:
+        after = None  # a cursor from an older store (the data directory was reset): start afresh
+    if after is None:
+        recent = await updates.recent(limit)
+        after = recent[0].id - 1 if recent else newest
+    if "text/event-stream" not in request.headers.get("accept", ""):
+        page = await updates.after(after, limit)
+        return UpdatesPage(updates=page, last_id=page[-1].id if page else after)
+    return EventSourceResponse(_stream(updates, after), ping=SSE_PING_SECONDS, send_timeout=SSE_SEND_TIMEOUT)
+
+
+async def _stream(updates: UpdateStream, after: int) -> AsyncIterator[ServerSentEvent]:
+    yield ServerSentEvent(comment="rosaOS updates", retry=SSE_RETRY_MS)
+    async for update in updates.follow(after):
+        yield ServerSentEvent(data=update.model_dump_json(), id=str(update.id))
+
+
+@protected.get("/processes")
+async def list_processes(runtime: Runtime) -> list[ProcessView]:
+    """The process agents and the devices they hold."""
+    return [ProcessView.model_validate(process) for process in await runtime.processes()]
+
+
+@protected.post("/processes/{process_id}/terminate")
+async def terminate_process(process_id: int, runtime: Runtime) -> ProcessView:
+    """Kill a running process and release its devices. An ended process is returned as it is."""
+    try:
+        process = await runtime.terminate(process_id)
+    except KeyError:
+        raise HTTPException(404, f"no process {process_id}: GET /processes lists the running ones") from None
+    return ProcessView.model_validate(process)
+
+
+@protected.get("/devices")
+async def list_devices(runtime: Runtime) -> list[DeviceView]:
+    """Every device instance, its status and its live state."""
+    return [DeviceView.model_validate(device) for device in await runtime.devices()]
+
+
+@public.get("/", include_in_schema=False)
+async def web_page() -> FileResponse:
+    """The web page. Public, but useless without a login code."""
+    return FileResponse(WEB_DIR / "index.html", headers=PAGE_HEADERS)
+
+
+PAGE_HEADERS = {
+    "Cache-Control": "no-cache",
+    "Content-Security-Policy": (
+        "default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' data:; "
+        "connect-src 'self'; base-uri 'none'; form-action 'self'; frame-ancestors 'none'"
+    ),
+    "Referrer-Policy": "no-referrer",
+    "X-Content-Type-Options": "nosniff",
+}
+
+
+def _key(in_body: str | None, in_header: str | None) -> str | None:
+    if in_body and in_header and in_body != in_header:
+        raise HTTPException(422, "the Idempotency-Key header and the body's idempotency_key differ; send one")
+    return in_body or in_header or None
+
+
+async def _accept(runtime: KernelRuntime, event: NewEvent) -> Accepted:
+    appended = await runtime.events.append(event)
+    # The event is committed: whatever fails below must not turn the answer into an error, or the
+    # client would retry something that is already queued.
+    if not appended.duplicate:
+        try:
+            await runtime.updates.publish_event(appended.id, event)
+        except Exception:
+            log.exception("could not publish the update for event %s", appended.id)
+    if isinstance(event, WorkerCallbackEvent):
+        try:
+            await runtime.worker_callback_recorded(appended.id, event.payload)
+        except Exception as error:
+            log.exception("worker_callback_recorded failed for event %s", appended.id)
+            with contextlib.suppress(Exception):
+                await runtime.updates.publish(
+                    "error", f"could not release the leases of process {event.payload.worker_id}: {error}"
+                )
+    return Accepted(id=appended.id, duplicate=appended.duplicate)
+
+
+async def _invalid_request(request: Request, error: Exception) -> JSONResponse:
+    assert isinstance(error, RequestValidationError)
+    problems = [_problem(problem) for problem in error.errors()]
+    summary = "; ".join(f"{'.'.join(problem['loc'])}: {problem['msg']}" for problem in problems)
+    return JSONResponse({"detail": f"invalid request: {summary}", "errors": problems}, status_code=422)
+
+
+def _problem(problem: Mapping[str, Any]) -> dict[str, Any]:
+    loc = [str(part) for part in problem["loc"]]
+    message = problem["msg"]
+    if problem["type"] == "json_invalid":
+        # FastAPI puts the character offset in loc and the parser's reason in ctx; say it plainly.
+        reason = problem.get("ctx", {}).get("error", "")
+        message = f"not valid JSON: {reason} (at character {loc[1]})" if len(loc) > 1 else message
+        loc = loc[:1]
+    return {"loc": loc, "msg": message, "type": problem["type"]}
+
+
+async def _internal_error(request: Request, error: Exception) -> JSONResponse:
+    return JSONResponse(
+        {"detail": f"internal error ({type(error).__name__}): see the rosaOS kernel log"}, status_code=500
+    )
+
+
+def create_app(runtime: KernelRuntime, *, allowed_origins: Iterable[str] = ()) -> FastAPI:
+    """The kernel's FastAPI app. ``allowed_origins`` adds browser origins besides the server's own."""
+    app = FastAPI(
+        title="rosaOS kernel",
+        version=rosaos.__version__,
+        summary="Events in, updates out: the kernel of an agentic operating system for robots.",
+        max_body_size=MAX_BODY_BYTES,
+    )
+    app.state.runtime = runtime
+    app.state.started = time.monotonic()
+    app.include_router(public)
+    app.include_router(protected)
+    app.mount("/static", StaticFiles(directory=WEB_DIR), name="static")
+    app.add_exception_handler(RequestValidationError, _invalid_request)
+    app.add_exception_handler(Exception, _internal_error)
+    assets = [f"/static/{path.name}" for path in WEB_DIR.iterdir() if path.is_file()]
+    open_paths = ["/", "/health", "/login", "/docs", "/openapi.json", *assets]
+    # Added last = runs first: foreign origins are refused before the token is even looked at.
+    app.add_middleware(BearerAuthMiddleware, token=runtime.token, open_paths=open_paths)
+    app.add_middleware(SameOriginMiddleware, allowed_origins=allowed_origins)
+    return app

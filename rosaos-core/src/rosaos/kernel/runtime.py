@@ -1,0 +1,296 @@
+"""The running kernel: devices, event store, worker pool, kernel agent and HTTP API, wired together.
+
+:class:`Kernel` is what ``rosaos up`` runs and what integration tests start on loopback. It
+implements the HTTP API's :class:`~rosaos.kernel.api.KernelRuntime`.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import socket
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import httpx
+import uvicorn
+from pydantic_ai.models import Model
+
+from rosaos.auth import load_or_create_token
+from rosaos.config import RosaosConfig
+from rosaos.devices.endpoints import DeviceEndpoint
+from rosaos.devices.serve import bind_socket
+from rosaos.devices.state_cache import DeviceStateCache
+from rosaos.devices.supervisor import DeviceSupervisor
+from rosaos.devices.world import World
+from rosaos.drivers import DeviceError
+from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
+from rosaos.kernel.api import create_app
+from rosaos.kernel.events import Event, EventStore, WorkerCallbackEvent
+from rosaos.kernel.login import LoginCodes, login_url
+from rosaos.kernel.loop import KernelLoop
+from rosaos.kernel.tools import build_kernel_tools
+from rosaos.kernel.updates import UpdateStream
+from rosaos.models.defaults import KernelModels, kernel_models
+from rosaos.models.select import ModelSpec
+from rosaos.processes.jobs import WorkerCallback, callback_idempotency_key
+from rosaos.processes.manager import ProcessInfo, ProcessManager
+from rosaos.processes.pool import WorkerPool
+from rosaos.processes.prompts import base_process_prompt
+
+log = logging.getLogger(__name__)
+
+EVENTS_FILE = "kernel.sqlite3"
+
+
+class KernelError(Exception):
+    """The kernel cannot start; the message says why and what to do."""
+
+
+class Kernel:
+    """One rosaOS instance: ``await kernel.start()``, then ``await kernel.stop()``."""
+
+    def __init__(
+        self,
+        config: RosaosConfig,
+        world: World,
+        *,
+        kernel_model: Model | None = None,
+        process_model: ModelSpec | None = None,
+        worker_env: Mapping[str, str] | None = None,
+    ) -> None:
+        self.config = config
+        self.world = world
+        self.data_dir = config.data_dir
+        self._models: KernelModels = kernel_models(config, world, override=kernel_model)
+        self._process_model = process_model or self._models.process
+        self._worker_env = dict(worker_env) if worker_env else None
+        self._ended_published: set[int] = set()
+        self._tasks: list[asyncio.Task[Any]] = []
+        self._server: uvicorn.Server | None = None
+        self._started = False
+        self.login_codes = LoginCodes()
+        self.url = ""
+
+    # --- KernelRuntime ---------------------------------------------------------------------------
+
+    @property
+    def events(self) -> EventStore:
+        return self._store
+
+    @property
+    def updates(self) -> UpdateStream:
+        return self._updates
+
+    @property
+    def token(self) -> str:
+        return self._token
+
+    @property
+    def model_description(self) -> str:
+        return self._models.description
+
+    @property
+    def model_notice(self) -> str | None:
+        return self._models.notice
+
+    async def processes(self) -> Sequence[ProcessInfo]:
+        return self.manager.list()
+
+    async def terminate(self, process_id: int) -> ProcessInfo:
+        return await self.manager.terminate(process_id)
+
+    async def devices(self) -> Sequence[Mapping[str, Any]]:
+        views = []
+        for endpoint in self.endpoints().values():
+            instance = self.world.instances[endpoint.name]
+            views.append(
+                {
+                    "name": endpoint.name,
+                    "driver": endpoint.driver,
+                    "concurrency": endpoint.concurrency,
+                    "backend": instance.backend,
+                    "status": endpoint.status,
+                    "url": endpoint.url,
+                    "state": self.states.get(endpoint.name),
+                    "description": endpoint.description,
+                    "held_by": [p.id for p in self.manager.list() if endpoint.name in p.devices],
+                }
+            )
+        return views
+
+    async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
+        self.manager.record_callback(callback)
+        if callback.worker_id in self._ended_published:
+            return
+        self._ended_published.add(callback.worker_id)
+        text = f"process {callback.worker_id} ended: {callback.status}"
+        if callback.error:
+            text += f" ({callback.error})"
+        await self._updates.publish(
+            "process_ended", text, callback.model_dump(mode="json"), event_id=event_id
+        )
+
+    # --- devices -----------------------------------------------------------------------------------
+
+    def endpoints(self) -> dict[str, DeviceEndpoint]:
+        """The world's devices as the process manager grants them."""
+        endpoints = {}
+        for name, entry in self.supervisor.directory().items():
+            instance = self.world.instances[name]
+            spec = instance.spec
+            endpoints[name] = DeviceEndpoint(
+                name=name,
+                driver=spec.name,
+                concurrency=spec.concurrency,
+                always_attached=spec.always_attached,
+                description=instance.description,
+                prompt=spec.prompt,
+                url=entry.url,
+                token=entry.token or self._token,
+                status=entry.status,
+            )
+        return endpoints
+
+    # --- lifecycle ---------------------------------------------------------------------------------
+
+    async def start(self, host: str | None = None, port: int | None = None) -> str:
+        """Start devices, the event store, the pool, the loop and the API; return the API's base URL."""
+        host = host or self.config.kernel.host
+        port = self.config.kernel.port if port is None else port
+        self.data_dir.mkdir(parents=True, exist_ok=True)
+        self._token = load_or_create_token(self.data_dir)
+        sock = await _bind_or_explain(host, port, self._token)
+        self.url = _base_url(sock)
+        try:
+            await self._start_parts(sock)
+        except BaseException:
+            await self.stop()
+            sock.close()
+            raise
+        self._started = True
+        return self.url
+
+    async def _start_parts(self, sock: socket.socket) -> None:
+        self._store = await EventStore.open(self.data_dir / EVENTS_FILE)
+        self._updates = await UpdateStream.open(self._store.database)
+        self.supervisor = DeviceSupervisor(self.world, self.data_dir, self._token)
+        await self.supervisor.start()
+        self.states = DeviceStateCache(self.endpoints)
+        pool = WorkerPool(size=self.config.kernel.pool_size, env=self._worker_env)
+        self.manager = ProcessManager(
+            devices=self.endpoints,
+            model=self._process_model,
+            base_prompt=base_process_prompt(self.config.kernel.process_prompt),
+            job_timeout=self.config.kernel.job_timeout,
+            request_limit=self.config.kernel.request_limit,
+            callback_url=f"{self.url}/event",
+            callback_token=self._token,
+            pool=pool,
+            on_ended=self._process_ended,
+            first_process_id=await self._store.next_process_id(),
+        )
+        await self.manager.start()
+        tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._store.note_process_id)
+        agent = build_kernel_agent(self._models.kernel, tools)
+        self.loop = KernelLoop(
+            self._store,
+            self._updates,
+            agent,
+            instructions=lambda: kernel_prompt(self.endpoints().values(), self.config.kernel.kernel_prompt),
+            model=self._model_for_event,
+            history_budget=self.config.kernel.history_messages,
+        )
+        app = create_app(self)
+        config = uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=3)
+        self._server = uvicorn.Server(config)
+        self._tasks.append(asyncio.create_task(self._server.serve(sockets=[sock]), name="kernel api"))
+        while not self._server.started:
+            if self._tasks[-1].done():
+                self._tasks[-1].result()
+                raise KernelError("the kernel API stopped during start-up")
+            await asyncio.sleep(0.01)
+        self._tasks.append(asyncio.create_task(self.states.run(), name="device states"))
+        self._tasks.append(asyncio.create_task(self._run_loop(), name="kernel loop"))
+
+    def _model_for_event(self, event: Event) -> Model | None:
+        return self._models.for_event(event)
+
+    async def _run_loop(self) -> None:
+        try:
+            await self.loop.run_forever()
+        except asyncio.CancelledError:
+            raise
+        except Exception:  # the loop must not die silently: say so where the user looks
+            log.exception("the kernel loop stopped")
+            await self._updates.publish("error", "the kernel loop stopped; see the console log")
+            raise
+
+    async def stop(self) -> None:
+        """Shut everything down: no orphan processes; unhandled events stay queued for next time."""
+        for task in reversed(self._tasks):
+            if task.get_name() == "kernel api" and self._server is not None:
+                self._server.should_exit = True
+            else:
+                task.cancel()
+        await asyncio.gather(*self._tasks, return_exceptions=True)
+        self._tasks.clear()
+        if hasattr(self, "manager"):
+            await self.manager.stop()
+        if hasattr(self, "supervisor"):
+            await self.supervisor.stop()
+        if hasattr(self, "_store"):
+            await self._store.close()
+        self._started = False
+
+    def login_link(self) -> str:
+        """A fresh one-time link that logs the web page in."""
+        return login_url(self.url + "/", self.login_codes.mint())
+
+    async def _process_ended(self, callback: WorkerCallback, delivered: bool) -> None:
+        """The pool saw a process end. If its worker could not post the callback, enqueue it here."""
+        if delivered:
+            return
+        event = WorkerCallbackEvent(
+            kind="worker_callback",
+            source="kernel",
+            payload=callback,
+            idempotency_key=callback_idempotency_key(callback.worker_id),
+        )
+        appended = await self._store.append(event)
+        if not appended.duplicate:
+            await self._updates.publish_event(appended.id, event)
+        await self.worker_callback_recorded(appended.id, callback)
+
+
+def _base_url(sock: socket.socket) -> str:
+    host, port = sock.getsockname()[:2]
+    shown = f"[{host}]" if ":" in host else host
+    if host in ("0.0.0.0", "::"):
+        shown = "127.0.0.1"
+    return f"http://{shown}:{port}"
+
+
+async def _bind_or_explain(host: str, port: int, token: str) -> socket.socket:
+    """Bind the API's port, or say what already runs there."""
+    try:
+        return bind_socket(host, port)
+    except DeviceError:
+        pass
+    url = f"http://{'127.0.0.1' if host in ('0.0.0.0', '') else host}:{port}"
+    with contextlib.suppress(httpx.HTTPError, ValueError):
+        async with httpx.AsyncClient(timeout=2) as client:
+            health = (await client.get(f"{url}/health")).json()
+        if "version" in health:
+            raise KernelError(
+                f"rosaOS {health['version']} is already running at {url}/ (model: {health.get('model')}); "
+                "use `rosaos chat` to talk to it, or stop it first, or start this one with --port"
+            )
+    raise KernelError(f"port {port} on {host} is in use by another program; start rosaOS with --port N")
+
+
+def events_path(data_dir: Path) -> Path:
+    """Where the kernel keeps its event store."""
+    return data_dir / EVENTS_FILE

@@ -1,0 +1,106 @@
+"""The kernel agent's only toolset: the process manager, as an internal FastMCP server.
+
+The kernel never touches hardware. Its system-call table is these four tools; device tools are
+reachable only from process agents that hold a lease on the device.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Awaitable, Callable, Mapping
+from typing import Annotated, Any
+
+from fastmcp import FastMCP
+from fastmcp.exceptions import ToolError
+from pydantic import Field
+
+from rosaos.devices.endpoints import DeviceEndpoint
+from rosaos.processes.manager import LaunchRefused, ProcessInfo, ProcessManager
+
+KERNEL_TOOL_NAMES = ("launch_process", "terminate_process", "list_processes", "list_devices")
+
+_READ_ONLY = {"readOnlyHint": True, "destructiveHint": False, "idempotentHint": True}
+
+
+def build_kernel_tools(
+    manager: ProcessManager,
+    devices: Callable[[], Mapping[str, DeviceEndpoint]],
+    on_launch: Callable[[int], Awaitable[None]] | None = None,
+) -> FastMCP:
+    """Build the process-manager server that the kernel agent mounts in-process.
+
+    ``on_launch(process_id)`` runs after each launch; the kernel records the id so ids stay
+    unique across restarts.
+    """
+    server = FastMCP("rosaos-kernel", instructions="Process management for the rosaOS kernel.")
+
+    @server.tool(annotations={"readOnlyHint": False, "destructiveHint": False, "idempotentHint": False})
+    async def launch_process(
+        task: Annotated[
+            str,
+            Field(
+                min_length=1,
+                max_length=4000,
+                description="What the process agent must do, in full: it sees nothing else of the conversation.",
+            ),
+        ],
+        devices: Annotated[
+            list[str],
+            Field(max_length=16, description="Instance names of the devices it needs (see list_devices)."),
+        ],
+    ) -> dict[str, Any]:
+        """Start a process agent on a task with the devices it needs; returns its id at once.
+
+        The result arrives later as a [Worker callback] event. An exclusive device held by
+        another process is refused with the holder named: wait for its callback, ask the user,
+        or terminate_process(holder). The always-attached device is granted automatically.
+        """
+        try:
+            info = await manager.launch(task, list(devices))
+        except LaunchRefused as refusal:
+            raise ToolError(str(refusal)) from None
+        if on_launch is not None:
+            await on_launch(info.id)
+        return {"process_id": info.id, "devices": info.devices, "state": info.state}
+
+    @server.tool(annotations={"readOnlyHint": False, "destructiveHint": True, "idempotentHint": True})
+    async def terminate_process(
+        process_id: Annotated[int, Field(ge=1, description="The id launch_process returned.")],
+    ) -> dict[str, Any]:
+        """Kill a running process; its device leases are released."""
+        try:
+            info = await manager.terminate(process_id)
+        except KeyError as error:
+            raise ToolError(str(error.args[0]) if error.args else f"no process {process_id}") from None
+        return _process_data(info)
+
+    @server.tool(annotations=_READ_ONLY)
+    async def list_processes() -> list[dict[str, Any]]:
+        """List the running processes: id, task, devices held, state."""
+        return [_process_data(info) for info in manager.list()]
+
+    @server.tool(annotations=_READ_ONLY)
+    async def list_devices() -> list[dict[str, Any]]:
+        """List the devices of the world: name, driver, description, concurrency, availability, holder."""
+        holders: dict[str, list[int]] = {}
+        for info in manager.list():
+            for name in info.devices:
+                holders.setdefault(name, []).append(info.id)
+        return [
+            {
+                "name": endpoint.name,
+                "driver": endpoint.driver,
+                "description": endpoint.description,
+                "concurrency": endpoint.concurrency,
+                "always_attached": endpoint.always_attached,
+                "available": endpoint.grantable,
+                "status": endpoint.status,
+                "held_by": holders.get(endpoint.name, []),
+            }
+            for endpoint in devices().values()
+        ]
+
+    return server
+
+
+def _process_data(info: ProcessInfo) -> dict[str, Any]:
+    return info.model_dump(mode="json")

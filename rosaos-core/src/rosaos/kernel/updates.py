@@ -1,0 +1,271 @@
+"""The updates stream: everything the kernel does, as the web page and the CLI follow it.
+
+Every kernel output (an event received, a reply, a process launched or ended, a tool call, an
+error) is published here. Updates are persisted in the same SQLite file as the events (table
+``updates``), so a client that reconnects resumes from the last id it saw, even across restarts.
+
+Fan-out is in memory: each follower has a bounded queue. :meth:`UpdateStream.publish` never
+waits for a follower; a follower whose queue is full is marked as lagging and catches up from the
+table. A slow or stuck client therefore never slows the kernel, and never misses an update.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import sqlite3
+import time
+from collections.abc import AsyncIterator, Sequence
+from datetime import UTC, datetime
+from typing import Any, Literal
+
+from pydantic import BaseModel
+
+from rosaos.kernel.events import (
+    Database,
+    DeviceNotice,
+    Event,
+    NewEvent,
+    UserText,
+    WorkerCallback,
+    mark_handled_in,
+)
+
+UpdateKind = Literal[
+    "event", "kernel_reply", "process_launched", "process_ended", "tool_call", "error", "notice"
+]
+"""``event``: an event was received. ``kernel_reply``: the kernel answered the user.
+``process_launched`` / ``process_ended``: a process started or finished. ``tool_call``: the kernel
+called one of its tools. ``error``: something failed. ``notice``: anything else worth showing."""
+
+FOLLOWER_QUEUE_SIZE = 256
+CATCH_UP_BATCH = 200
+
+_SCHEMA = """
+CREATE TABLE IF NOT EXISTS updates (
+    id INTEGER PRIMARY KEY AUTOINCREMENT,
+    time REAL NOT NULL,
+    kind TEXT NOT NULL,
+    text TEXT NOT NULL,
+    data TEXT NOT NULL,
+    event_id INTEGER
+);
+"""
+_COLUMNS = "id, time, kind, text, data, event_id"
+
+
+class Update(BaseModel):
+    """One line of the updates stream."""
+
+    id: int
+    time: datetime
+    kind: UpdateKind
+    text: str
+    """What a person reads: ``[User typed] hello``, ``Launched process 7 on kitchen_light``."""
+    data: dict[str, Any]
+    """Machine-readable details (event kind and payload, process id, tool arguments, ...)."""
+    event_id: int | None = None
+    """The event this update belongs to, if any."""
+
+
+def describe_event(event: Event | NewEvent) -> str:
+    """One line for people and the kernel model: ``[User said] turn on the light``."""
+    payload = event.payload
+    if isinstance(payload, UserText):
+        label = "User said" if event.kind == "user_said" else "User typed"
+        return f"[{label}] {payload.text}"
+    if isinstance(payload, WorkerCallback):
+        parts = [f"worker={payload.worker_id}", f"status={payload.status}"]
+        if payload.output:
+            parts.append(f"output={payload.output}")
+        if payload.error:
+            parts.append(f"error={payload.error}")
+        return "[Worker callback] " + " ".join(parts)
+    if isinstance(payload, DeviceNotice):
+        return f"[Device notice] {payload.device}: {payload.message}"
+    cause = f" (event {payload.source_event})" if payload.source_event else ""
+    return f"[Error]{cause} {payload.message}"
+
+
+class _Follower:
+    """One subscriber's bounded queue, and whether it overflowed."""
+
+    def __init__(self, size: int) -> None:
+        self.queue: asyncio.Queue[Update] = asyncio.Queue(size)
+        self.lagging = False
+
+    def offer(self, update: Update) -> None:
+        if self.lagging:
+            return
+        try:
+            self.queue.put_nowait(update)
+        except asyncio.QueueFull:
+            # Dropping is safe: the follower re-reads everything after its last id from the table.
+            self.lagging = True
+
+
+class UpdateStream:
+    """Publish kernel outputs and follow them. Shares the event store's :class:`Database`."""
+
+    def __init__(self, database: Database, follower_queue_size: int = FOLLOWER_QUEUE_SIZE) -> None:
+        self._database = database
+        self._followers: set[_Follower] = set()
+        self._queue_size = follower_queue_size
+
+    @classmethod
+    async def open(cls, database: Database) -> UpdateStream:
+        """Create the ``updates`` table if needed. Pass ``event_store.database``."""
+        await database.executescript(_SCHEMA)
+        return cls(database)
+
+    async def publish(
+        self,
+        kind: UpdateKind,
+        text: str,
+        data: dict[str, Any] | None = None,
+        event_id: int | None = None,
+    ) -> int:
+        """Persist one update, hand it to every follower without waiting, and return its id."""
+        at = time.time()
+        encoded = json.dumps(data or {}, default=str)
+
+        def insert(connection: sqlite3.Connection) -> int:
+            rows = connection.execute(
+                "INSERT INTO updates (time, kind, text, data, event_id) VALUES (?, ?, ?, ?, ?) RETURNING id",
+                (at, kind, text, encoded, event_id),
+            ).fetchall()
+            return int(rows[0][0])
+
+        update_id = await self._database.run(insert)
+        update = Update(
+            id=update_id,
+            time=datetime.fromtimestamp(at, UTC),
+            kind=kind,
+            text=text,
+            data=json.loads(encoded),
+            event_id=event_id,
+        )
+        for follower in list(self._followers):
+            follower.offer(update)
+        return update_id
+
+    async def publish_and_mark_handled(
+        self, event_id: int, items: Sequence[tuple[UpdateKind, str, dict[str, Any]]]
+    ) -> list[int]:
+        """Publish what the kernel did for an event and mark it handled, in one transaction.
+
+        A kernel killed at any point therefore shows an event's outputs exactly once: either
+        none of them (the event is redelivered) or all of them (it is not).
+        """
+        at = time.time()
+        encoded = [(kind, text, json.dumps(data or {}, default=str)) for kind, text, data in items]
+
+        def commit(connection: sqlite3.Connection) -> list[int]:
+            ids = [
+                int(
+                    connection.execute(
+                        "INSERT INTO updates (time, kind, text, data, event_id) VALUES (?, ?, ?, ?, ?) RETURNING id",
+                        (at, kind, text, data, event_id),
+                    ).fetchall()[0][0]
+                )
+                for kind, text, data in encoded
+            ]
+            mark_handled_in(connection, event_id)
+            return ids
+
+        ids = await self._database.run(commit)
+        for update_id, (kind, text, data) in zip(ids, encoded, strict=True):
+            update = Update(
+                id=update_id,
+                time=datetime.fromtimestamp(at, UTC),
+                kind=kind,
+                text=text,
+                data=json.loads(data),
+                event_id=event_id,
+            )
+            for follower in list(self._followers):
+                follower.offer(update)
+        return ids
+
+    async def publish_event(self, event_id: int, event: NewEvent) -> int:
+        """Publish the ``event`` update for an event just appended to the store."""
+        data = {"kind": event.kind, "source": event.source, "payload": event.payload.model_dump(mode="json")}
+        return await self.publish("event", describe_event(event), data, event_id=event_id)
+
+    async def after(self, update_id: int, limit: int = 100) -> list[Update]:
+        """Up to ``limit`` updates with an id above ``update_id``, oldest first."""
+        rows = await self._database.fetch(
+            f"SELECT {_COLUMNS} FROM updates WHERE id > ? ORDER BY id LIMIT ?", (update_id, limit)
+        )
+        return [_update(row) for row in rows]
+
+    async def recent(self, limit: int = 100) -> list[Update]:
+        """The last ``limit`` updates, oldest first."""
+        rows = await self._database.fetch(
+            f"SELECT {_COLUMNS} FROM updates ORDER BY id DESC LIMIT ?", (limit,)
+        )
+        return [_update(row) for row in reversed(rows)]
+
+    async def last_id(self) -> int:
+        """The id of the newest update, 0 when there is none."""
+        rows = await self._database.fetch("SELECT coalesce(max(id), 0) FROM updates")
+        return int(rows[0][0])
+
+    async def follow(self, after_id: int = 0) -> AsyncIterator[Update]:
+        """Every update with an id above ``after_id``, in id order, then new ones as they come.
+
+        Never ends on its own; stop iterating (or cancel) to unsubscribe.
+        """
+        follower = _Follower(self._queue_size)
+        # Subscribe before reading the table, so nothing published in between is missed;
+        # an update seen both ways is skipped by id.
+        self._followers.add(follower)
+        try:
+            last = after_id
+            catching_up = True
+            while True:
+                if catching_up or follower.lagging:
+                    follower.lagging = False
+                    _drain(follower.queue)
+                    batch = await self.after(last, CATCH_UP_BATCH)
+                    for update in batch:
+                        yield update
+                        last = update.id
+                    catching_up = len(batch) == CATCH_UP_BATCH
+                    continue
+                update = await follower.queue.get()
+                if update.id <= last:
+                    continue
+                if update.id != last + 1:
+                    # A gap (published by another process, or handed over out of order):
+                    # the table is the truth, so re-read from it, this update included.
+                    catching_up = True
+                    continue
+                yield update
+                last = update.id
+        finally:
+            self._followers.discard(follower)
+
+    @property
+    def follower_count(self) -> int:
+        """How many clients follow the stream now."""
+        return len(self._followers)
+
+
+def _drain(queue: asyncio.Queue[Update]) -> None:
+    with contextlib.suppress(asyncio.QueueEmpty):
+        while True:
+            queue.get_nowait()
+
+
+def _update(row: tuple[Any, ...]) -> Update:
+    update_id, at, kind, text, data, event_id = row
+    return Update(
+        id=update_id,
+        time=datetime.fromtimestamp(at, UTC),
+        kind=kind,
+        text=text,
+        data=json.loads(data),
+        event_id=event_id,
+    )

@@ -1,0 +1,70 @@
+"""The messages that cross process boundaries: a job sent to a worker, and the callback it posts.
+
+Both are pydantic models because they travel as JSON: a job over the worker's stdin pipe, a
+callback over HTTP to the kernel's ``POST /event``.
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from rosaos.models.select import ModelSpec
+
+ProcessStatus = Literal["ok", "error", "crashed", "timeout", "terminated"]
+"""How a process ended: ``ok`` (the agent finished), ``error`` (it raised), ``crashed`` (the
+worker died), ``timeout`` (killed at the job timeout), ``terminated`` (killed on request)."""
+
+
+class GrantedDevice(BaseModel):
+    """A device a process may use: where its MCP server is, and what the agent should know about it."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    name: str
+    driver: str
+    url: str
+    token: str
+    description: str
+    prompt: str
+
+
+class WorkerJob(BaseModel):
+    """One task for one process agent. Sent to an idle worker as one JSON line."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    process_id: int = Field(ge=1)
+    task: str = Field(min_length=1)
+    devices: list[GrantedDevice]
+    model: ModelSpec
+    base_prompt: str
+    timeout: float = Field(gt=0)
+    request_limit: int = Field(ge=1)
+    callback_url: str
+    """The kernel's ``POST /event`` URL."""
+    callback_token: str
+
+
+class WorkerCallback(BaseModel):
+    """What a process reports when it ends; the payload of a ``worker_callback`` event."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    worker_id: int = Field(ge=1, description="The process id that launch_process returned.")
+    status: ProcessStatus
+    output: str | None = None
+    error: str | None = None
+    task: str | None = None
+    model_requests: int = Field(default=0, ge=0)
+    tool_calls: int = Field(default=0, ge=0)
+
+
+def callback_idempotency_key(process_id: int) -> str:
+    """The idempotency key of a process's ``worker_callback`` event.
+
+    The worker posts its callback with this key; when it could not, the process manager enqueues
+    the callback itself with the same key, so a callback that did arrive is not handled twice.
+    """
+    return f"process-{process_id}"

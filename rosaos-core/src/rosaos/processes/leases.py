@@ -1,0 +1,124 @@
+"""Device leases: which live process holds which device, enforced in code, never left to the model.
+
+A device declares its concurrency (:data:`rosaos.drivers.Concurrency`): an ``exclusive`` device is
+held by at most one live process, a ``shared`` one by any number. A grant is all-or-nothing: a
+process gets every device it asked for (plus the always-attached ones) or none, so it never starts
+with half of what its task needs. Refusals say who holds what, so the kernel agent can wait, ask
+the user, or terminate the holder.
+
+The table is plain synchronous data: the process manager calls it from the event loop, and a
+grant or release never awaits, so no lock is needed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass
+
+from rosaos.devices.endpoints import DeviceEndpoint
+
+
+class LeaseRefused(Exception):
+    """A grant that cannot be made. The message says why and what the kernel can do about it."""
+
+    def __init__(self, message: str, *, holders: Mapping[str, Lease] | None = None) -> None:
+        super().__init__(message)
+        self.holders: dict[str, Lease] = dict(holders or {})
+        """Exclusive devices that were refused because another process holds them."""
+
+
+@dataclass(frozen=True)
+class Lease:
+    """One device held by one process."""
+
+    device: str
+    process_id: int
+    task: str
+
+
+class LeaseTable:
+    """The leases of all live processes."""
+
+    def __init__(self) -> None:
+        self._leases: dict[int, list[Lease]] = {}
+
+    def acquire(
+        self,
+        process_id: int,
+        task: str,
+        requested: Iterable[str],
+        devices: Mapping[str, DeviceEndpoint],
+    ) -> list[str]:
+        """Grant ``requested`` plus every always-attached device to ``process_id``, all or nothing.
+
+        Returns the granted device names: the requested ones in the order asked, then the
+        always-attached ones that were not asked for. Raises :class:`LeaseRefused` naming every
+        problem (unknown device, device not served, exclusive device held by another process).
+        An always-attached device that is not served right now is left out rather than refused:
+        the process can still do its task, it just cannot talk to the user.
+        """
+        if process_id in self._leases:
+            raise ValueError(f"process {process_id} already holds leases; process ids must be new")
+        wanted = list(dict.fromkeys(requested))
+
+        unknown = [name for name in wanted if name not in devices]
+        if unknown:
+            known = ", ".join(sorted(devices)) or "none"
+            names = ", ".join(repr(name) for name in unknown)
+            noun = "device" if len(unknown) == 1 else "devices"
+            raise LeaseRefused(f"unknown {noun} {names}; the devices are: {known}")
+
+        problems: list[str] = []
+        for name in wanted:
+            device = devices[name]
+            if not device.grantable:
+                problems.append(
+                    f"{name} is not available now (status: {device.status}); "
+                    "choose another device, or try again once it is healthy"
+                )
+        implicit = [
+            name
+            for name, device in devices.items()
+            if device.always_attached and device.grantable and name not in wanted
+        ]
+        granted = wanted + implicit
+
+        held: dict[str, Lease] = {}
+        for name in granted:
+            holder = self._exclusive_holder(name, devices[name])
+            if holder is not None:
+                held[name] = holder
+                problems.append(
+                    f"{name} is held by process {holder.process_id} ({holder.task!r}); "
+                    f"wait for it, or terminate_process({holder.process_id})"
+                )
+        if problems:
+            raise LeaseRefused("\n".join(problems), holders=held)
+
+        self._leases[process_id] = [Lease(name, process_id, task) for name in granted]
+        return granted
+
+    def release(self, process_id: int) -> list[str]:
+        """Release every device ``process_id`` holds; returns their names. Releasing twice is fine."""
+        return [lease.device for lease in self._leases.pop(process_id, [])]
+
+    def held_by(self, process_id: int) -> list[str]:
+        """The devices ``process_id`` holds, in grant order (empty when it holds none)."""
+        return [lease.device for lease in self._leases.get(process_id, [])]
+
+    def holders(self) -> dict[str, list[Lease]]:
+        """Every held device and the leases on it (several for a shared device)."""
+        by_device: dict[str, list[Lease]] = {}
+        for leases in self._leases.values():
+            for lease in leases:
+                by_device.setdefault(lease.device, []).append(lease)
+        return by_device
+
+    def _exclusive_holder(self, name: str, device: DeviceEndpoint) -> Lease | None:
+        if device.concurrency != "exclusive":
+            return None
+        for leases in self._leases.values():
+            for lease in leases:
+                if lease.device == name:
+                    return lease
+        return None

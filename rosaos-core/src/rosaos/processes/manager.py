@@ -1,0 +1,210 @@
+"""The process manager: what the kernel agent's tools call to launch, list and terminate processes.
+
+``launch`` takes the leases first (a refusal never reaches the pool), then hands the job to the
+worker pool and returns at once with the process id. A process ends in one of two ways, and the
+first one to arrive wins (the other is a no-op):
+
+- the kernel commits the process's ``worker_callback`` event and calls :meth:`record_callback`;
+- the pool reports the end (``done`` line, crash, timeout, terminate) through its ``on_ended``.
+
+Either way the process is marked ended and its leases are released. The pool's report is then
+passed on to the kernel's ``on_ended``, which enqueues the callback when the worker could not
+deliver it itself, so no ending is lost.
+"""
+
+from __future__ import annotations
+
+import builtins
+from collections.abc import Awaitable, Callable, Mapping
+from datetime import UTC, datetime
+from typing import Literal
+
+from pydantic import BaseModel
+
+from rosaos.devices.endpoints import DeviceEndpoint
+from rosaos.models.select import ModelSpec
+from rosaos.processes.jobs import GrantedDevice, WorkerCallback, WorkerJob
+from rosaos.processes.leases import LeaseRefused, LeaseTable
+from rosaos.processes.pool import PoolError, WorkerPool
+
+ProcessState = Literal["running", "ok", "error", "crashed", "timeout", "terminated"]
+
+
+class ProcessInfo(BaseModel):
+    """One process, as ``list_processes`` shows it."""
+
+    id: int
+    task: str
+    devices: list[str]
+    state: ProcessState
+    started_at: datetime
+    ended_at: datetime | None = None
+    worker_pid: int | None = None
+
+
+class LaunchRefused(Exception):
+    """A process that was not launched; the message says why and what to do instead."""
+
+
+class ProcessManager:
+    """Launches processes on the worker pool under device leases, and tracks them until they end."""
+
+    def __init__(
+        self,
+        *,
+        devices: Callable[[], Mapping[str, DeviceEndpoint]],
+        model: ModelSpec,
+        base_prompt: str,
+        job_timeout: float,
+        request_limit: int,
+        callback_url: str,
+        callback_token: str,
+        pool: WorkerPool,
+        on_ended: Callable[[WorkerCallback, bool], Awaitable[None]],
+        first_process_id: int = 1,
+    ) -> None:
+        if first_process_id < 1:
+            raise ValueError("first_process_id must be 1 or more")
+        self._devices = devices
+        self._model = model
+        self._base_prompt = base_prompt
+        self._job_timeout = job_timeout
+        self._request_limit = request_limit
+        self._callback_url = callback_url
+        self._callback_token = callback_token
+        self._pool = pool
+        self._on_ended = on_ended
+        self._next_id = first_process_id
+        self._processes: dict[int, ProcessInfo] = {}
+        self.leases = LeaseTable()
+        pool.on_ended = self._worker_ended
+
+    @property
+    def pool(self) -> WorkerPool:
+        """The worker pool; the manager has taken over its ``on_ended``."""
+        return self._pool
+
+    @property
+    def next_process_id(self) -> int:
+        """The id the next launch will get."""
+        return self._next_id
+
+    async def start(self) -> None:
+        """Start the worker pool (its warm workers are ready when this returns)."""
+        await self._pool.start()
+
+    async def stop(self) -> None:
+        """Terminate every running process, release every lease, and stop the pool."""
+        for info in self.list():
+            await self.terminate(info.id)
+        await self._pool.stop()
+        for process_id in list(self._processes):
+            self.leases.release(process_id)
+
+    async def launch(self, task: str, devices: builtins.list[str]) -> ProcessInfo:
+        """Start a process for ``task`` holding ``devices`` (plus the always-attached ones).
+
+        Returns as soon as a worker has the job. Raises :class:`LaunchRefused` when the task is
+        empty, a device is unknown, unavailable, or held exclusively by another process.
+        """
+        task = task.strip()
+        if not task:
+            raise LaunchRefused("the task is empty; describe what the process should do")
+        endpoints = self._devices()
+        process_id = self._next_id
+        try:
+            granted = self.leases.acquire(process_id, task, devices, endpoints)
+        except LeaseRefused as refusal:
+            raise LaunchRefused(str(refusal)) from None
+        self._next_id += 1
+        job = WorkerJob(
+            process_id=process_id,
+            task=task,
+            devices=[_granted(endpoints[name]) for name in granted],
+            model=self._model,
+            base_prompt=self._base_prompt,
+            timeout=self._job_timeout,
+            request_limit=self._request_limit,
+            callback_url=self._callback_url,
+            callback_token=self._callback_token,
+        )
+        info = ProcessInfo(id=process_id, task=task, devices=granted, state="running", started_at=_now())
+        self._processes[process_id] = info
+        try:
+            handle = await self._pool.run(job)
+        except (PoolError, ValueError) as failure:
+            self._end(process_id, "error")
+            raise LaunchRefused(f"could not start a worker for the process: {failure}") from None
+        info.worker_pid = handle.worker_pid
+        if info.state == "terminated":
+            # terminate() (or stop()) came while a one-off worker was being spawned: honour it now.
+            await self._pool.terminate(process_id)
+        return info.model_copy()
+
+    async def terminate(self, process_id: int) -> ProcessInfo:
+        """Kill a running process and release its leases; an ended process is returned as it is.
+
+        Raises ``KeyError`` with a readable message for an id that was never launched.
+        """
+        info = self._get(process_id)
+        if info.state == "running" and not await self._pool.terminate(process_id):
+            # No worker has the job: launch() is still spawning one, and will kill it on return.
+            self._end(process_id, "terminated")
+        return self._get(process_id).model_copy()
+
+    def list(self, include_ended: bool = False) -> builtins.list[ProcessInfo]:
+        """The running processes (and the ended ones too with ``include_ended``), oldest first."""
+        return [
+            info.model_copy()
+            for info in sorted(self._processes.values(), key=lambda info: info.id)
+            if include_ended or info.state == "running"
+        ]
+
+    def get(self, process_id: int) -> ProcessInfo:
+        """One process by id; ``KeyError`` with a readable message for an unknown id."""
+        return self._get(process_id).model_copy()
+
+    def record_callback(self, callback: WorkerCallback) -> None:
+        """Mark the process ended as ``callback`` says and release its leases. Idempotent.
+
+        The kernel calls this when it commits a ``worker_callback`` event. A callback for a process
+        this manager does not know (from before a restart) is ignored.
+        """
+        self._end(callback.worker_id, callback.status)
+
+    async def _worker_ended(self, callback: WorkerCallback, delivered: bool) -> None:
+        self.record_callback(callback)
+        await self._on_ended(callback, delivered)
+
+    def _end(self, process_id: int, state: ProcessState) -> None:
+        info = self._processes.get(process_id)
+        if info is None:
+            return
+        if info.state == "running":
+            info.state, info.ended_at = state, _now()
+        self.leases.release(process_id)
+
+    def _get(self, process_id: int) -> ProcessInfo:
+        try:
+            return self._processes[process_id]
+        except KeyError:
+            running = ", ".join(str(pid) for pid, info in self._processes.items() if info.state == "running")
+            raise KeyError(
+                f"no process {process_id}; running processes: {running or 'none'} (see list_processes)"
+            ) from None
+
+
+def _granted(endpoint: DeviceEndpoint) -> GrantedDevice:
+    assert endpoint.url is not None, "the lease table grants served devices only"
+    return GrantedDevice(
+        name=endpoint.name,
+        driver=endpoint.driver,
+        url=endpoint.url,
+        token=endpoint.token,
+        description=endpoint.description,
+        prompt=endpoint.prompt,
+    )
+
+
+def _now() -> datetime:
+    return datetime.now(UTC)

@@ -1,0 +1,429 @@
+"""The warm worker pool: long-lived worker subprocesses that run process agents, one job each at a time.
+
+Importing pydantic-ai and FastMCP takes seconds, so workers are started ahead of time and reused.
+When every warm worker is busy, a one-off worker is spawned for the job and retired after it.
+
+Each worker runs in its own process group and is watched by one task that reads its protocol
+lines (see :mod:`rosaos.processes.worker`) and notices when it exits. That watcher is the only
+place a job's end is reported, so each job is reported exactly once, to ``on_ended``:
+
+- ``done`` line: the worker's own callback, and whether the worker delivered it to the kernel.
+- the process exits mid-job: ``crashed`` (with its exit code or signal), unless the pool killed
+  it on purpose: ``timeout`` (the job overran ``timeout + kill_grace``) or ``terminated``.
+
+Killing means SIGKILL to the whole process group, then waiting for the exit, so no worker (or
+anything it started) outlives a terminate, a timeout or :meth:`WorkerPool.stop`. A warm worker
+that dies is replaced, so the pool keeps its size.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+import os
+import signal
+import sys
+from collections.abc import Awaitable, Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Literal
+
+from pydantic import ValidationError
+
+from rosaos.processes.jobs import ProcessStatus, WorkerCallback, WorkerJob
+
+log = logging.getLogger(__name__)
+
+OnEnded = Callable[[WorkerCallback, bool], Awaitable[None]]
+"""Called once per job with its callback and whether the worker already delivered it by HTTP."""
+
+LINE_LIMIT = 16 * 1024 * 1024
+RETIRE_GRACE = 5.0
+"""Seconds a worker that closed its stdout (retired, or broken) gets to exit before it is killed."""
+MAX_RESTART_DELAY = 30.0
+"""Longest wait before replacing a worker, when workers keep dying during start-up."""
+
+
+class PoolError(Exception):
+    """The pool cannot run workers; the message says what to check."""
+
+
+@dataclass(frozen=True)
+class JobHandle:
+    """Where a job runs."""
+
+    process_id: int
+    worker_pid: int
+    one_off: bool
+
+
+@dataclass(frozen=True)
+class WorkerStats:
+    """One worker, for ``rosaos ps`` and the benchmarks."""
+
+    pid: int
+    state: Literal["starting", "idle", "busy"]
+    one_off: bool
+    process_id: int | None
+    rss_bytes: int | None
+
+
+class _Worker:
+    """One worker subprocess and what the pool knows about it."""
+
+    def __init__(self, proc: asyncio.subprocess.Process, one_off: bool) -> None:
+        self.proc = proc
+        self.one_off = one_off
+        self.ready = asyncio.Event()
+        self.ready_seen = False
+        """True once the worker said ``ready`` (``ready`` is also set when it dies, to wake waiters)."""
+        self.exited = asyncio.Event()
+        """Set once the exit has been handled: the job reported, a replacement requested."""
+        self.job: WorkerJob | None = None
+        self.kill_reason: ProcessStatus | None = None
+        self.deadline: asyncio.TimerHandle | None = None
+
+    @property
+    def pid(self) -> int:
+        return self.proc.pid
+
+
+class WorkerPool:
+    """A warm pool of ``size`` worker subprocesses running ``python -m rosaos.processes.worker``.
+
+    ``env`` is added to this process's environment for the workers (e.g. ``PYTHONPATH``).
+    A job may run ``kill_grace`` seconds past its timeout (the worker stops it itself at the
+    timeout and reports it) before the pool kills the worker.
+    """
+
+    def __init__(
+        self,
+        size: int = 2,
+        python: str = sys.executable,
+        env: Mapping[str, str] | None = None,
+        *,
+        on_ended: OnEnded | None = None,
+        kill_grace: float = 5.0,
+        start_timeout: float = 60.0,
+    ) -> None:
+        if size < 0:
+            raise ValueError("pool size must be 0 or more")
+        self.size = size
+        self.python = python
+        self.on_ended = on_ended
+        """Where job ends are reported; the process manager sets it."""
+        self.kill_grace = kill_grace
+        self.start_timeout = start_timeout
+        self._env = {**os.environ, **(env or {})}
+        self._workers: set[_Worker] = set()
+        self._spawning: set[asyncio.Task[Any]] = set()
+        self._watchers: set[asyncio.Task[Any]] = set()
+        self._stopping = False
+        self._start_failures = 0
+
+    async def start(self) -> None:
+        """Start the warm workers and wait until each has finished its imports."""
+        self._stopping = False
+        workers = [await self._spawn(one_off=False) for _ in range(self.size)]
+        hint = f"run 'echo | {self.python} -m rosaos.processes.worker' to see why"
+        try:
+            async with asyncio.timeout(self.start_timeout):
+                await asyncio.gather(*(worker.ready.wait() for worker in workers))
+        except TimeoutError:
+            await self.stop()
+            raise PoolError(f"workers did not start within {self.start_timeout:g} s; {hint}") from None
+        codes = [str(worker.proc.returncode) for worker in workers if worker.proc.returncode is not None]
+        if codes:
+            await self.stop()
+            raise PoolError(f"worker exited during start-up (exit code {', '.join(codes)}); {hint}")
+
+    async def run(self, job: WorkerJob) -> JobHandle:
+        """Give ``job`` to an idle warm worker, or to a new one-off worker if all are busy."""
+        if self._stopping:
+            raise PoolError("the worker pool is stopped")
+        if self._worker_for(job.process_id) is not None:
+            raise ValueError(f"process {job.process_id} is already running")
+        idle = [worker for worker in self._workers if self._is_idle(worker)]
+        # A warm worker that is still importing is still faster than a fresh one-off.
+        idle.sort(key=lambda worker: not worker.ready.is_set())
+        if idle:
+            worker = idle[0]
+            self._assign(worker, job)
+        else:
+            worker = await self._spawn(one_off=True, job=job)
+        await self._send(worker, job)
+        return JobHandle(job.process_id, worker.pid, worker.one_off)
+
+    async def terminate(self, process_id: int) -> bool:
+        """Kill the worker running ``process_id`` and wait until its end is reported.
+
+        Returns False when no worker is running that process (it already ended).
+        """
+        worker = self._worker_for(process_id)
+        if worker is None:
+            return False
+        self._kill(worker, "terminated")
+        await worker.exited.wait()
+        return True
+
+    async def stop(self) -> None:
+        """Kill every worker (jobs still running are reported ``terminated``) and wait for them."""
+        self._stopping = True
+        for task in list(self._spawning):
+            task.cancel()
+        await asyncio.gather(*self._spawning, return_exceptions=True)
+        workers = list(self._workers)
+        for worker in workers:
+            self._kill(worker, "terminated")
+        await asyncio.gather(*(worker.exited.wait() for worker in workers))
+
+    def stats(self) -> list[WorkerStats]:
+        """Every live worker: pid, state, job and resident memory (read from /proc on Linux)."""
+        rows = []
+        for worker in sorted(self._workers, key=lambda worker: worker.pid):
+            state: Literal["starting", "idle", "busy"]
+            if worker.job is not None:
+                state = "busy"
+            elif worker.ready.is_set():
+                state = "idle"
+            else:
+                state = "starting"
+            process_id = worker.job.process_id if worker.job else None
+            rows.append(WorkerStats(worker.pid, state, worker.one_off, process_id, _rss_bytes(worker.pid)))
+        return rows
+
+    async def wait_until_warm(self) -> None:
+        """Wait until the pool has ``size`` warm workers that finished their imports."""
+        while True:
+            warm = [worker for worker in self._workers if not worker.one_off and worker.ready.is_set()]
+            if len(warm) >= self.size and not self._spawning:
+                return
+            await asyncio.sleep(0.05)
+
+    # -- workers ------------------------------------------------------------------------------
+
+    async def _spawn(self, one_off: bool, job: WorkerJob | None = None) -> _Worker:
+        try:
+            proc = await asyncio.create_subprocess_exec(
+                self.python,
+                "-m",
+                "rosaos.processes.worker",
+                stdin=asyncio.subprocess.PIPE,
+                stdout=asyncio.subprocess.PIPE,
+                env=self._env,
+                # Own process group: a kill takes everything the worker started with it, and a
+                # Ctrl-C in the terminal reaches the kernel, which then stops the pool in order.
+                start_new_session=True,
+                limit=LINE_LIMIT,
+            )
+        except OSError as failure:
+            raise PoolError(f"cannot start a worker with {self.python}: {failure.strerror}") from None
+        if self._stopping:  # stop() ran while this worker was being started: it must not outlive it
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(proc.pid, signal.SIGKILL)
+            await proc.wait()
+            raise PoolError("the worker pool is stopped")
+        worker = _Worker(proc, one_off)
+        # No await between registering and assigning: no other run() can take this worker.
+        self._workers.add(worker)
+        if job is not None:
+            self._assign(worker, job)
+        watcher = asyncio.create_task(self._watch(worker), name=f"rosaos-worker-{proc.pid}")
+        # Referenced so the watcher is not garbage-collected while it runs.
+        self._watchers.add(watcher)
+        watcher.add_done_callback(self._watchers.discard)
+        log.debug("started %s worker %d", "one-off" if one_off else "warm", proc.pid)
+        return worker
+
+    def _replace(self, delay: float) -> None:
+        async def replace() -> None:
+            await asyncio.sleep(delay)
+            try:
+                await self._spawn(one_off=False)
+            except PoolError as failure:
+                log.error("could not replace a worker: %s", failure)
+
+        task = asyncio.create_task(replace())
+        self._spawning.add(task)
+        task.add_done_callback(self._spawning.discard)
+
+    def _assign(self, worker: _Worker, job: WorkerJob) -> None:
+        worker.job = job
+        deadline = job.timeout + self.kill_grace
+        worker.deadline = asyncio.get_running_loop().call_later(deadline, self._kill, worker, "timeout")
+
+    async def _send(self, worker: _Worker, job: WorkerJob) -> None:
+        assert worker.proc.stdin is not None
+        # A worker that died already is reported by its watcher; the write error adds nothing.
+        with contextlib.suppress(ConnectionError, RuntimeError):
+            worker.proc.stdin.write(job.model_dump_json().encode() + b"\n")
+            await worker.proc.stdin.drain()
+
+    def _kill(self, worker: _Worker, reason: ProcessStatus) -> None:
+        if worker.exited.is_set():
+            return
+        if worker.kill_reason is None:
+            worker.kill_reason = reason
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(worker.pid, signal.SIGKILL)
+
+    def _is_idle(self, worker: _Worker) -> bool:
+        return (
+            worker.job is None
+            and not worker.one_off
+            and worker.kill_reason is None
+            and worker.proc.returncode is None
+        )
+
+    def _worker_for(self, process_id: int) -> _Worker | None:
+        for worker in self._workers:
+            if worker.job is not None and worker.job.process_id == process_id:
+                return worker
+        return None
+
+    # -- watching -----------------------------------------------------------------------------
+
+    async def _watch(self, worker: _Worker) -> None:
+        """Read the worker's protocol lines until it exits, then report its job and replace it."""
+        assert worker.proc.stdout is not None
+        try:
+            while line := await worker.proc.stdout.readline():
+                await self._on_line(worker, line)
+        except (ValueError, asyncio.LimitOverrunError) as failure:
+            log.error("worker %d broke the protocol (%s); killing it", worker.pid, failure)
+            self._kill(worker, "crashed")
+        finally:
+            await self._on_exit(worker)
+
+    async def _on_exit(self, worker: _Worker) -> None:
+        try:
+            returncode = await asyncio.wait_for(worker.proc.wait(), timeout=RETIRE_GRACE)
+        except TimeoutError:  # stdout closed but the process lives on: it is of no use any more
+            self._kill(worker, "crashed")
+            returncode = await worker.proc.wait()
+        # SIGKILL the group also when the leader exited alone: nothing it started may linger.
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(worker.pid, signal.SIGKILL)
+        self._workers.discard(worker)
+        worker.ready.set()  # wake start() if the worker died while importing
+        job, worker.job = worker.job, None
+        try:
+            if job is not None:
+                self._cancel_deadline(worker)
+                await self._report_killed(worker, job, returncode)
+        finally:
+            if not worker.one_off and not self._stopping:
+                self._replace(self._replacement_delay(worker, returncode))
+            worker.exited.set()
+
+    def _replacement_delay(self, worker: _Worker, returncode: int) -> float:
+        """No delay, unless workers keep dying during start-up: then back off instead of looping."""
+        if worker.ready_seen or worker.kill_reason is not None:
+            return 0.0
+        self._start_failures += 1
+        delay = min(MAX_RESTART_DELAY, 0.5 * 2**self._start_failures)
+        log.error(
+            "worker %d exited during start-up (%s); next try in %g s. Run "
+            "'echo | %s -m rosaos.processes.worker' to see why",
+            worker.pid,
+            _describe_exit(returncode),
+            delay,
+            self.python,
+        )
+        return delay
+
+    async def _on_line(self, worker: _Worker, line: bytes) -> None:
+        try:
+            event = json.loads(line)
+        except json.JSONDecodeError:
+            log.warning("worker %d wrote a non-protocol line: %r", worker.pid, line[:200])
+            return
+        kind = event.get("event")
+        if kind == "ready":
+            worker.ready_seen = True
+            worker.ready.set()
+            self._start_failures = 0
+        elif kind == "done":
+            await self._on_done(worker, event)
+        elif kind == "rejected" and worker.job is not None:
+            job, worker.job = worker.job, None
+            self._cancel_deadline(worker)
+            await self._emit(
+                _ended(job, "error", f"the worker rejected the job: {event.get('error')}"), False
+            )
+
+    async def _on_done(self, worker: _Worker, event: dict[str, Any]) -> None:
+        job = worker.job
+        if job is None or event.get("process_id") != job.process_id:
+            log.warning("worker %d reported an unexpected job end: %s", worker.pid, event)
+            return
+        worker.job = None
+        self._cancel_deadline(worker)
+        try:
+            callback = WorkerCallback.model_validate(event.get("callback"))
+        except ValidationError as invalid:  # a worker from another rosaOS version, say
+            callback = _ended(job, "error", f"the worker sent an invalid callback: {invalid}")
+        if worker.one_off:
+            self._retire(worker)
+        await self._emit(callback, bool(event.get("delivered")))
+
+    def _retire(self, worker: _Worker) -> None:
+        """Let a one-off worker exit on its own (stdin closed); kill it if it lingers."""
+        assert worker.proc.stdin is not None
+        worker.proc.stdin.close()
+        asyncio.get_running_loop().call_later(RETIRE_GRACE, self._kill, worker, "terminated")
+
+    async def _report_killed(self, worker: _Worker, job: WorkerJob, returncode: int) -> None:
+        if worker.kill_reason == "timeout":
+            status: ProcessStatus = "timeout"
+            error = f"the process ran past its timeout of {job.timeout:g} s and its worker was killed"
+        elif worker.kill_reason == "terminated":
+            status, error = "terminated", "the process was terminated on request"
+        else:
+            status = "crashed"
+            error = (
+                f"the worker process (pid {worker.pid}) died while running the task "
+                f"({_describe_exit(returncode)}); the task may be half done, so check the "
+                "devices' state before retrying"
+            )
+        await self._emit(_ended(job, status, error), False)
+
+    async def _emit(self, callback: WorkerCallback, delivered: bool) -> None:
+        if self.on_ended is None:
+            log.info("process %d ended: %s", callback.worker_id, callback.status)
+            return
+        try:
+            await self.on_ended(callback, delivered)
+        except Exception:
+            log.exception("on_ended failed for process %d", callback.worker_id)
+
+    def _cancel_deadline(self, worker: _Worker) -> None:
+        if worker.deadline is not None:
+            worker.deadline.cancel()
+            worker.deadline = None
+
+
+def _ended(job: WorkerJob, status: ProcessStatus, error: str) -> WorkerCallback:
+    return WorkerCallback(worker_id=job.process_id, status=status, error=error, task=job.task)
+
+
+def _describe_exit(returncode: int) -> str:
+    if returncode < 0:
+        try:
+            return f"killed by {signal.Signals(-returncode).name}"
+        except ValueError:
+            return f"killed by signal {-returncode}"
+    return f"exit code {returncode}"
+
+
+def _rss_bytes(pid: int) -> int | None:
+    # /proc is in memory, so this read does not block the event loop in any meaningful way.
+    try:
+        for line in Path(f"/proc/{pid}/status").read_text().splitlines():
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        return None
+    return None

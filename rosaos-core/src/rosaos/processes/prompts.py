@@ -1,0 +1,62 @@
+"""The process agent's system prompt: base prompt, then the kernel's task, then one section per device.
+
+The kernel agent decides *what* to do and which devices to grant; the process agent does it with
+exactly the tools of those devices. Its prompt therefore says how to behave (the base prompt),
+what to do (the task, verbatim from ``launch_process``), and what each granted device is and how
+to drive it (the device prompt that the driver ships).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from rosaos.processes.jobs import GrantedDevice
+
+DEFAULT_PROCESS_PROMPT = """\
+You are a process agent in rosaOS, an operating system for robots and smart devices.
+The kernel agent gave you one task and a set of devices. Carry out the task using only the tools \
+of those devices, then reply with a short report of what you did and the resulting device state.
+
+- Do exactly the task: do not touch devices or settings the task does not ask for.
+- Read a device's state (get_state) before acting when the task depends on it, and after acting \
+when you need to confirm the result.
+- Tool arguments are bounded; if a value is out of range, use the nearest valid one and say so.
+- If a tool fails, read its message: retry once if it says how to fix the call, otherwise stop \
+and report what failed and why.
+- Never invent a device state or a result you did not get from a tool.
+- Your report goes back to the kernel, not directly to the user: keep it factual and brief.
+"""
+
+
+def base_process_prompt(configured: str | None) -> str:
+    """The base process prompt: ``[kernel] process_prompt`` from the config, or the built-in default."""
+    if configured is not None and configured.strip():
+        return configured
+    return DEFAULT_PROCESS_PROMPT
+
+
+def tool_prefix(device: str) -> str:
+    """The prefix a device's tool names get when a process holds more than one device."""
+    return device
+
+
+def process_system_prompt(base_prompt: str, task: str, devices: Sequence[GrantedDevice]) -> str:
+    """Assemble the process agent's system prompt for ``task`` with ``devices`` granted.
+
+    Each device section is headed by its instance name and description, followed by the driver's
+    device prompt. With more than one device the tool names are prefixed by the instance name
+    (``kitchen_light_set_color``), and the section says so, so the model can tell them apart.
+    """
+    parts = [base_prompt.strip(), f"# Your task\n{task.strip()}"]
+    if not devices:
+        parts.append("# Your devices\nYou hold no devices for this task, so you have no tools.")
+    else:
+        prefixed = len(devices) > 1
+        names = ", ".join(device.name for device in devices)
+        parts.append(f"# Your devices\nYou hold: {names}.")
+        for device in devices:
+            heading = f"## {device.name} ({device.driver})\n{device.description.strip()}"
+            if prefixed:
+                heading += f"\nIts tools are named `{tool_prefix(device.name)}_<tool>`."
+            parts.append(f"{heading}\n\n{device.prompt.strip()}")
+    return "\n\n".join(parts) + "\n"

@@ -1,0 +1,291 @@
+"""Worker main, ``python -m rosaos.processes.worker``: runs process agents, one job at a time.
+
+A worker is long-lived so the pool can keep it warm: the heavy imports (pydantic-ai, FastMCP)
+happen once, at start-up. The protocol with the pool is one JSON object per line:
+
+- stdin, pool to worker: a :class:`~rosaos.processes.jobs.WorkerJob`.
+- stdout, worker to pool: ``{"event": "ready"}`` once the imports are done, then for each job
+  ``{"event": "done", "process_id": N, "delivered": bool, "callback": {...}}`` after the
+  callback was posted to the kernel (``delivered`` false means the pool must enqueue it), or
+  ``{"event": "rejected", "error": ...}`` for a line that is not a valid job.
+
+stdout carries protocol lines only: the real stdout is kept for them and fd 1 is pointed at
+stderr, so a stray ``print`` in a library cannot corrupt the protocol. Logs go to stderr.
+The worker exits when stdin closes (the pool is gone).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+import os
+import sys
+from collections.abc import Sequence
+from typing import IO, Any
+
+import httpx
+from fastmcp import Client
+from pydantic import ValidationError
+from pydantic_ai import Agent, UsageLimitExceeded, capture_run_messages
+from pydantic_ai.mcp import MCPToolset
+from pydantic_ai.messages import ModelMessage, ModelResponse, TextPart
+from pydantic_ai.models import Model
+from pydantic_ai.models.function import AgentInfo, FunctionModel
+from pydantic_ai.toolsets import AbstractToolset
+from pydantic_ai.usage import UsageLimits
+
+from rosaos.models.select import ModelError, build_model
+from rosaos.processes.jobs import (
+    GrantedDevice,
+    ProcessStatus,
+    WorkerCallback,
+    WorkerJob,
+    callback_idempotency_key,
+)
+from rosaos.processes.prompts import process_system_prompt, tool_prefix
+
+log = logging.getLogger("rosaos.processes.worker")
+
+CONNECT_TIMEOUT = 10.0
+"""Seconds to open an MCP session with one granted device."""
+CALLBACK_RETRY_DELAYS = (0.0, 0.25, 1.0)
+"""Delays before each attempt to post the callback; after the last, the pool enqueues it."""
+CALLBACK_TIMEOUT = 5.0
+LINE_LIMIT = 16 * 1024 * 1024
+"""Largest job line accepted (device prompts make jobs a few KiB; this is only a guard)."""
+
+
+class DeviceUnreachable(Exception):
+    """A granted device whose MCP server could not be reached; the message names it and its URL."""
+
+
+def offline_model() -> Model:
+    """The model used when none is configured (``ModelSpec.model`` is None).
+
+    A placeholder until the local-intent engine lands: it answers every task with a message
+    saying how to configure a model, so the offline path still runs end to end.
+    """
+
+    def answer(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        return ModelResponse(
+            parts=[
+                TextPart(
+                    "No model is configured: set [models] process in rosaos.toml (for example "
+                    "'openai:gpt-5.2', or 'openai-compatible' with base_url and model_name), "
+                    "then run the task again."
+                )
+            ]
+        )
+
+    return FunctionModel(answer, model_name="rosaos-unconfigured")
+
+
+async def run_job(job: WorkerJob) -> WorkerCallback:
+    """Run one process agent to completion and describe how it ended. Never raises."""
+    status: ProcessStatus = "ok"
+    output: str | None = None
+    error: str | None = None
+    with capture_run_messages() as messages:
+        try:
+            async with asyncio.timeout(job.timeout) as deadline:
+                output = await _run_agent(job)
+        except TimeoutError:
+            if not deadline.expired():
+                log.exception("process %d failed", job.process_id)
+                status, error = "error", "a tool or model call timed out; try again, or check the device"
+            else:
+                status = "timeout"
+                error = f"the process ran past its timeout of {job.timeout:g} s and was stopped"
+        except UsageLimitExceeded:
+            status = "error"
+            error = (
+                f"the process used its limit of {job.request_limit} model requests without finishing; "
+                "split the task into smaller ones, or raise [kernel] request_limit"
+            )
+        except Exception as failure:
+            log.exception("process %d failed", job.process_id)
+            status, error = "error", describe_error(failure)
+    requests, tool_calls = count_usage(messages)
+    return WorkerCallback(
+        worker_id=job.process_id,
+        status=status,
+        output=output,
+        error=error,
+        task=job.task,
+        model_requests=requests,
+        tool_calls=tool_calls,
+    )
+
+
+async def _run_agent(job: WorkerJob) -> str:
+    model = build_model(job.model, offline=offline_model())
+    prefixed = len(job.devices) > 1
+    async with contextlib.AsyncExitStack() as stack:
+        toolsets = [await _connect(stack, device, prefixed) for device in job.devices]
+        agent = Agent(
+            model,
+            instructions=process_system_prompt(job.base_prompt, job.task, job.devices),
+            toolsets=toolsets,
+            name=f"process-{job.process_id}",
+        )
+        result = await agent.run(job.task, usage_limits=UsageLimits(request_limit=job.request_limit))
+        return str(result.output)
+
+
+async def _connect(
+    stack: contextlib.AsyncExitStack, device: GrantedDevice, prefixed: bool
+) -> AbstractToolset[Any]:
+    """Open the device's MCP session up front, so a dead device is reported by name, not as a stack."""
+    client: Client[Any] = Client(
+        device.url, auth=device.token, name=f"rosaos-{device.name}", init_timeout=CONNECT_TIMEOUT
+    )
+    # 'failed': a device error (bulb offline, value refused) goes back to the model as a failed
+    # tool result it can read and report, instead of ending the whole run.
+    toolset: MCPToolset[Any] = MCPToolset(client, id=device.name, tool_error_behavior="failed")
+    try:
+        await stack.enter_async_context(toolset)
+    except Exception as failure:
+        refused = await _refused_token(device)
+        if refused:
+            raise DeviceUnreachable(
+                f"device {device.name} at {device.url} refused the bearer token ({refused}); "
+                "check the token configured for it"
+            ) from failure
+        raise DeviceUnreachable(
+            f"cannot reach device {device.name} at {device.url}: {describe_error(failure)}; "
+            "check that it is served and healthy (rosaos devices list)"
+        ) from failure
+    return toolset.prefixed(tool_prefix(device.name)) if prefixed else toolset
+
+
+async def _refused_token(device: GrantedDevice) -> str | None:
+    """After a failed connect: whether the server answered 401/403 (the MCP error does not say)."""
+    try:
+        async with httpx.AsyncClient(timeout=CONNECT_TIMEOUT) as http:
+            response = await http.post(device.url, headers={"Authorization": f"Bearer {device.token}"})
+    except httpx.HTTPError:
+        return None
+    return f"HTTP {response.status_code}" if response.status_code in (401, 403) else None
+
+
+def describe_error(failure: BaseException) -> str:
+    """A one-line, readable description of ``failure``: our own errors by message, others by type too."""
+    while isinstance(failure, BaseExceptionGroup) and failure.exceptions:
+        failure = failure.exceptions[0]
+    if isinstance(failure, DeviceUnreachable | ModelError):
+        return str(failure)
+    text = str(failure).strip().splitlines()[0] if str(failure).strip() else ""
+    return f"{type(failure).__name__}: {text}" if text else type(failure).__name__
+
+
+def count_usage(messages: Sequence[ModelMessage]) -> tuple[int, int]:
+    """Model requests (responses received) and tool calls made, from a run's messages."""
+    responses = [message for message in messages if isinstance(message, ModelResponse)]
+    return len(responses), sum(len(response.tool_calls) for response in responses)
+
+
+def callback_event(callback: WorkerCallback) -> dict[str, Any]:
+    """The ``POST /event`` body that carries ``callback`` to the kernel."""
+    return {
+        "kind": "worker_callback",
+        "source": "worker",
+        "payload": callback.model_dump(mode="json"),
+        "idempotency_key": callback_idempotency_key(callback.worker_id),
+    }
+
+
+async def deliver_callback(job: WorkerJob, callback: WorkerCallback) -> bool:
+    """Post ``callback`` to the kernel, retrying briefly. False if it did not get through."""
+    headers = {"Authorization": f"Bearer {job.callback_token}"}
+    body = callback_event(callback)
+    async with httpx.AsyncClient(timeout=CALLBACK_TIMEOUT) as http:
+        for delay in CALLBACK_RETRY_DELAYS:
+            await asyncio.sleep(delay)
+            try:
+                response = await http.post(job.callback_url, json=body, headers=headers)
+            except httpx.HTTPError as failure:
+                log.warning(
+                    "process %d: callback to %s failed: %s", job.process_id, job.callback_url, failure
+                )
+                continue
+            if response.is_success:
+                return True
+            log.warning(
+                "process %d: kernel answered %d to the callback: %s",
+                job.process_id,
+                response.status_code,
+                response.text[:200],
+            )
+            # Only a server-side or throttling failure may go away on retry.
+            if response.status_code < 500 and response.status_code not in (408, 429):
+                return False
+    return False
+
+
+class ProtocolWriter:
+    """Writes protocol lines to the worker's real stdout; everything else printed goes to stderr."""
+
+    def __init__(self) -> None:
+        sys.stdout.flush()
+        self._stream: IO[str] = os.fdopen(os.dup(1), "w", buffering=1, encoding="utf-8")
+        os.dup2(2, 1)
+        sys.stdout = sys.stderr
+
+    def send(self, event: dict[str, Any]) -> None:
+        """Write one event line. A small write to a pipe the pool always drains; it does not block."""
+        self._stream.write(json.dumps(event) + "\n")
+        self._stream.flush()
+
+
+async def _stdin_reader() -> asyncio.StreamReader:
+    loop = asyncio.get_running_loop()
+    reader = asyncio.StreamReader(limit=LINE_LIMIT)
+    await loop.connect_read_pipe(lambda: asyncio.StreamReaderProtocol(reader), sys.stdin)
+    return reader
+
+
+async def serve(protocol: ProtocolWriter) -> None:
+    """Announce readiness, then run each job read from stdin until stdin closes."""
+    reader = await _stdin_reader()
+    protocol.send({"event": "ready", "pid": os.getpid()})
+    while line := await reader.readline():
+        if not line.strip():
+            continue
+        try:
+            job = WorkerJob.model_validate_json(line)
+        except ValidationError as invalid:
+            log.error("rejected a job that is not a valid WorkerJob: %s", invalid)
+            protocol.send({"event": "rejected", "error": f"not a valid WorkerJob: {invalid}"})
+            continue
+        log.info("process %d: starting %r with %d device(s)", job.process_id, job.task, len(job.devices))
+        callback = await run_job(job)
+        delivered = await deliver_callback(job, callback)
+        log.info("process %d: %s (callback delivered: %s)", job.process_id, callback.status, delivered)
+        protocol.send(
+            {
+                "event": "done",
+                "process_id": job.process_id,
+                "delivered": delivered,
+                "callback": callback.model_dump(mode="json"),
+            }
+        )
+
+
+def main() -> None:
+    """Entry point of ``python -m rosaos.processes.worker``."""
+    # Libraries (httpx, mcp) log every request at INFO; only their warnings are worth a line.
+    logging.basicConfig(
+        level=logging.WARNING,
+        stream=sys.stderr,
+        format=f"worker[{os.getpid()}] %(levelname)s %(name)s: %(message)s",
+    )
+    logging.getLogger("rosaos").setLevel(os.environ.get("ROSAOS_WORKER_LOG", "INFO").upper())
+    protocol = ProtocolWriter()
+    with contextlib.suppress(KeyboardInterrupt):
+        asyncio.run(serve(protocol))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,35 @@
+"""Appends events to the store given on the command line until it is killed (test_durability).
+
+Each line on stdout reports something already committed: ``appended ID N`` or ``handled ID``.
+Every other event is marked handled, as a kernel working through the queue would.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import sys
+from pathlib import Path
+
+from rosaos.kernel.events import EventStore, UserText, UserTypedEvent
+
+
+async def main(path: Path) -> None:
+    store = await EventStore.open(path)
+    n = 0
+    while True:
+        event = UserTypedEvent(
+            kind="user_typed",
+            source="durability",
+            payload=UserText(text=f"event {n}"),
+            idempotency_key=f"key-{n}",
+        )
+        appended = await store.append(event)
+        print(f"appended {appended.id} {n}", flush=True)
+        if n % 2 == 0:
+            await store.mark_handled(appended.id)
+            print(f"handled {appended.id}", flush=True)
+        n += 1
+
+
+if __name__ == "__main__":
+    asyncio.run(main(Path(sys.argv[1])))

@@ -1,0 +1,100 @@
+"""Helpers for the kernel tests: the token, a small in-test runtime, and a polling wait.
+
+``TestRuntime`` implements :class:`rosaos.kernel.api.KernelRuntime` with a fixed list of processes
+and devices; integration tests with the real process manager and device supervisor live elsewhere.
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Awaitable, Callable, Sequence
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from typing import Any
+
+from rosaos.kernel.events import EventStore
+from rosaos.kernel.login import LoginCodes
+from rosaos.kernel.updates import UpdateStream
+from rosaos.processes.jobs import WorkerCallback
+
+TOKEN = "test-token-0123456789"
+ORIGIN = "http://127.0.0.1:8765"
+AUTH = {"Authorization": f"Bearer {TOKEN}"}
+
+
+@dataclass
+class Process:
+    """Stands in for ``rosaos.processes.manager.ProcessInfo`` (the API reads attributes)."""
+
+    id: int
+    task: str
+    devices: list[str]
+    state: str = "running"
+    started_at: datetime = field(default_factory=lambda: datetime.now(UTC))
+    ended_at: datetime | None = None
+    worker_pid: int | None = 4242
+
+
+@dataclass
+class TestRuntime:
+    """A :class:`KernelRuntime` with canned processes and devices, recording what the API asks."""
+
+    __test__ = False  # not a test class, despite the name
+
+    events: EventStore
+    updates: UpdateStream
+    token: str = TOKEN
+    login_codes: LoginCodes = field(default_factory=LoginCodes)
+    model_description: str = "offline default"
+    model_notice: str | None = "No model is configured: set [models] kernel in rosaos.toml."
+    process_list: list[Process] = field(default_factory=list)
+    device_list: list[dict[str, Any]] = field(default_factory=list)
+    callbacks: list[tuple[int, WorkerCallback]] = field(default_factory=list)
+    terminated: list[int] = field(default_factory=list)
+
+    async def processes(self) -> Sequence[Any]:
+        return [p for p in self.process_list if p.state == "running"]
+
+    async def terminate(self, process_id: int) -> Any:
+        for process in self.process_list:
+            if process.id == process_id:
+                self.terminated.append(process_id)
+                process.state, process.ended_at = "terminated", datetime.now(UTC)
+                return process
+        raise KeyError(f"no process {process_id}")
+
+    async def devices(self) -> Sequence[dict[str, Any]]:
+        return self.device_list
+
+    async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
+        self.callbacks.append((event_id, callback))
+
+
+def kitchen_light(on: bool = False) -> dict[str, Any]:
+    return {
+        "name": "kitchen_light",
+        "driver": "tapo",
+        "concurrency": "exclusive",
+        "backend": "sim",
+        "status": "healthy",
+        "url": "http://127.0.0.1:9101/mcp",
+        "state": {"on": on, "brightness": 100},
+        "description": "Ceiling light in the kitchen",
+    }
+
+
+async def eventually(
+    condition: Callable[[], bool | Awaitable[bool]], within: float = 10.0, message: str = "condition"
+) -> None:
+    """Poll ``condition`` until it holds, failing after ``within`` seconds (never a timing assertion)."""
+    try:
+        async with asyncio.timeout(within):
+            while True:
+                result = condition()
+                if not isinstance(result, bool):
+                    result = await result
+                if result:
+                    return
+                await asyncio.sleep(0.02)
+    except TimeoutError:
+        raise AssertionError(f"{message} did not happen within {within} s") from None

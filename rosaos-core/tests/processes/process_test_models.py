@@ -1,0 +1,137 @@
+"""Models for worker tests, imported by real worker subprocesses as ``python:process_test_models:<name>``.
+
+Each factory returns a pydantic-ai ``FunctionModel`` that plays one scripted part: use a device,
+hang, block the event loop, die, fail. The tests put this folder on the workers' ``PYTHONPATH``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import os
+import time
+from collections.abc import Awaitable
+
+from pydantic_ai.messages import (
+    ModelMessage,
+    ModelRequest,
+    ModelResponse,
+    ModelResponsePart,
+    SystemPromptPart,
+    TextPart,
+    ToolCallPart,
+    ToolReturnPart,
+    UserPromptPart,
+)
+from pydantic_ai.models.function import AgentInfo, FunctionModel
+
+
+def _tool_returns(messages: list[ModelMessage]) -> list[ToolReturnPart]:
+    last = messages[-1]
+    return (
+        [part for part in last.parts if isinstance(part, ToolReturnPart)]
+        if isinstance(last, ModelRequest)
+        else []
+    )
+
+
+def _task(messages: list[ModelMessage]) -> str:
+    first = messages[0]
+    assert isinstance(first, ModelRequest)
+    return " ".join(str(part.content) for part in first.parts if isinstance(part, UserPromptPart))
+
+
+def by_task() -> FunctionModel:
+    """Plays the part its task names: "sleep", "crash", else set every level to 42 (for manager tests)."""
+    level, sleep, crash = sets_level(), sleeps(), exits()
+
+    async def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        task = _task(messages)
+        chosen = sleep if "sleep" in task else crash if "crash" in task else level
+        assert chosen.function is not None
+        response = chosen.function(messages, info)
+        return await response if isinstance(response, Awaitable) else response
+
+    return FunctionModel(respond, model_name="by-task")
+
+
+def sets_level() -> FunctionModel:
+    """Calls every ``set_level`` tool it has with level 42, then reports what the tools returned."""
+
+    def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        returns = _tool_returns(messages)
+        if returns:
+            return ModelResponse(parts=[TextPart("; ".join(str(part.content) for part in returns))])
+        calls: list[ModelResponsePart] = [
+            ToolCallPart(tool.name, {"level": 42})
+            for tool in info.function_tools
+            if tool.name.endswith("set_level")
+        ]
+        return ModelResponse(parts=calls or [TextPart("no set_level tool")])
+
+    return FunctionModel(respond, model_name="sets-level")
+
+
+def reports_prompt() -> FunctionModel:
+    """Answers with the tool names it sees and its system prompt, as JSON."""
+
+    def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        system = [
+            part.content
+            for message in messages
+            if isinstance(message, ModelRequest)
+            for part in message.parts
+            if isinstance(part, SystemPromptPart)
+        ]
+        report = {"tools": sorted(tool.name for tool in info.function_tools), "system": "\n".join(system)}
+        return ModelResponse(parts=[TextPart(json.dumps(report))])
+
+    return FunctionModel(respond, model_name="reports-prompt")
+
+
+def polls_forever() -> FunctionModel:
+    """Calls ``get_state`` on every request and never answers: runs into the request limit."""
+
+    def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        tool = next(tool for tool in info.function_tools if tool.name.endswith("get_state"))
+        return ModelResponse(parts=[ToolCallPart(tool.name, {})])
+
+    return FunctionModel(respond, model_name="polls-forever")
+
+
+def sleeps() -> FunctionModel:
+    """Awaits forever: a process that must be stopped by its timeout or by terminate."""
+
+    async def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        await asyncio.sleep(3600)
+        raise AssertionError("unreachable")
+
+    return FunctionModel(respond, model_name="sleeps")
+
+
+def blocks() -> FunctionModel:
+    """Blocks the worker's event loop: only killing the worker stops it."""
+
+    async def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        time.sleep(3600)  # noqa: ASYNC251 - blocking on purpose: this is the stuck worker
+        raise AssertionError("unreachable")
+
+    return FunctionModel(respond, model_name="blocks")
+
+
+def exits() -> FunctionModel:
+    """Kills its own worker process mid-run with exit code 3."""
+
+    def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        os._exit(3)
+
+    return FunctionModel(respond, model_name="exits")
+
+
+def fails() -> FunctionModel:
+    """Raises inside the model: the process ends with status ``error``."""
+
+    def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        raise RuntimeError("the model exploded\nsecond line that should not appear")
+
+    return FunctionModel(respond, model_name="fails")

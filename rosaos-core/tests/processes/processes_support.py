@@ -1,0 +1,180 @@
+"""Helpers shared by the process tests: the test device, the kernel stand-in, job building, polling.
+
+``conftest.py`` puts this folder on ``sys.path`` so test modules can import this module, and so the
+in-process worker tests can import ``process_test_models`` like the worker subprocesses do.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import itertools
+import os
+import tempfile
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Annotated, Any
+
+from fastmcp import FastMCP
+from pydantic import Field
+
+from rosaos.devices.endpoints import DeviceEndpoint
+from rosaos.drivers import Concurrency
+from rosaos.models.select import ModelSpec
+from rosaos.processes.jobs import GrantedDevice, WorkerCallback, WorkerJob
+
+HERE = Path(__file__).parent
+TOKEN = "device-token"
+KERNEL_TOKEN = "kernel-token"
+_process_ids = itertools.count(1)
+
+
+def model_spec(name: str) -> ModelSpec:
+    """A model from ``process_test_models`` (this folder is on the workers' PYTHONPATH)."""
+    return ModelSpec(model=f"python:process_test_models:{name}")
+
+
+PYCACHE = Path(tempfile.gettempdir()) / "rosaos-test-worker-pycache"
+
+
+def worker_env() -> dict[str, str]:
+    """Environment for worker subprocesses: this folder on PYTHONPATH, so they find the test models.
+
+    These tests start a dozen workers. Where bytecode writing is turned off
+    (PYTHONDONTWRITEBYTECODE), each would compile pydantic-ai from source again, so their bytecode
+    goes to a cache of their own instead; an ordinary install has it precompiled anyway.
+    """
+    paths = [str(HERE), os.environ.get("PYTHONPATH", "")]
+    env = {"PYTHONPATH": os.pathsep.join(path for path in paths if path)}
+    if os.environ.get("PYTHONDONTWRITEBYTECODE"):
+        env |= {"PYTHONDONTWRITEBYTECODE": "", "PYTHONPYCACHEPREFIX": str(PYCACHE)}
+    return env
+
+
+def new_process_id() -> int:
+    """Process ids unique across the test session, as the kernel's would be."""
+    return next(_process_ids)
+
+
+async def eventually(check: Callable[[], Any], within: float = 30.0, what: str = "condition") -> Any:
+    """Poll ``check`` until it returns something truthy; fail with ``what`` after ``within`` s."""
+    deadline = asyncio.get_running_loop().time() + within
+    while True:
+        result = check()
+        if result:
+            return result
+        if asyncio.get_running_loop().time() > deadline:
+            raise AssertionError(f"timed out after {within:g} s waiting for {what}")
+        await asyncio.sleep(0.05)
+
+
+def pid_alive(pid: int) -> bool:
+    """Whether a process with ``pid`` exists (a reaped pid does not)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+@dataclass
+class LoopbackDevice:
+    """A test device served over HTTP; ``state`` is the live state its tools change."""
+
+    name: str
+    url: str
+    state: dict[str, Any]
+
+    def granted(self) -> GrantedDevice:
+        return GrantedDevice(
+            name=self.name,
+            driver="testdevice",
+            url=self.url,
+            token=TOKEN,
+            description=f"A dimmable test device called {self.name}.",
+            prompt="Use set_level to change the level (0-100) and get_state to read it.",
+        )
+
+    def endpoint(
+        self, concurrency: Concurrency = "exclusive", always_attached: bool = False
+    ) -> DeviceEndpoint:
+        granted = self.granted()
+        return DeviceEndpoint(
+            name=self.name,
+            driver=granted.driver,
+            concurrency=concurrency,
+            always_attached=always_attached,
+            description=granted.description,
+            prompt=granted.prompt,
+            url=self.url,
+            token=TOKEN,
+            status="healthy",
+        )
+
+
+def build_test_device(name: str, state: dict[str, Any]) -> FastMCP:
+    server = FastMCP(name)
+
+    @server.tool(annotations={"readOnlyHint": False, "destructiveHint": False, "idempotentHint": True})
+    def set_level(level: Annotated[int, Field(ge=0, le=100, description="Level in percent.")]) -> str:
+        """Set the device level, 0-100."""
+        state["level"] = level
+        return f"{name} level is {level}"
+
+    @server.tool(annotations={"readOnlyHint": True})
+    def get_state() -> dict[str, Any]:
+        """The device state as JSON."""
+        return dict(state)
+
+    return server
+
+
+@dataclass
+class KernelStandIn:
+    """Records the bodies of ``POST /event``, like the kernel API would accept them."""
+
+    url: str
+    bodies: list[dict[str, Any]] = field(default_factory=list)
+
+    def callbacks_for(self, process_id: int) -> list[dict[str, Any]]:
+        return [body for body in self.bodies if body["payload"]["worker_id"] == process_id]
+
+
+def make_job(
+    kernel: KernelStandIn,
+    model: str,
+    devices: list[LoopbackDevice] | None = None,
+    *,
+    timeout: float = 30.0,
+    request_limit: int = 10,
+    callback_url: str | None = None,
+    process_id: int | None = None,
+) -> WorkerJob:
+    """A job for one test model, posting its callback to the kernel stand-in."""
+    return WorkerJob(
+        process_id=process_id or new_process_id(),
+        task=f"run the {model} test",
+        devices=[device.granted() for device in devices or []],
+        model=model_spec(model),
+        base_prompt="You are a test process.",
+        timeout=timeout,
+        request_limit=request_limit,
+        callback_url=callback_url or kernel.url,
+        callback_token=KERNEL_TOKEN,
+    )
+
+
+@dataclass
+class Endings:
+    """What the pool reported through ``on_ended``, per process id."""
+
+    reports: dict[int, list[tuple[WorkerCallback, bool]]] = field(default_factory=dict)
+
+    async def record(self, callback: WorkerCallback, delivered: bool) -> None:
+        self.reports.setdefault(callback.worker_id, []).append((callback, delivered))
+
+    async def wait(self, process_id: int) -> tuple[WorkerCallback, bool]:
+        """The one report for ``process_id``, once it arrives."""
+        reports = await eventually(lambda: self.reports.get(process_id), what=f"process {process_id} to end")
+        assert len(reports) == 1, reports
+        return reports[0]

@@ -1,0 +1,50 @@
+"""Process prompts: base prompt, then the task, then one section per granted device."""
+
+from __future__ import annotations
+
+from rosaos.processes.jobs import GrantedDevice
+from rosaos.processes.prompts import DEFAULT_PROCESS_PROMPT, base_process_prompt, process_system_prompt
+
+
+def device(name: str, driver: str = "tapo") -> GrantedDevice:
+    return GrantedDevice(
+        name=name,
+        driver=driver,
+        url=f"http://127.0.0.1:9/{name}/mcp",
+        token="t",
+        description=f"The {name} description.",
+        prompt=f"How to drive {name}.",
+    )
+
+
+def test_parts_come_in_order_base_task_devices() -> None:
+    prompt = process_system_prompt("BASE", "turn the light red", [device("kitchen_light")])
+    assert (
+        prompt.index("BASE") < prompt.index("turn the light red") < prompt.index("How to drive kitchen_light")
+    )
+
+
+def test_each_device_is_headed_by_its_name_driver_and_description() -> None:
+    prompt = process_system_prompt("BASE", "task", [device("kitchen_light")])
+    assert "## kitchen_light (tapo)\nThe kitchen_light description.\n\nHow to drive kitchen_light." in prompt
+
+
+def test_one_device_has_unprefixed_tools() -> None:
+    assert "Its tools are named" not in process_system_prompt("BASE", "task", [device("kitchen_light")])
+
+
+def test_several_devices_say_how_their_tools_are_prefixed() -> None:
+    prompt = process_system_prompt("BASE", "task", [device("kitchen_light"), device("reachy", "reachy")])
+    assert "You hold: kitchen_light, reachy." in prompt
+    assert "Its tools are named `kitchen_light_<tool>`." in prompt
+    assert "Its tools are named `reachy_<tool>`." in prompt
+
+
+def test_no_devices_says_there_are_no_tools() -> None:
+    assert "you have no tools" in process_system_prompt("BASE", "tell a joke", [])
+
+
+def test_configured_base_prompt_replaces_the_default() -> None:
+    assert base_process_prompt("Be terse.") == "Be terse."
+    assert base_process_prompt(None) == DEFAULT_PROCESS_PROMPT
+    assert base_process_prompt("  ") == DEFAULT_PROCESS_PROMPT

@@ -1,0 +1,137 @@
+"""The worker's job runner, in-process: process agents against real device servers on loopback.
+
+The worker subprocess and its pipe protocol are exercised by the pool tests; here the same
+``run_job`` and ``deliver_callback`` run in the test's event loop so each behaviour is quick to see.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from processes_support import KernelStandIn, LoopbackDevice, make_job, model_spec
+
+from rosaos.models.select import ModelSpec
+from rosaos.processes.jobs import WorkerCallback
+from rosaos.processes.worker import deliver_callback, run_job
+
+pytestmark = pytest.mark.asyncio(loop_scope="module")
+
+
+async def test_process_uses_its_device_and_reports_ok(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    lamp = devices["lamp"]
+    lamp.state["level"] = 0
+    callback = await run_job(make_job(kernel, "sets_level", [lamp]))
+    assert (callback.status, callback.output, callback.error) == ("ok", "lamp level is 42", None)
+    assert lamp.state["level"] == 42
+    assert (callback.model_requests, callback.tool_calls) == (2, 1)
+
+
+async def test_one_device_keeps_its_tool_names(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    callback = await run_job(make_job(kernel, "reports_prompt", [devices["lamp"]]))
+    assert json.loads(callback.output or "")["tools"] == ["get_state", "set_level"]
+
+
+async def test_several_devices_get_tool_names_prefixed_by_instance(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    callback = await run_job(make_job(kernel, "reports_prompt", [devices["lamp"], devices["fan"]]))
+    report = json.loads(callback.output or "")
+    assert report["tools"] == ["fan_get_state", "fan_set_level", "lamp_get_state", "lamp_set_level"]
+    assert "You are a test process." in report["system"]
+    assert "## fan (testdevice)" in report["system"]
+
+
+async def test_prefixed_tools_reach_the_right_devices(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    devices["lamp"].state["level"] = devices["fan"].state["level"] = 0
+    callback = await run_job(make_job(kernel, "sets_level", [devices["lamp"], devices["fan"]]))
+    assert callback.status == "ok"
+    assert devices["lamp"].state["level"] == devices["fan"].state["level"] == 42
+    assert callback.tool_calls == 2
+
+
+async def test_unreachable_device_is_an_error_naming_it(kernel: KernelStandIn, unreachable_url: str) -> None:
+    dead = LoopbackDevice("dead_lamp", unreachable_url.replace("/event", "/mcp"), {})
+    callback = await run_job(make_job(kernel, "sets_level", [dead]))
+    assert callback.status == "error"
+    assert (callback.error or "").startswith(f"cannot reach device dead_lamp at {dead.url}")
+    assert "Traceback" not in (callback.error or "")
+
+
+async def test_device_that_refuses_the_token_is_an_error_saying_so(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    job = make_job(kernel, "sets_level", [devices["lamp"]])
+    job.devices[0] = job.devices[0].model_copy(update={"token": "wrong"})
+    callback = await run_job(job)
+    assert callback.status == "error"
+    assert f"device lamp at {devices['lamp'].url} refused the bearer token (HTTP 401)" in (
+        callback.error or ""
+    )
+
+
+async def test_request_limit_ends_the_process_with_a_clear_error(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    callback = await run_job(make_job(kernel, "polls_forever", [devices["lamp"]], request_limit=3))
+    assert callback.status == "error"
+    assert "limit of 3 model requests" in (callback.error or "")
+    assert callback.model_requests == 3
+
+
+async def test_model_failure_is_an_error_with_one_readable_line(kernel: KernelStandIn) -> None:
+    callback = await run_job(make_job(kernel, "fails"))
+    assert (callback.status, callback.error) == ("error", "RuntimeError: the model exploded")
+
+
+async def test_job_past_its_timeout_is_stopped_by_the_worker(kernel: KernelStandIn) -> None:
+    callback = await run_job(make_job(kernel, "sleeps", timeout=0.3))
+    assert callback.status == "timeout"
+    assert "timeout of 0.3 s" in (callback.error or "")
+
+
+async def test_no_model_configured_answers_how_to_configure_one(kernel: KernelStandIn) -> None:
+    job = make_job(kernel, "unused").model_copy(update={"model": ModelSpec()})
+    callback = await run_job(job)
+    assert callback.status == "ok"
+    assert (callback.output or "").startswith("No model is configured:")
+
+
+async def test_model_that_cannot_be_imported_is_an_error(kernel: KernelStandIn) -> None:
+    job = make_job(kernel, "unused").model_copy(update={"model": model_spec("no_such_factory")})
+    callback = await run_job(job)
+    assert callback.status == "error"
+    assert (callback.error or "").startswith("cannot import model 'process_test_models:no_such_factory'")
+
+
+async def test_callback_is_posted_as_a_worker_callback_event(kernel: KernelStandIn) -> None:
+    job = make_job(kernel, "unused")
+    callback = WorkerCallback(worker_id=job.process_id, status="ok", output="done", task=job.task)
+    assert await deliver_callback(job, callback)
+    assert kernel.callbacks_for(job.process_id) == [
+        {
+            "kind": "worker_callback",
+            "source": "worker",
+            "payload": callback.model_dump(mode="json"),
+            "idempotency_key": f"process-{job.process_id}",
+        }
+    ]
+
+
+async def test_callback_to_an_unreachable_kernel_is_not_delivered(
+    kernel: KernelStandIn, unreachable_url: str
+) -> None:
+    job = make_job(kernel, "unused", callback_url=unreachable_url)
+    assert not await deliver_callback(job, WorkerCallback(worker_id=job.process_id, status="ok"))
+
+
+async def test_callback_with_a_wrong_token_is_not_delivered(kernel: KernelStandIn) -> None:
+    job = make_job(kernel, "unused").model_copy(update={"callback_token": "wrong"})
+    assert not await deliver_callback(job, WorkerCallback(worker_id=job.process_id, status="ok"))
+    assert kernel.callbacks_for(job.process_id) == []

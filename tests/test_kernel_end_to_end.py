@@ -1,0 +1,216 @@
+"""The kernel end to end: real device servers, real worker subprocesses, the real HTTP API.
+
+The kernel and the process agents run scripted ``FunctionModel``s (tests/kernel_scripts.py), so
+every other part is the one ``rosaos up`` runs: the event store, the kernel loop, the process
+manager with its leases, the worker pool, the Tapo simulator served over MCP HTTP.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import os
+import signal
+import time
+from collections.abc import AsyncIterator, Awaitable, Callable
+from pathlib import Path
+from typing import Any
+
+import httpx
+import pytest
+import pytest_asyncio
+
+from rosaos.config import load_config
+from rosaos.devices.client import DeviceClient
+from rosaos.devices.world import build_world
+from rosaos.kernel.runtime import Kernel
+from rosaos.models.select import ModelSpec
+from rosaos.plugins import load_drivers
+
+HERE = Path(__file__).parent
+pytestmark = pytest.mark.asyncio(loop_scope="module")
+
+WORLD = """
+[devices.kitchen_light]
+driver = "tapo"
+description = "Ceiling light in the kitchen"
+sim = { on = false }
+
+[devices.living_room_lamp]
+driver = "tapo"
+description = "Floor lamp in the living room"
+sim = { on = true, brightness = 60 }
+"""
+
+
+async def eventually(check: Callable[[], Awaitable[Any]], timeout: float = 30.0) -> Any:
+    """Poll ``check`` until it returns something truthy; fail with the last value after ``timeout``."""
+    deadline = time.monotonic() + timeout
+    value = None
+    while time.monotonic() < deadline:
+        value = await check()
+        if value:
+            return value
+        await asyncio.sleep(0.05)
+    raise AssertionError(f"condition not met within {timeout} s (last value: {value!r})")
+
+
+@pytest_asyncio.fixture(scope="module", loop_scope="module")
+async def kernel(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Kernel]:
+    home = tmp_path_factory.mktemp("kernel")
+    (home / "rosaos.toml").write_text(f'data_dir = "{home / "data"}"\n' + WORLD)
+    config = load_config(home / "rosaos.toml")
+    from kernel_scripts import kernel_model
+
+    kernel = Kernel(
+        config,
+        build_world(config, load_drivers()),
+        kernel_model=kernel_model(),
+        process_model=ModelSpec(model="python:kernel_scripts:worker_model"),
+        worker_env={"PYTHONPATH": str(HERE)},
+    )
+    await kernel.start(port=0)
+    yield kernel
+    await kernel.stop()
+
+
+@pytest_asyncio.fixture(loop_scope="module")
+async def api(kernel: Kernel) -> AsyncIterator[httpx.AsyncClient]:
+    headers = {"Authorization": f"Bearer {kernel.token}"}
+    async with httpx.AsyncClient(base_url=kernel.url, headers=headers, timeout=10) as client:
+        yield client
+
+
+async def device_state(kernel: Kernel, name: str) -> dict[str, Any]:
+    endpoint = kernel.endpoints()[name]
+    assert endpoint.url is not None
+    return await DeviceClient(endpoint.url, endpoint.token, 5, name).get_state()
+
+
+async def updates_for(api: httpx.AsyncClient, after: int = 0) -> list[dict[str, Any]]:
+    page = (await api.get("/updates", params={"after": after, "limit": 1000})).json()
+    return list(page["updates"])
+
+
+async def chat(api: httpx.AsyncClient, text: str) -> int:
+    response = await api.post("/chat", json={"text": text})
+    assert response.status_code == 202, response.text
+    return int(response.json()["id"])
+
+
+async def settled(api: httpx.AsyncClient) -> bool:
+    """No running process and no pending event."""
+    processes = (await api.get("/processes")).json()
+    pending = (await api.get("/health")).json()["pending_events"]
+    return not any(p["state"] == "running" for p in processes) and pending == 0
+
+
+async def test_chat_turns_on_the_kitchen_light_through_a_process(
+    kernel: Kernel, api: httpx.AsyncClient
+) -> None:
+    assert (await device_state(kernel, "kitchen_light"))["on"] is False
+    event_id = await chat(api, "turn on the kitchen light")
+
+    await eventually(lambda: _state_is(kernel, "kitchen_light", "on", True))
+    await eventually(lambda: settled(api))
+    updates = await updates_for(api)
+    ours = [u for u in updates if u["event_id"] == event_id]
+    kinds = [u["kind"] for u in ours]
+    assert kinds[0] == "event" and "process_launched" in kinds and "kernel_reply" in kinds
+    launch = next(u for u in ours if u["kind"] == "tool_call")
+    assert launch["data"] == {
+        "tool": "launch_process",
+        "args": {"task": "call turn_on {}", "devices": ["kitchen_light"]},
+    }
+    process_id = next(u for u in ours if u["kind"] == "process_launched")["data"]["process_id"]
+    callback = next(
+        u
+        for u in updates
+        if u["kind"] == "event" and u["data"].get("payload", {}).get("worker_id") == process_id
+    )
+    assert callback["data"]["kind"] == "worker_callback"
+    assert callback["data"]["payload"]["status"] == "ok"
+    replies = [
+        u["text"] for u in updates if u["kind"] == "kernel_reply" and u["event_id"] == callback["event_id"]
+    ]
+    assert replies == [f"process {process_id}: ok"]
+    assert any(u["kind"] == "process_ended" and u["data"]["worker_id"] == process_id for u in updates)
+
+
+async def _state_is(kernel: Kernel, device: str, key: str, value: Any) -> bool:
+    return (await device_state(kernel, device)).get(key) == value
+
+
+async def test_a_held_exclusive_device_is_refused_naming_the_holder(
+    kernel: Kernel, api: httpx.AsyncClient
+) -> None:
+    await eventually(lambda: settled(api))
+    event_id = await chat(api, "kitchen_light: sleep 2; kitchen_light: call turn_off {}")
+    await eventually(lambda: settled(api))
+    ours = [u for u in await updates_for(api) if u["event_id"] == event_id]
+    launched = [u for u in ours if u["kind"] == "process_launched"]
+    refused = [u for u in ours if u["kind"] == "notice" and u["text"].startswith("launch refused")]
+    assert len(launched) == 1 and len(refused) == 1
+    holder = launched[0]["data"]["process_id"]
+    assert f"process {holder}" in refused[0]["text"] and "sleep 2" in refused[0]["text"]
+
+
+async def test_two_processes_run_at_once_on_two_devices(kernel: Kernel, api: httpx.AsyncClient) -> None:
+    await eventually(lambda: settled(api))
+    event_id = await chat(
+        api,
+        'kitchen_light: sleep 1\ncall turn_off {}; living_room_lamp: sleep 1\ncall set_brightness {"brightness": 25}',
+    )
+
+    async def both_running() -> bool:
+        running = [p for p in (await api.get("/processes")).json() if p["state"] == "running"]
+        return len(running) == 2
+
+    await eventually(both_running)
+    await eventually(lambda: settled(api))
+    ours = [u for u in await updates_for(api) if u["event_id"] == event_id]
+    assert len([u for u in ours if u["kind"] == "process_launched"]) == 2
+    assert (await device_state(kernel, "kitchen_light"))["on"] is False
+    assert (await device_state(kernel, "living_room_lamp"))["brightness"] == 25
+
+
+async def test_a_worker_killed_mid_task_reports_crashed_and_releases_its_lease(
+    kernel: Kernel, api: httpx.AsyncClient
+) -> None:
+    await eventually(lambda: settled(api))
+    await chat(api, "kitchen_light: sleep 30")
+
+    async def running() -> dict[str, Any] | None:
+        return next((p for p in (await api.get("/processes")).json() if p["state"] == "running"), None)
+
+    process = await eventually(running)
+    pid = await eventually(lambda: _worker_pid(api, process["id"]))
+    os.kill(pid, signal.SIGKILL)
+
+    async def crashed_callback() -> dict[str, Any] | None:
+        return next(
+            (
+                u
+                for u in await updates_for(api)
+                if u["kind"] == "event"
+                and u["data"].get("payload", {}).get("worker_id") == process["id"]
+                and u["data"]["payload"]["status"] == "crashed"
+            ),
+            None,
+        )
+
+    await eventually(crashed_callback)
+    await eventually(lambda: settled(api))
+    assert kernel.manager.leases.held_by(process["id"]) == []
+    # The lease really is free: a new process gets the device.
+    event_id = await chat(api, "kitchen_light: call turn_on {}")
+    await eventually(lambda: settled(api))
+    ours = [u for u in await updates_for(api) if u["event_id"] == event_id]
+    assert [u["kind"] for u in ours].count("process_launched") == 1
+
+
+async def _worker_pid(api: httpx.AsyncClient, process_id: int) -> int | None:
+    for process in (await api.get("/processes")).json():
+        if process["id"] == process_id:
+            pid = process.get("worker_pid")
+            return int(pid) if pid else None
+    return None

@@ -1,0 +1,108 @@
+"""A kernel killed with SIGKILL loses nothing: on restart it handles every queued event exactly once.
+
+Runs the real ``rosaos up`` command twice on one data directory, with a scripted kernel model
+(``slow SECONDS``: sleep, then answer) so events pile up in the queue before the kill.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import httpx
+import pytest
+
+HERE = Path(__file__).parent
+ROSAOS = Path(sys.executable).with_name("rosaos")
+EVENTS = 6
+
+
+def start_kernel(config: Path) -> tuple[subprocess.Popen[str], str]:
+    """Start ``rosaos up`` and return it with its base URL, read from its banner."""
+    env = {**os.environ, "PYTHONPATH": str(HERE), "COLUMNS": "200"}
+    process = subprocess.Popen(
+        [
+            str(ROSAOS),
+            "up",
+            "--config",
+            str(config),
+            "--port",
+            "0",
+            "--model",
+            "python:kernel_scripts:kernel_model",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=env,
+    )
+    assert process.stdout is not None
+    seen = []
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        line = process.stdout.readline()
+        if not line:
+            break
+        seen.append(line)
+        match = re.search(r"rosaOS is up at (http://\S+?)/?$", line.strip())
+        if match:
+            return process, match.group(1)
+    process.kill()
+    raise AssertionError("rosaos up did not start:\n" + "".join(seen))
+
+
+@pytest.fixture
+def config(tmp_path: Path) -> Path:
+    path = tmp_path / "rosaos.toml"
+    path.write_text(
+        f'data_dir = "{tmp_path / "data"}"\n'
+        "[kernel]\npool_size = 0\n"
+        '[devices.kitchen_light]\ndriver = "tapo"\n'
+    )
+    return path
+
+
+def wait_for(check, timeout: float = 60.0):  # type: ignore[no-untyped-def]
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        value = check()
+        if value:
+            return value
+        time.sleep(0.05)
+    raise AssertionError(f"condition not met within {timeout} s")
+
+
+def test_events_queued_at_a_sigkill_are_each_handled_once_after_restart(config: Path) -> None:
+    first, url = start_kernel(config)
+    token = (config.parent / "data" / "token").read_text().strip()
+    headers = {"Authorization": f"Bearer {token}"}
+    try:
+        with httpx.Client(base_url=url, headers=headers, timeout=10) as api:
+            ids = [
+                api.post("/chat", json={"text": "slow 0.4", "idempotency_key": f"restart-{n}"}).json()["id"]
+                for n in range(EVENTS)
+            ]
+            wait_for(lambda: api.get(f"/events/{ids[0]}").json()["handled"])
+            assert not api.get(f"/events/{ids[-1]}").json()["handled"], "the queue drained before the kill"
+    finally:
+        first.send_signal(signal.SIGKILL)
+        first.wait()
+
+    second, url = start_kernel(config)
+    try:
+        with httpx.Client(base_url=url, headers=headers, timeout=10) as api:
+            # A client retrying after the crash gets the first event back, not a new one.
+            retry = api.post("/chat", json={"text": "slow 0.4", "idempotency_key": "restart-0"}).json()
+            assert retry == {"id": ids[0], "duplicate": True}
+            wait_for(lambda: all(api.get(f"/events/{i}").json()["handled"] for i in ids))
+            updates = api.get("/updates", params={"after": 0, "limit": 1000}).json()["updates"]
+        replies = [u["event_id"] for u in updates if u["kind"] == "kernel_reply"]
+        assert sorted(replies) == sorted(ids)
+    finally:
+        second.send_signal(signal.SIGINT)
+        assert second.wait(timeout=60) == 0
