@@ -59,7 +59,10 @@ def devices_list(
         bool, typer.Option("--check/--no-check", help="Health-check each instance (get_state).")
     ] = True,
 ) -> None:
-    """List the device instances: driver, package, concurrency, backend, URL and health."""
+    """List the device instances: driver, package, concurrency, backend, URL and health.
+
+    Exits 0 even when a device is unhealthy (the listing says so); 2 for a configuration error.
+    """
     from rosaos.devices.commands import list_devices
 
     raise typer.Exit(list_devices(config, json_output=json_output, check=check))

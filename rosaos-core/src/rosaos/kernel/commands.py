@@ -83,6 +83,9 @@ def up_command(
             f"warning: plugin {broken.plugin} ({broken.package}) is broken: {broken.error}", markup=False
         )
     logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    # The MCP HTTP clients log every request at INFO; health checks would flood the console.
+    for noisy in ("httpx", "httpx2", "mcp", "fastmcp"):
+        logging.getLogger(noisy).setLevel(logging.WARNING)
     return asyncio.run(_serve(kernel, console, err))
 
 

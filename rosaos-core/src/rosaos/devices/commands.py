@@ -1,0 +1,329 @@
+"""``rosaos devices list``, ``rosaos devices check`` and ``rosaos serve-device``: the device commands.
+
+Each returns its exit code; :mod:`rosaos.cli` wires them to typer. A configuration that cannot
+be used exits 2 with the reason (file, key, what is wrong) and no traceback.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import ipaddress
+import json
+import socket
+import sys
+from pathlib import Path
+from typing import Any, Literal
+from urllib.parse import urlsplit
+
+from pydantic import BaseModel
+from rich.console import Console
+from rich.markup import escape
+from rich.table import Table
+
+from rosaos.auth import load_or_create_token, token_path
+from rosaos.config import ConfigError, RosaosConfig, load_config
+from rosaos.devices.client import DeviceClient
+from rosaos.devices.host import install_stop_signals, serve_until_stopped
+from rosaos.devices.runtime import RuntimeEntry, record_served_device, served_devices
+from rosaos.devices.serve import ServedDevice, open_device
+from rosaos.devices.world import DeviceInstance, World, build_world
+from rosaos.drivers import DeviceError
+from rosaos.plugins import DriverRegistry, load_drivers
+
+LIST_TIMEOUT = 5.0
+"""Seconds each health check in ``devices list`` may take; they run concurrently."""
+
+Via = Literal["served", "remote", "in-process"]
+
+
+class DeviceRow(BaseModel):
+    """One line of ``rosaos devices list`` (one object of its ``--json`` output)."""
+
+    instance: str
+    driver: str
+    package: str
+    version: str
+    concurrency: str
+    backend: str
+    url: str | None
+    """Where it is served: by ``rosaos up``/``serve-device`` here, or the remote URL; None if not served."""
+    health: str
+    state: dict[str, Any] | None = None
+    """The ``get_state`` answer, when the instance was checked."""
+
+
+def _stderr() -> Console:
+    return Console(stderr=True, highlight=False)
+
+
+def _load(config_path: Path | None) -> tuple[RosaosConfig, DriverRegistry, World]:
+    config = load_config(config_path)
+    registry = load_drivers()
+    return config, registry, build_world(config, registry)
+
+
+def _load_or_report(config_path: Path | None) -> tuple[RosaosConfig, DriverRegistry, World] | None:
+    try:
+        return _load(config_path)
+    except (ConfigError, KeyError) as error:
+        message = error.args[0] if isinstance(error, KeyError) and error.args else str(error)
+        print(f"error: {message}", file=sys.stderr)
+        return None
+
+
+def _token_for(instance: DeviceInstance, data_dir: Path) -> str:
+    return instance.token or load_or_create_token(data_dir)
+
+
+async def _check_in_process(instance: DeviceInstance, data_dir: Path, seconds: float) -> dict[str, Any]:
+    """Start the backend here, call get_state through an in-memory client, close the backend."""
+    try:
+        async with asyncio.timeout(seconds), open_device(instance, data_dir) as device:
+            return await DeviceClient.in_process(device.server, seconds, instance.name).get_state()
+    except TimeoutError:
+        raise DeviceError(f"{instance.name} did not start and answer within {seconds:g} s") from None
+    except DeviceError:
+        raise
+    except Exception as error:  # driver code: report it as the device's error, not a traceback
+        raise DeviceError(f"{instance.name}: {type(error).__name__}: {error}") from None
+
+
+# --- rosaos devices list ------------------------------------------------------------------------
+
+
+def list_devices(config_path: Path | None, json_output: bool = False, check: bool = True) -> int:
+    """Print the world's instances with driver, package, concurrency, backend, URL and health.
+
+    Exits 0 even when some device is unhealthy or unreachable: listing is informational, and the
+    health column says what is wrong. Use ``rosaos devices check NAME`` for a pass/fail exit code.
+    Exits 2 only when the configuration cannot be used.
+    """
+    loaded = _load_or_report(config_path)
+    if loaded is None:
+        return 2
+    config, registry, world = loaded
+    rows = asyncio.run(_rows(world, config.data_dir, check))
+    if json_output:
+        print(json.dumps([row.model_dump() for row in rows], indent=2, default=str))
+    else:
+        _print_table(rows, world)
+    for broken in registry.broken:
+        _stderr().print(
+            f"[yellow]warning:[/] plugin {broken.plugin!r} ({broken.package}) is broken and was "
+            f"skipped: {escape(broken.error)}"
+        )
+    return 0
+
+
+async def _rows(world: World, data_dir: Path, check: bool) -> list[DeviceRow]:
+    served = await asyncio.to_thread(served_devices, data_dir)
+    return list(await asyncio.gather(*(_row(i, served.get(i.name), data_dir, check) for i in world)))
+
+
+async def _row(
+    instance: DeviceInstance, served: RuntimeEntry | None, data_dir: Path, check: bool
+) -> DeviceRow:
+    info = instance.driver
+    row = DeviceRow(
+        instance=instance.name,
+        driver=info.spec.name,
+        package=info.package,
+        version=info.version,
+        concurrency=info.spec.concurrency,
+        backend=instance.backend,
+        url=served.url if served else instance.url,
+        health="not checked",
+    )
+    if not info.spec.implemented:
+        row.health = "not implemented"
+        return row
+    if served is None and not instance.is_remote:
+        row.health = "not served"
+    elif served is not None and not check:
+        row.health = f"{served.status} (not checked)"
+    if not check:
+        return row
+    try:
+        if row.url is not None:
+            token = await asyncio.to_thread(_token_for, instance, data_dir)
+            row.state = await DeviceClient(row.url, token, LIST_TIMEOUT, instance.name).get_state()
+            row.health = "healthy"
+        else:
+            row.state = await _check_in_process(instance, data_dir, LIST_TIMEOUT)
+            row.health = "healthy (not served)"
+    except DeviceError as error:
+        row.health = f"error: {error}"
+    return row
+
+
+def _print_table(rows: list[DeviceRow], world: World) -> None:
+    title = "demo world (no rosaos.toml)" if world.is_demo else str(world.source)
+    table = Table(title=f"Devices: {escape(title)}", title_justify="left")
+    for column in ("Instance", "Driver", "Package", "Concurrency", "Backend", "URL", "Health"):
+        table.add_column(column, overflow="fold")
+    for row in rows:
+        colour = (
+            "green"
+            if row.health.startswith("healthy")
+            else "red"
+            if row.health.startswith("error")
+            else "dim"
+        )
+        table.add_row(
+            row.instance,
+            row.driver,
+            f"{row.package} {row.version}",
+            row.concurrency,
+            row.backend,
+            row.url or "-",
+            f"[{colour}]{escape(row.health)}[/]",
+        )
+    Console(highlight=False).print(table)
+
+
+# --- rosaos devices check -----------------------------------------------------------------------
+
+
+def check_device(
+    name: str, config_path: Path | None, json_output: bool = False, timeout: float = 10.0
+) -> int:
+    """Call one instance's get_state and print it; exit 1 with the reason when that fails.
+
+    Goes to the served URL when ``rosaos up`` or ``rosaos serve-device`` serves it here, to the
+    URL of a remote instance, or else starts it in this process; the output says which.
+    """
+    loaded = _load_or_report(config_path)
+    if loaded is None:
+        return 2
+    config, _, world = loaded
+    try:
+        instance = world.get(name)
+    except KeyError as error:
+        return _check_failed(name, None, None, str(error.args[0]), json_output)
+    if not instance.spec.implemented:
+        reason = (
+            f"driver {instance.spec.name!r} ({instance.driver.package}) is not implemented yet: "
+            "it is listed but cannot be served or checked"
+        )
+        return _check_failed(name, None, None, reason, json_output)
+    served = served_devices(config.data_dir).get(name)
+    via: Via
+    if served is not None and served.url:
+        via, url = "served", served.url
+    elif instance.url is not None:
+        via, url = "remote", instance.url
+    else:
+        via, url = "in-process", None
+    try:
+        state = asyncio.run(_get_state(instance, url, config.data_dir, timeout))
+    except DeviceError as error:
+        return _check_failed(name, via, url, str(error), json_output)
+    if json_output:
+        print(json.dumps({"instance": name, "via": via, "url": url, "ok": True, "state": state}, indent=2))
+        return 0
+    where = {
+        "served": f"served at {url} (pid {served.pid if served else '?'})",
+        "remote": f"remote instance at {url}",
+        "in-process": "in this process: it is not being served (start it with `rosaos up` "
+        f"or `rosaos serve-device {name}`)",
+    }[via]
+    print(f"{name}: healthy, checked {where}")
+    print(json.dumps(state, indent=2, default=str))
+    return 0
+
+
+async def _get_state(
+    instance: DeviceInstance, url: str | None, data_dir: Path, seconds: float
+) -> dict[str, Any]:
+    if url is None:
+        return await _check_in_process(instance, data_dir, seconds)
+    token = await asyncio.to_thread(_token_for, instance, data_dir)
+    return await DeviceClient(url, token, seconds, instance.name).get_state()
+
+
+def _check_failed(name: str, via: Via | None, url: str | None, reason: str, json_output: bool) -> int:
+    if json_output:
+        print(json.dumps({"instance": name, "via": via, "url": url, "ok": False, "error": reason}, indent=2))
+    print(f"{name}: check failed: {reason}", file=sys.stderr)
+    return 1
+
+
+# --- rosaos serve-device ------------------------------------------------------------------------
+
+
+def serve_device_command(name: str, config_path: Path | None, host: str = "127.0.0.1", port: int = 0) -> int:
+    """Serve one instance in the foreground over streamable HTTP, behind the token, until Ctrl-C."""
+    loaded = _load_or_report(config_path)
+    if loaded is None:
+        return 2
+    config, _, world = loaded
+    try:
+        instance = world.get(name)
+    except KeyError as error:
+        print(f"error: {error.args[0]}", file=sys.stderr)
+        return 1
+    if instance.is_remote:
+        print(
+            f"error: {name} is a remote instance ({instance.url}); run `rosaos serve-device {name}` "
+            "on that machine, with a config where it is local",
+            file=sys.stderr,
+        )
+        return 1
+    if not instance.spec.implemented:
+        print(
+            f"error: driver {instance.spec.name!r} is not implemented yet; it cannot be served",
+            file=sys.stderr,
+        )
+        return 1
+    already = served_devices(config.data_dir).get(name)
+    if already is not None:
+        print(
+            f"error: {name} is already served at {already.url} (pid {already.pid}); stop that first, "
+            "so two copies of one device do not disagree",
+            file=sys.stderr,
+        )
+        return 1
+    if not _is_loopback(host):
+        _stderr().print(
+            f"[yellow]warning:[/] binding {escape(host)}, not loopback: anyone who can reach this "
+            f"machine and holds the token can drive {name}. Keep the token secret and the network trusted."
+        )
+    token = load_or_create_token(config.data_dir)
+    try:
+        asyncio.run(_serve(instance, config.data_dir, token, host, port or instance.port or 0))
+    except DeviceError as error:
+        print(f"error: {error}", file=sys.stderr)
+        return 1
+    return 0
+
+
+async def _serve(instance: DeviceInstance, data_dir: Path, token: str, host: str, port: int) -> None:
+    stop = asyncio.Event()
+    install_stop_signals(stop)
+    with contextlib.ExitStack() as records:
+
+        def ready(served: ServedDevice) -> None:
+            records.enter_context(record_served_device(data_dir, instance.name, served.url))
+            backend = f"{instance.spec.name}, {instance.backend}"
+            print(f"{instance.name} ({backend}) serving at {served.url}")
+            print(f"token: {token_path(data_dir)} (send 'Authorization: Bearer <token>')")
+            if not _is_loopback(host):
+                port = urlsplit(served.url).port
+                print(
+                    f'other machines: url = "http://{socket.gethostname()}:{port}/mcp" and this token '
+                    f"as token = ... in [devices.{instance.name}] of their rosaos.toml"
+                )
+            print("Press Ctrl-C to stop.", flush=True)
+
+        await serve_until_stopped(instance, data_dir, token, host, port, ready, stop)
+    print(f"{instance.name}: stopped", flush=True)
+
+
+def _is_loopback(host: str) -> bool:
+    if host == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False

@@ -1,0 +1,361 @@
+"""Serve every local instance of a world in its own host process, keep them healthy, and say where they are.
+
+:class:`DeviceSupervisor` is what ``rosaos up`` runs. Each local instance gets a device host
+subprocess (:mod:`rosaos.devices.host`); every few seconds the supervisor calls its ``get_state``
+over HTTP, and restarts a host that died or stopped answering, backing off exponentially. A host
+that cannot start is reported (log, status, runtime file) and retried, never fatal. Placeholder
+drivers are listed as ``not implemented``; remote instances are only probed.
+
+The runtime file ``<data_dir>/run/devices.json`` tells other commands (``rosaos devices list``,
+``rosaos devices check``) which instances are being served, and where.
+``rosaos serve-device`` records its one instance in ``<data_dir>/run/serve-device/<name>.json``.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import os
+from dataclasses import dataclass, field
+from datetime import datetime
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+from urllib.parse import urlsplit
+
+from pydantic import BaseModel
+
+from rosaos.auth import token_path
+from rosaos.devices.client import DeviceClient
+from rosaos.devices.host import HostJob, HostProcess
+from rosaos.devices.runtime import (
+    DeviceStatus,
+    RuntimeEntry,
+    RuntimeFile,
+    now,
+    read_runtime_file,
+    runtime_file_path,
+    write_atomic,
+)
+from rosaos.devices.world import DeviceInstance, World
+from rosaos.drivers import DeviceError
+
+log = logging.getLogger("rosaos.devices.supervisor")
+
+
+class DirectoryEntry(BaseModel):
+    """How to reach one instance: what the kernel hands to a worker that is granted it."""
+
+    name: str
+    driver: str
+    url: str | None
+    """None while the instance is not being served (placeholder, failed, restarting)."""
+    token: str | None
+    status: DeviceStatus
+    remote: bool
+    error: str | None = None
+    restarts: int = 0
+
+
+@dataclass
+class SafeStopOutcome:
+    """The result of calling ``safe_stop`` on one instance."""
+
+    instance: str
+    ok: bool
+    detail: str
+
+
+@dataclass
+class _Hosted:
+    """The supervisor's view of one instance."""
+
+    instance: DeviceInstance
+    status: DeviceStatus
+    since: datetime = field(default_factory=now)
+    url: str | None = None
+    error: str | None = None
+    host: HostProcess | None = None
+    port: int | None = None
+    restarts: int = 0
+    settled: asyncio.Event = field(default_factory=asyncio.Event)
+    """Set after the first start attempt (or first probe, for remote instances)."""
+
+
+class DeviceSupervisor:
+    """Serve the local instances of ``world`` in host subprocesses; probe and restart them.
+
+    Use as ``async with DeviceSupervisor(world, data_dir, token) as supervisor:``. After
+    :meth:`start` returns, every instance has had its first start attempt.
+    """
+
+    def __init__(
+        self,
+        world: World,
+        data_dir: Path,
+        token: str,
+        *,
+        host: str = "127.0.0.1",
+        health_interval: float = 5.0,
+        health_timeout: float = 3.0,
+        unhealthy_after: int = 3,
+        backoff_base: float = 0.5,
+        backoff_cap: float = 30.0,
+        start_timeout: float = 60.0,
+        stop_grace: float = 5.0,
+    ) -> None:
+        self.world = world
+        self.data_dir = data_dir
+        self.token = token
+        self.host = host
+        self.health_interval = health_interval
+        self.health_timeout = health_timeout
+        self.unhealthy_after = unhealthy_after
+        """Consecutive failed health checks before a live host is restarted."""
+        self.backoff_base = backoff_base
+        self.backoff_cap = backoff_cap
+        self.start_timeout = start_timeout
+        self.stop_grace = stop_grace
+        self._devices: dict[str, _Hosted] = {}
+        self._tasks: list[asyncio.Task[None]] = []
+        self._save_lock = asyncio.Lock()
+        self._token_file = token_path(data_dir)
+        self._owns_runtime_file = False
+
+    async def __aenter__(self) -> DeviceSupervisor:
+        try:
+            await self.start()
+        except BaseException:
+            await self.stop()
+            raise
+        return self
+
+    async def __aexit__(
+        self, exc_type: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None
+    ) -> None:
+        await self.stop()
+
+    @property
+    def runtime_file(self) -> Path:
+        return runtime_file_path(self.data_dir)
+
+    def log_file(self, name: str) -> Path:
+        """Where a host's stderr goes: driver output, uvicorn warnings, tracebacks."""
+        return self.data_dir / "logs" / "devices" / f"{name}.log"
+
+    async def start(self) -> None:
+        """Start every local host and probe every remote instance; return once each has settled."""
+        other = await asyncio.to_thread(read_runtime_file, self.data_dir)
+        if other is not None and other.supervisor_pid != os.getpid():
+            raise DeviceError(
+                f"devices in {self.data_dir} are already served by another rosaOS (pid "
+                f"{other.supervisor_pid}); stop it first, or use another data_dir"
+            )
+        self._owns_runtime_file = True
+        await asyncio.to_thread(self._prepare_files)
+        for instance in self.world:
+            if not instance.spec.implemented:
+                self._devices[instance.name] = _Hosted(instance, "not implemented")
+                continue
+            hosted = _Hosted(instance, "starting", port=instance.port)
+            self._devices[instance.name] = hosted
+            runner = self._watch_remote(hosted) if instance.is_remote else self._keep_serving(hosted)
+            self._tasks.append(asyncio.create_task(runner, name=f"device {instance.name}"))
+        await asyncio.gather(
+            *(d.settled.wait() for d in self._devices.values() if d.status != "not implemented")
+        )
+        await self._save()
+
+    def _prepare_files(self) -> None:
+        # Hosts read the token from a file, never from argv (visible in ps) or the environment.
+        if not (
+            self._token_file.is_file() and self._token_file.read_text(encoding="utf-8").strip() == self.token
+        ):
+            self._token_file = self.data_dir / "run" / "device-token"
+            write_atomic(self._token_file, self.token + "\n")
+        self.log_file("any").parent.mkdir(parents=True, exist_ok=True)
+
+    async def stop(self) -> None:
+        """Stop watching, terminate every host (and its process group), remove the runtime file."""
+        for task in self._tasks:
+            task.cancel()
+        await asyncio.gather(*self._tasks, return_exceptions=True)
+        self._tasks.clear()
+        await asyncio.gather(*(self._terminate(d) for d in self._devices.values()))
+        for hosted in self._devices.values():
+            if hosted.status != "not implemented" and not hosted.instance.is_remote:
+                self._set(hosted, "stopped", url=None)
+        if self._owns_runtime_file:  # never remove the file of another rosaOS we refused to race
+            async with self._save_lock:
+                await asyncio.to_thread(self.runtime_file.unlink, missing_ok=True)
+
+    def directory(self) -> dict[str, DirectoryEntry]:
+        """Every instance with its URL, token and status: what the kernel grants to workers."""
+        return {
+            name: DirectoryEntry(
+                name=name,
+                driver=d.instance.spec.name,
+                url=d.url,
+                token=(d.instance.token or self.token) if d.instance.is_remote else self.token,
+                status=d.status,
+                remote=d.instance.is_remote,
+                error=d.error,
+                restarts=d.restarts,
+            )
+            for name, d in self._devices.items()
+        }
+
+    async def safe_stop_all(self, per_device_timeout: float = 5.0) -> list[SafeStopOutcome]:
+        """Call ``safe_stop`` on every reachable instance at once; failures are reported, not raised."""
+        entries = [e for e in self.directory().values() if e.url]
+
+        async def one(entry: DirectoryEntry) -> SafeStopOutcome:
+            assert entry.url is not None
+            try:
+                detail = await DeviceClient(entry.url, entry.token, per_device_timeout, entry.name).call(
+                    "safe_stop"
+                )
+            except DeviceError as error:
+                return SafeStopOutcome(entry.name, False, str(error))
+            return SafeStopOutcome(entry.name, True, str(detail))
+
+        outcomes = list(await asyncio.gather(*(one(e) for e in entries)))
+        outcomes += [
+            SafeStopOutcome(e.name, False, f"not served ({e.status})")
+            for e in self.directory().values()
+            if not e.url
+        ]
+        return outcomes
+
+    # --- one local instance ----------------------------------------------------------------------
+
+    async def _keep_serving(self, hosted: _Hosted) -> None:
+        """Start the host; when it dies or stops answering, start it again after a backoff."""
+        failures = 0
+        while True:
+            started = asyncio.get_running_loop().time()
+            try:
+                await self._launch(hosted)
+                hosted.settled.set()
+                await self._watch_local(hosted)
+            except DeviceError as error:
+                log.warning("%s: cannot start: %s", hosted.instance.name, error)
+                self._set(hosted, "failed", url=None, error=str(error))
+            except Exception as error:  # one device's trouble must never take the supervisor down
+                log.exception("%s: unexpected error while hosting it", hosted.instance.name)
+                self._set(hosted, "failed", url=None, error=f"{type(error).__name__}: {error}")
+            await self._terminate(hosted)
+            hosted.settled.set()
+            await self._save()
+            lived = asyncio.get_running_loop().time() - started
+            # A host that ran for a while earned a fresh start; a crash loop backs off to the cap.
+            failures = 1 if lived >= self.backoff_cap else failures + 1
+            delay = min(self.backoff_cap, self.backoff_base * 2 ** (failures - 1))
+            if hosted.status != "failed":
+                self._set(hosted, "restarting", url=None)
+                await self._save()
+            log.info("%s: restarting in %.1f s", hosted.instance.name, delay)
+            await asyncio.sleep(delay)
+            hosted.restarts += 1
+
+    async def _launch(self, hosted: _Hosted) -> None:
+        """Start a host process and wait for its ready line and a first answer to get_state."""
+        name = hosted.instance.name
+        if hosted.status != "failed":  # a retry of a failed start stays "failed" until it works
+            self._set(hosted, "starting", error=hosted.error)
+        job = HostJob.for_instance(
+            hosted.instance,
+            self.data_dir,
+            self._token_file,
+            self.world.source,
+            host=self.host,
+            port=hosted.instance.port or 0,
+            preferred_port=None if hosted.instance.port else hosted.port,
+        )
+        host = await HostProcess.spawn(job, self.log_file(name), self.start_timeout, self.stop_grace)
+        hosted.host, hosted.url = host, host.url
+        hosted.port = urlsplit(host.url).port
+        log.info("%s: serving at %s (pid %s)", name, host.url, host.pid)
+        await self._probe(hosted)
+
+    async def _watch_local(self, hosted: _Hosted) -> None:
+        """Probe until the host dies, or fails ``unhealthy_after`` checks in a row (then stop it)."""
+        host = hosted.host
+        assert host is not None
+        exited = asyncio.create_task(host.wait())
+        try:
+            failures = 0 if hosted.status == "healthy" else 1
+            while True:
+                await asyncio.wait({exited}, timeout=self.health_interval)
+                if exited.done():
+                    error = await host.exit_reason()
+                    log.warning("%s: %s", hosted.instance.name, error)
+                    self._set(hosted, "restarting", url=None, error=error)
+                    return
+                failures = 0 if await self._probe(hosted) else failures + 1
+                if failures >= self.unhealthy_after:
+                    log.warning("%s: unhealthy %d times in a row; restarting", hosted.instance.name, failures)
+                    return
+        finally:
+            exited.cancel()
+
+    async def _probe(self, hosted: _Hosted) -> bool:
+        """One health check: get_state over HTTP. Updates the status; True when it answered."""
+        assert hosted.url is not None
+        token = hosted.instance.token or self.token
+        try:
+            await DeviceClient(hosted.url, token, self.health_timeout, hosted.instance.name).get_state()
+        except DeviceError as error:
+            bad: DeviceStatus = "unreachable" if hosted.instance.is_remote else "unhealthy"
+            self._set(hosted, bad, error=str(error))
+            await self._save()
+            return False
+        self._set(hosted, "healthy", error=None)
+        await self._save()
+        return True
+
+    async def _watch_remote(self, hosted: _Hosted) -> None:
+        """Remote instances are someone else's to restart; only report whether they answer."""
+        hosted.url = hosted.instance.url
+        while True:
+            await self._probe(hosted)
+            hosted.settled.set()
+            await asyncio.sleep(self.health_interval)
+
+    async def _terminate(self, hosted: _Hosted) -> None:
+        host, hosted.host = hosted.host, None
+        if host is not None:
+            await host.stop(self.stop_grace)
+
+    # --- status and the runtime file -------------------------------------------------------------
+
+    def _set(
+        self, hosted: _Hosted, status: DeviceStatus, *, error: str | None = None, **changes: Any
+    ) -> None:
+        if status != hosted.status:
+            hosted.since = now()
+        hosted.status = status
+        hosted.error = error
+        for key, value in changes.items():
+            setattr(hosted, key, value)
+
+    async def _save(self) -> None:
+        async with self._save_lock:
+            if not self._tasks:  # stopped (or not started): the file must not reappear
+                return
+            runtime = RuntimeFile(
+                supervisor_pid=os.getpid(),
+                devices={
+                    name: RuntimeEntry(
+                        url=d.url,
+                        pid=d.host.pid if d.host and d.url else None,
+                        status=d.status,
+                        since=d.since,
+                        error=d.error,
+                        restarts=d.restarts,
+                    )
+                    for name, d in self._devices.items()
+                    if d.status != "not implemented" and not d.instance.is_remote
+                },
+            )
+            await asyncio.to_thread(write_atomic, self.runtime_file, runtime.model_dump_json(indent=2))
