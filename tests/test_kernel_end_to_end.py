@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import asyncio
 import os
+import shutil
 import signal
 import time
 from collections.abc import AsyncIterator, Awaitable, Callable
@@ -18,6 +19,7 @@ from typing import Any
 import httpx
 import pytest
 import pytest_asyncio
+from playwright.async_api import async_playwright
 
 from rosaos.config import load_config
 from rosaos.devices.client import DeviceClient
@@ -214,3 +216,35 @@ async def _worker_pid(api: httpx.AsyncClient, process_id: int) -> int | None:
             pid = process.get("worker_pid")
             return int(pid) if pid else None
     return None
+
+
+CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
+
+
+async def test_the_web_page_chats_with_the_kernel_and_shows_the_device_change(
+    kernel: Kernel, api: httpx.AsyncClient, tmp_path: Path
+) -> None:
+    if CHROMIUM is None:
+        pytest.skip("Chromium is not installed: ./scripts/test installs Debian's chromium package")
+    await eventually(lambda: settled(api))
+    brightness = '.device-card[data-device="living_room_lamp"] [data-key="brightness"]'
+    async with async_playwright() as playwright:
+        browser = await playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
+        try:
+            page = await browser.new_page()
+            errors: list[str] = []
+            page.on("pageerror", lambda error: errors.append(str(error)))
+            await page.goto(kernel.login_link())
+            await page.wait_for_selector("#app", state="visible")
+            before = await (await page.wait_for_selector(brightness)).inner_text()
+            assert before != "10"
+
+            await page.fill("#chat-input", 'living_room_lamp: call set_brightness {"brightness": 10}')
+            await page.press("#chat-input", "Enter")
+
+            await page.wait_for_selector(f"{brightness}:text-is('10')", timeout=30_000)
+            await page.wait_for_selector("#chat-log .msg-kernel", timeout=30_000)
+            await page.screenshot(path=str(tmp_path / "web-page.png"), full_page=True)
+            assert errors == []
+        finally:
+            await browser.close()
