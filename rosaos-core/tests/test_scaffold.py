@@ -24,7 +24,7 @@ def in_tmp(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
 
 def new_driver(
     name: str | None = "acme_plug",
-    dest: Path = Path(),
+    dest: Path | None = None,
     *,
     defaults: bool = True,
     title: str | None = None,

@@ -17,7 +17,6 @@ from pydantic_ai.messages import (
     ModelRequest,
     ModelResponse,
     ModelResponsePart,
-    SystemPromptPart,
     TextPart,
     ToolCallPart,
     ToolReturnPart,
@@ -73,17 +72,13 @@ def sets_level() -> FunctionModel:
 
 
 def reports_prompt() -> FunctionModel:
-    """Answers with the tool names it sees and its system prompt, as JSON."""
+    """Answers with the tool names it sees and its instructions (the process system prompt), as JSON."""
 
     def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
-        system = [
-            part.content
-            for message in messages
-            if isinstance(message, ModelRequest)
-            for part in message.parts
-            if isinstance(part, SystemPromptPart)
-        ]
-        report = {"tools": sorted(tool.name for tool in info.function_tools), "system": "\n".join(system)}
+        report = {
+            "tools": sorted(tool.name for tool in info.function_tools),
+            "system": info.instructions or "",
+        }
         return ModelResponse(parts=[TextPart(json.dumps(report))])
 
     return FunctionModel(respond, model_name="reports-prompt")
