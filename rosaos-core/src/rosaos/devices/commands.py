@@ -29,6 +29,7 @@ from rosaos.devices.runtime import RuntimeEntry, record_served_device, served_de
 from rosaos.devices.serve import ServedDevice, open_device
 from rosaos.devices.world import DeviceInstance, World, build_world
 from rosaos.drivers import DeviceError
+from rosaos.frontends.console import console
 from rosaos.plugins import DriverRegistry, load_drivers
 
 LIST_TIMEOUT = 5.0
@@ -54,7 +55,7 @@ class DeviceRow(BaseModel):
 
 
 def _stderr() -> Console:
-    return Console(stderr=True, highlight=False)
+    return console(stderr=True)
 
 
 def _load(config_path: Path | None) -> tuple[RosaosConfig, DriverRegistry, World]:
@@ -179,7 +180,7 @@ def _print_table(rows: list[DeviceRow], world: World) -> None:
             row.url or "-",
             f"[{colour}]{escape(row.health)}[/]",
         )
-    Console(highlight=False).print(table)
+    console().print(table)
 
 
 # --- rosaos devices check -----------------------------------------------------------------------

@@ -16,6 +16,7 @@ from typing import Any
 
 from rich.console import Console
 
+from rosaos.frontends.console import console as terminal
 from rosaos.kernel.client import KernelClient, KernelUnavailable
 
 POLL_SECONDS = 0.1
@@ -143,7 +144,7 @@ async def _settled(client: KernelClient, conversation: Conversation) -> bool:
 
 async def one_shot(client: KernelClient, text: str, wait: bool, timeout: float, json_output: bool) -> int:
     """``rosaos chat -m TEXT [--wait]``."""
-    console = None if json_output else Console(highlight=False)
+    console = None if json_output else terminal()
     if not wait:
         event_id = await client.chat(text, idempotency_key=f"chat-{uuid.uuid4()}")
         if json_output:
@@ -161,7 +162,7 @@ async def one_shot(client: KernelClient, text: str, wait: bool, timeout: float, 
 
 async def repl(client: KernelClient) -> int:
     """Interactive chat: type lines, see replies and callbacks as they come. Ctrl-D or /quit exits."""
-    console = Console(highlight=False)
+    console = terminal()
     health = await client.health()
     console.print(f"Connected to rosaOS {health['version']} at {client.base_url} (model: {health['model']}).")
     if health.get("model_notice"):

@@ -18,6 +18,7 @@ from rosaos.auth import token_path
 from rosaos.config import ConfigError, RosaosConfig, load_config
 from rosaos.devices.world import build_world
 from rosaos.drivers import DeviceError
+from rosaos.frontends.console import console as terminal
 from rosaos.kernel.client import KernelClient, KernelUnavailable
 from rosaos.kernel.runtime import Kernel, KernelError
 from rosaos.models.select import ModelError
@@ -56,8 +57,8 @@ def up_command(
     models: dict[str, Any],
 ) -> int:
     """Start devices, kernel, pool and web page; run until Ctrl-C."""
-    console = Console(highlight=False)
-    err = Console(stderr=True, highlight=False)
+    console = terminal()
+    err = terminal(stderr=True)
     kernel_overrides: dict[str, Any] = {}
     if host is not None:
         kernel_overrides["host"] = host
@@ -163,7 +164,7 @@ def ps_command(config_path: Path | None, url: str | None, json_output: bool, all
             f"{(now - started).total_seconds():.0f}s",
             process["task"].splitlines()[0][:60],
         )
-    Console().print(table)
+    terminal().print(table)
     return 0
 
 
