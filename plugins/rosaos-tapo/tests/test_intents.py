@@ -9,6 +9,8 @@ from hassil import recognize
 from hassil.intents import TextSlotList
 
 from rosaos.models.intents_file import IntentsFile, load_intents_file
+from rosaos.models.matching import IntentMatcher
+from rosaos.models.sources import DeviceIntentSource
 from rosaos_tapo.colors import NAMED_COLORS
 from rosaos_tapo.plugin import SPEC
 
@@ -96,3 +98,72 @@ def test_every_intent_template_uses_the_device_slot(intents_file: IntentsFile) -
         for data in intent["data"]:
             for sentence in data["sentences"]:
                 assert "{device}" in sentence, f"{name}: {sentence!r} names no device"
+
+
+# The homeassistant: table — Home Assistant's multilingual intents mapped onto the bulb's tools
+
+
+def test_the_bulb_behaves_like_an_ha_light(intents_file: IntentsFile) -> None:
+    mapping = intents_file.homeassistant
+    assert mapping is not None
+    assert mapping.domain == "light"
+    assert {"HassTurnOn", "HassTurnOff", "HassLightSet", "HassGetState"} <= set(mapping.intents)
+
+
+async def test_every_ha_action_calls_a_bulb_tool_with_arguments_it_takes(
+    intents_file: IntentsFile, open_bulb: Any
+) -> None:
+    async with open_bulb() as bulb:
+        tools = {tool.name: tool for tool in await bulb.client.list_tools()}
+    assert intents_file.homeassistant is not None
+    for intent, mapping in intents_file.homeassistant.intents.items():
+        for action in mapping.actions:
+            assert action.tool in tools, f"{intent}: no tool {action.tool}"
+            accepted = set(tools[action.tool].input_schema.get("properties") or {})
+            assert set(action.args) <= accepted, f"{intent}: {action.tool} takes {sorted(accepted)}"
+
+
+def test_ha_state_answers_use_get_state_keys(intents_file: IntentsFile) -> None:
+    assert intents_file.homeassistant is not None
+    states = intents_file.homeassistant.intents["HassGetState"].states
+    assert states == {"on": {"on": True}, "off": {"on": False}}
+
+
+@pytest.mark.parametrize(
+    ("language", "sentence", "expected"),
+    [
+        (
+            "en",
+            "Turn off all the lights",
+            [("kitchen_light", "turn_off", {}), ("bedroom_light", "turn_off", {})],
+        ),
+        (
+            "en",
+            "set the kitchen light color temperature to warm white",
+            [("kitchen_light", "set_color_temp", {"kelvin": 2700})],
+        ),
+        ("fr", "allume la lumière de la cuisine", [("kitchen_light", "turn_on", {})]),
+        (
+            "fr",
+            "mets la lumière de la chambre en bleu",
+            [("bedroom_light", "set_color_name", {"name": "blue"})],
+        ),
+    ],
+)
+def test_ha_sentences_reach_the_bulbs_through_the_engine(
+    language: str, sentence: str, expected: list[tuple[str, str, dict[str, Any]]]
+) -> None:
+    assert SPEC.intents is not None
+    world = [
+        DeviceIntentSource(
+            "kitchen_light", "tapo", "Ceiling light in the kitchen", area="cuisine", intents=SPEC.intents
+        ),
+        DeviceIntentSource(
+            "bedroom_light", "tapo", "Bedside light in the bedroom", area="chambre", intents=SPEC.intents
+        ),
+    ]
+    result = IntentMatcher(world, language).match(sentence)
+    planned = [
+        (step.device, step.tool, step.args) for process in result.processes for step in process.plan.steps
+    ]
+    assert planned == expected

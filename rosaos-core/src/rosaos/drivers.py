@@ -133,6 +133,10 @@ class DriverSpec(BaseModel):
     """Instances this driver adds to the demo world; defaults to one instance named after it."""
     implemented: bool = True
     """False for a placeholder driver: listed, never served. Not an error."""
+    login: Callable[[DeviceContext], int] | None = None
+    """Interactive account login for ``rosaos devices login NAME`` (cloud services such as Spotify):
+    called with the instance's context, talks to the user on stdin/stdout, keeps what it obtains
+    under ``ctx.data_dir / "drivers" / <driver>``, and returns the exit code. None: no login needed."""
 
     @field_validator("name")
     @classmethod

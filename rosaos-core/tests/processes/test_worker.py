@@ -96,11 +96,11 @@ async def test_job_past_its_timeout_is_stopped_by_the_worker(kernel: KernelStand
     assert "timeout of 0.3 s" in (callback.error or "")
 
 
-async def test_no_model_configured_answers_how_to_configure_one(kernel: KernelStandIn) -> None:
+async def test_with_no_model_a_task_without_a_plan_says_how_to_configure_one(kernel: KernelStandIn) -> None:
     job = make_job(kernel, "unused").model_copy(update={"model": ModelSpec()})
     callback = await run_job(job)
     assert callback.status == "ok"
-    assert (callback.output or "").startswith("No model is configured:")
+    assert (callback.output or "").startswith("The offline engine only runs planned tasks")
 
 
 async def test_model_that_cannot_be_imported_is_an_error(kernel: KernelStandIn) -> None:

@@ -6,9 +6,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-from pydantic_ai.messages import ModelMessage, ModelResponse, TextPart
 from pydantic_ai.models import Model
-from pydantic_ai.models.function import AgentInfo, FunctionModel
 
 from rosaos.config import RosaosConfig
 from rosaos.models.select import ModelSpec, build_model
@@ -16,13 +14,6 @@ from rosaos.models.select import ModelSpec, build_model
 if TYPE_CHECKING:
     from rosaos.devices.world import World
     from rosaos.kernel.events import Event
-
-NO_MODEL_NOTICE = (
-    "No model is configured. Set one with `rosaos up --model openai:gpt-5.2` (or anthropic:…, "
-    "google-gla:…, groq:…, with the provider's API key in its usual environment variable), or "
-    "`--model openai-compatible --base-url http://127.0.0.1:11434/v1 --model-name qwen3:8b` for a "
-    "local server, or [models] kernel in rosaos.toml."
-)
 
 
 @dataclass
@@ -37,39 +28,51 @@ class KernelModels:
     """Per-event override of the kernel model (the offline fast path), None for the default."""
 
 
+OFFLINE_NOTICE = (
+    'Running offline: the local-intent engine understands direct commands ("turn on the kitchen '
+    'light", "play some jazz"). For open-ended requests set a model: `rosaos up --model '
+    "openai:gpt-5.2` (or anthropic:…, google-gla:…, groq:…), or `--model openai-compatible "
+    "--base-url http://127.0.0.1:11434/v1 --model-name qwen3:8b`."
+)
+
+
 def kernel_spec(config: RosaosConfig) -> ModelSpec:
+    """The kernel's model as configured."""
     models = config.models
     return ModelSpec(
-        model=models.kernel, base_url=models.base_url, api_key=models.api_key, model_name=models.model_name
+        model=models.kernel,
+        base_url=models.base_url,
+        api_key=models.api_key,
+        model_name=models.model_name,
+        prefer_local=models.prefer_local,
+        language=models.language,
     )
 
 
 def process_spec(config: RosaosConfig) -> ModelSpec:
+    """The process agents' model: ``[models] process``, else the kernel's."""
     models = config.models
-    return ModelSpec(
-        model=models.process or models.kernel,
-        base_url=models.base_url,
-        api_key=models.api_key,
-        model_name=models.model_name,
-    )
+    return kernel_spec(config).model_copy(update={"model": models.process or models.kernel})
 
 
 def kernel_models(config: RosaosConfig, world: World, override: Model | None = None) -> KernelModels:
-    """Resolve the configured models. ``override`` (tests) replaces the kernel model outright."""
+    """Resolve the configured models. ``override`` (tests) replaces the kernel model outright.
+
+    No model configured: the offline local-intent engine is the kernel. A model configured: it
+    is the kernel, and with ``prefer_local`` the engine still takes the sentences it matches.
+    """
+    from rosaos.models.kernel_model import LocalIntentModel
+    from rosaos.models.routing import KernelRouter
+    from rosaos.models.sources import intent_sources
+
     spec = kernel_spec(config)
     process = process_spec(config)
     if override is not None:
         return KernelModels(override, process, override.model_name, None, lambda event: None)
+    local = LocalIntentModel(intent_sources(world), language=config.models.language)
     if spec.model is None:
-        model = unconfigured_model()
-        return KernelModels(model, process, "none", NO_MODEL_NOTICE, lambda event: None)
-    return KernelModels(build_model(spec), process, spec.describe(), None, lambda event: None)
-
-
-def unconfigured_model() -> Model:
-    """Answers every event by saying how to configure a model, so the system still runs end to end."""
-
-    def answer(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
-        return ModelResponse(parts=[TextPart(NO_MODEL_NOTICE)])
-
-    return FunctionModel(answer, model_name="rosaos-unconfigured")
+        return KernelModels(local, process, "offline local-intent engine", OFFLINE_NOTICE, lambda event: None)
+    llm = build_model(spec)
+    router = KernelRouter(local, llm, prefer_local=spec.prefer_local)
+    description = spec.describe() + (" (exact commands run offline)" if spec.prefer_local else "")
+    return KernelModels(llm, process, description, None, router.model_for_event)

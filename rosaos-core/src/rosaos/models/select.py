@@ -35,6 +35,10 @@ class ModelSpec(BaseModel):
     base_url: str | None = None
     api_key: str | None = None
     model_name: str | None = None
+    prefer_local: bool = True
+    """With a model set: tasks the offline engine planned still run locally (no LLM call)."""
+    language: str = "en"
+    """Language of the offline engine's replies."""
 
     @property
     def is_offline_default(self) -> bool:

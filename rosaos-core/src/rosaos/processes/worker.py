@@ -30,9 +30,8 @@ from fastmcp import Client
 from pydantic import ValidationError
 from pydantic_ai import Agent, UsageLimitExceeded, capture_run_messages
 from pydantic_ai.mcp import MCPToolset
-from pydantic_ai.messages import ModelMessage, ModelResponse, TextPart
+from pydantic_ai.messages import ModelMessage, ModelResponse
 from pydantic_ai.models import Model
-from pydantic_ai.models.function import AgentInfo, FunctionModel
 from pydantic_ai.toolsets import AbstractToolset
 from pydantic_ai.usage import UsageLimits
 
@@ -61,25 +60,18 @@ class DeviceUnreachable(Exception):
     """A granted device whose MCP server could not be reached; the message names it and its URL."""
 
 
-def offline_model() -> Model:
-    """The model used when none is configured (``ModelSpec.model`` is None).
+def process_model(job: WorkerJob) -> Model:
+    """The process agent's model: the offline plan runner, the configured LLM, or a routing of both.
 
-    A placeholder until the local-intent engine lands: it answers every task with a message
-    saying how to configure a model, so the offline path still runs end to end.
+    With no model configured, :class:`~rosaos.models.process_model.LocalPlanModel` executes the
+    plan the offline engine wrote into the task. With one configured and ``prefer_local``, a
+    planned task still runs locally and anything else goes to the LLM.
     """
+    from rosaos.models.routing import process_model_for
 
-    def answer(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
-        return ModelResponse(
-            parts=[
-                TextPart(
-                    "No model is configured: set [models] process in rosaos.toml (for example "
-                    "'openai:gpt-5.2', or 'openai-compatible' with base_url and model_name), "
-                    "then run the task again."
-                )
-            ]
-        )
-
-    return FunctionModel(answer, model_name="rosaos-unconfigured")
+    spec = job.model
+    llm = None if spec.model is None else build_model(spec)
+    return process_model_for(job.task, llm, spec.prefer_local, spec.language)
 
 
 async def run_job(job: WorkerJob) -> WorkerCallback:
@@ -120,7 +112,7 @@ async def run_job(job: WorkerJob) -> WorkerCallback:
 
 
 async def _run_agent(job: WorkerJob) -> str:
-    model = build_model(job.model, offline=offline_model())
+    model = process_model(job)
     prefixed = len(job.devices) > 1
     async with contextlib.AsyncExitStack() as stack:
         toolsets = [await _connect(stack, device, prefixed) for device in job.devices]

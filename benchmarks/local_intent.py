@@ -1,0 +1,114 @@
+"""Micro-benchmark: how long the offline local-intent engine takes to match one sentence.
+
+Runs every ``say:`` sentence of the public task files (``../shared/bench/tasks/*.yaml``, or the
+folder given with ``--tasks``) through :meth:`rosaos.models.matching.IntentMatcher.match` against
+its own world, with the installed drivers' intents. Each sentence is matched once to warm up, then
+``--repeat`` times with the match cache cleared, so every timing is a full recognition.
+
+Prints a table (per sentence: outcome, p50, p95) and then one JSON object with the totals::
+
+    .venv/bin/python benchmarks/local_intent.py [--repeat 50] [--language en] [--tasks DIR]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import time
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from rosaos.config import DeviceConfig
+from rosaos.models.matching import IntentMatcher
+from rosaos.models.sources import sources_from_config
+from rosaos.plugins import load_drivers
+
+DEFAULT_TASKS = Path(__file__).resolve().parents[2] / "shared" / "bench" / "tasks"
+
+
+def world_devices(world: dict[str, Any]) -> dict[str, DeviceConfig]:
+    """A task file's ``world:`` as ``[devices.*]`` tables; matching needs no state, so it is left out."""
+    return {
+        name: DeviceConfig(
+            driver=entry["driver"],
+            description=entry.get("description"),
+            aliases=entry.get("aliases", []),
+            area=entry.get("area"),
+            sim=entry.get("sim", {}),
+        )
+        for name, entry in world.items()
+    }
+
+
+def percentile(samples: list[float], fraction: float) -> float:
+    ordered = sorted(samples)
+    return ordered[min(len(ordered) - 1, round(fraction * (len(ordered) - 1)))]
+
+
+def main() -> None:
+    """Run the benchmark and print the table and the JSON summary."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--tasks", type=Path, default=DEFAULT_TASKS)
+    parser.add_argument("--repeat", type=int, default=50)
+    parser.add_argument("--language", default="en")
+    options = parser.parse_args()
+
+    registry = load_drivers()
+    rows: list[dict[str, Any]] = []
+    build_ms: list[float] = []
+    for path in sorted(options.tasks.glob("*.yaml")):
+        document = yaml.safe_load(path.read_text(encoding="utf-8"))
+        started = time.perf_counter()
+        matcher = IntentMatcher(
+            sources_from_config(world_devices(document["world"]), registry), options.language
+        )
+        build_ms.append((time.perf_counter() - started) * 1000)
+        for task in document["tasks"]:
+            outcome = matcher.match(task["say"])  # warm-up: hassil compiles lazily
+            samples = []
+            for _ in range(options.repeat):
+                matcher.clear_cache()
+                started = time.perf_counter()
+                matcher.match(task["say"])
+                samples.append((time.perf_counter() - started) * 1000)
+            rows.append(
+                {
+                    "task": task["id"],
+                    "say": task["say"],
+                    "outcome": outcome.kind,
+                    "processes": len(outcome.processes),
+                    "p50_ms": percentile(samples, 0.5),
+                    "p95_ms": percentile(samples, 0.95),
+                    "samples": samples,
+                }
+            )
+
+    width = max(len(row["say"]) for row in rows)
+    print(f"{'sentence':<{width}}  {'outcome':<9} {'procs':>5} {'p50 ms':>8} {'p95 ms':>8}")
+    for row in rows:
+        print(
+            f"{row['say']:<{width}}  {row['outcome']:<9} {row['processes']:>5} "
+            f"{row['p50_ms']:>8.2f} {row['p95_ms']:>8.2f}"
+        )
+    every = [sample for row in rows for sample in row["samples"]]
+    exact = [sample for row in rows if row["outcome"] == "plans" for sample in row["samples"]]
+    summary = {
+        "sentences": len(rows),
+        "repeat": options.repeat,
+        "language": options.language,
+        "build_ms_max": round(max(build_ms), 2),
+        "p50_ms": round(percentile(every, 0.5), 3),
+        "p95_ms": round(percentile(every, 0.95), 3),
+        "mean_ms": round(statistics.fmean(every), 3),
+        "exact_matches": sum(row["outcome"] == "plans" for row in rows),
+        "exact_p50_ms": round(percentile(exact, 0.5), 3) if exact else None,
+        "exact_p95_ms": round(percentile(exact, 0.95), 3) if exact else None,
+    }
+    print(json.dumps(summary))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,203 @@
+"""The kernel agent's offline model: the local-intent engine as a pydantic-ai ``Model``.
+
+Plugged in where an LLM would be, so the kernel runs unchanged: same queue, same
+``launch_process``, same workers, leases and MCP tools. Per request it reads the event being
+handled (see :func:`rosaos.kernel.loop.render_event`) and answers:
+
+- ``[User said]`` / ``[User typed]``: the sentence is matched (:class:`~rosaos.models.matching.
+  IntentMatcher`). An exact match becomes one ``launch_process`` call per process, all in one
+  response (parallel tool calls). Anything else becomes a text reply: a clarifying question, a
+  refusal naming what exists, or "not understood". Nothing is launched on a guess.
+- the ``launch_process`` results: a short acknowledgement from each plan ("On it: turn on the
+  kitchen light."), or the refusal (an exclusive device held by another process) passed on.
+- ``[Worker callback]``: the process's output (its plan made it a user-facing sentence), or an
+  apology with the error. No new process.
+- ``[Device notice]`` / ``[Error]``: acknowledged in one sentence.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from pydantic_ai.messages import (
+    ModelMessage,
+    ModelRequest,
+    ModelResponse,
+    ModelResponsePart,
+    TextPart,
+    ToolCallPart,
+)
+from pydantic_ai.models import Model, ModelRequestParameters
+from pydantic_ai.settings import ModelSettings
+
+from rosaos.models.conversation import (
+    ToolOutcome,
+    content_text,
+    current_turn,
+    last_request,
+    parse_callback,
+    parse_event,
+    responses_by,
+    tool_outcomes,
+    user_text,
+)
+from rosaos.models.matching import IntentMatcher, MatchResult
+from rosaos.models.phrases import phrase
+from rosaos.models.plan import PlanError, decode_plan, has_plan
+from rosaos.models.sources import DeviceIntentSource
+
+LAUNCH_TOOL = "launch_process"
+USER_TAGS = frozenset({"User said", "User typed"})
+CALLBACK_TAG = "Worker callback"
+NO_OUTPUT = "(no output)"
+
+
+class LocalIntentModel(Model):
+    """The offline kernel model: sentence templates instead of an LLM.
+
+    ``devices`` are the world's devices (:func:`rosaos.models.sources.intent_sources`);
+    ``language`` is ``[models] language``. The hassil grammars are built here, once.
+    """
+
+    def __init__(self, devices: Sequence[DeviceIntentSource], language: str = "en") -> None:
+        super().__init__()
+        self.language = language
+        self.matcher = IntentMatcher(devices, language)
+
+    @property
+    def model_name(self) -> str:
+        """The name responses carry; routing uses it to keep a turn on the model that began it."""
+        return "rosaos-local-intent"
+
+    @property
+    def system(self) -> str:
+        """The provider, for telemetry: rosaOS itself."""
+        return "rosaos"
+
+    def match(self, text: str) -> MatchResult:
+        """What ``text`` asks for: processes to launch, or the reply instead (see ``IntentMatcher``)."""
+        return self.matcher.match(text)
+
+    def handles_text(self, rendered_event: str) -> bool:
+        """Whether this model answers ``rendered_event`` exactly, so an LLM is not needed.
+
+        True for user text that matches completely and for callbacks of processes it planned.
+        A bare choice ("the kitchen light") is not: it may answer the LLM's "which light?".
+        """
+        event = parse_event(rendered_event)
+        if event.tag in USER_TAGS or event.tag is None:
+            return self.match(event.body).is_exact and not self.matcher.choice(event.body)
+        if event.tag == CALLBACK_TAG:
+            task = parse_callback(event.body).task
+            return task is not None and has_plan(task)
+        return False
+
+    def handles(self, messages: Sequence[ModelMessage]) -> bool:
+        """Whether this model should answer the request at the end of ``messages``."""
+        turn = current_turn(messages)
+        if len(turn) > 1:  # a turn already under way stays with the model that started it
+            return responses_by(turn, self.model_name)
+        text = user_text(last_request(messages))
+        return text is not None and self.handles_text(text)
+
+    async def request(
+        self,
+        messages: list[ModelMessage],
+        model_settings: ModelSettings | None,
+        model_request_parameters: ModelRequestParameters,
+    ) -> ModelResponse:
+        """Answer the kernel event at the end of ``messages`` (see the module docstring)."""
+        model_settings, model_request_parameters = self.prepare_request(
+            model_settings, model_request_parameters
+        )
+        tools = [tool.name for tool in model_request_parameters.function_tools]
+        return ModelResponse(parts=self.respond(messages, tools), model_name=self.model_name)
+
+    def respond(self, messages: Sequence[ModelMessage], tools: Sequence[str]) -> list[ModelResponsePart]:
+        """The response parts for ``messages``, given the names of the tools the agent offers."""
+        turn = current_turn(messages)
+        outcomes = tool_outcomes(turn)
+        if outcomes:
+            return [TextPart(self._acknowledge(outcomes))]
+        event = parse_event(user_text(last_request(messages)) or "")
+        if event.tag in USER_TAGS or event.tag is None:
+            return self._command(event.body, tools, self._open_question(messages))
+        if event.tag == CALLBACK_TAG:
+            return [TextPart(self._callback_reply(event.body))]
+        if event.tag == "Device notice":
+            return [TextPart(phrase(self.language, "device_notice", message=event.body))]
+        return [TextPart(phrase(self.language, "error", message=event.body))]
+
+    def _open_question(self, messages: Sequence[ModelMessage]) -> str | None:
+        """The user's previous sentence, if this model's last reply asked "which one?" about it."""
+        earlier = list(messages[: len(messages) - len(current_turn(messages))])
+        if (
+            not earlier
+            or not isinstance(earlier[-1], ModelResponse)
+            or earlier[-1].model_name != self.model_name
+        ):
+            return None
+        reply = earlier[-1].text or ""
+        previous = parse_event(user_text(_first_request(current_turn(earlier))) or "")
+        if previous.tag not in USER_TAGS and previous.tag is not None:
+            return None
+        asked = self.match(previous.body)
+        return previous.body if asked.kind == "clarify" and asked.reply == reply else None
+
+    def _command(
+        self, text: str, tools: Sequence[str], open_question: str | None = None
+    ) -> list[ModelResponsePart]:
+        # An answer to "which one?" ("the kitchen light") completes the question's sentence; on
+        # its own it would read as "turn on the kitchen light".
+        answered = self.matcher.follow_up(open_question, text) if open_question else None
+        result = answered or self.match(text)
+        if not result.is_exact:
+            return [TextPart(result.reply)]
+        launch = next((name for name in tools if name == LAUNCH_TOOL), None) or next(
+            (name for name in tools if name.endswith(LAUNCH_TOOL)), None
+        )
+        if launch is None:  # misconfigured agent: say so rather than pretend
+            return [
+                TextPart(
+                    phrase(self.language, "launch_refused", reason=f"no {LAUNCH_TOOL} tool is available")
+                )
+            ]
+        return [
+            ToolCallPart(launch, {"task": process.task, "devices": list(process.devices)})
+            for process in result.processes
+        ]
+
+    def _acknowledge(self, outcomes: list[ToolOutcome]) -> str:
+        replies: list[str] = []
+        for outcome in outcomes:
+            if not outcome.ok:
+                replies.append(phrase(self.language, "launch_refused", reason=content_text(outcome.content)))
+                continue
+            task = str(outcome.call.args_as_dict().get("task", ""))
+            try:
+                plan = decode_plan(task)
+            except PlanError:
+                plan = None
+            replies.append(
+                plan.ack if plan is not None and plan.ack else phrase(self.language, "callback_done")
+            )
+        # "Turn off all the lights" launches one process per light, all with the same ack.
+        return " ".join(dict.fromkeys(replies))
+
+    def _callback_reply(self, body: str) -> str:
+        callback = parse_callback(body)
+        if callback.status == "ok":
+            output = (callback.output or "").strip()
+            return output if output and output != NO_OUTPUT else phrase(self.language, "callback_done")
+        error = callback.error or callback.output or callback.status
+        try:
+            plan = decode_plan(callback.task or "")
+        except PlanError:
+            plan = None
+        if plan is not None:
+            return plan.failure.replace("{error}", error)
+        return phrase(self.language, "callback_failed", status=callback.status, error=error)
+
+
+def _first_request(messages: Sequence[ModelMessage]) -> ModelRequest | None:
+    return next((message for message in messages if isinstance(message, ModelRequest)), None)

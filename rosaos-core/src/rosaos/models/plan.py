@@ -1,0 +1,118 @@
+"""The plan a kernel task carries: exact tool calls, for the offline process engine and for people.
+
+A task the local-intent engine launches is a readable sentence followed by a fenced block::
+
+    Turn on the kitchen light.
+
+    Planned device calls (rosaOS offline engine; an LLM may follow them too):
+    ```rosaos-plan
+    {"version": 1, "steps": [{"device": "kitchen_light", "tool": "turn_on", "args": {}}],
+     "reply": "Done: turn on the kitchen light.", ...}
+    ```
+
+The process agent's system prompt contains the task, so :class:`~rosaos.models.process_model.
+LocalPlanModel` finds the block there and runs the steps in order; an LLM reading the same task
+sees plain instructions plus the exact calls.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+PLAN_FENCE = "rosaos-plan"
+PLAN_INTRO = "Planned device calls (rosaOS offline engine; an LLM may follow them too):"
+_BLOCK = re.compile(r"```" + PLAN_FENCE + r"[ \t]*\n(?P<body>.*?)\n?```", re.DOTALL)
+RESULT_PLACEHOLDER = "{result}"
+ERROR_PLACEHOLDER = "{error}"
+
+
+class PlanError(ValueError):
+    """A ``rosaos-plan`` block that is not valid JSON or not a valid :class:`Plan`."""
+
+
+class PlanStep(BaseModel):
+    """One tool call on one device."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    device: str = Field(min_length=1)
+    """Instance name; the process agent's tool is ``<device>_<tool>`` or bare ``<tool>``."""
+    tool: str = Field(min_length=1)
+    args: dict[str, Any] = Field(default_factory=dict)
+
+
+class PlanAnswer(BaseModel):
+    """A yes/no question answered from the state the last step returned."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    when: dict[str, Any] = Field(min_length=1)
+    """State keys and the values that make the answer "yes"."""
+    yes: str
+    no: str
+
+
+class Plan(BaseModel):
+    """What a process does, step by step, and what it says when it is done."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    version: Literal[1] = 1
+    steps: list[PlanStep] = Field(min_length=1)
+    reply: str
+    """Final output when every step succeeded; ``{result}`` becomes the last step's result."""
+    failure: str = "Sorry, that failed: {error}"
+    """Final output when a step failed; ``{error}`` becomes the tool's message."""
+    ack: str = ""
+    """What the kernel says once the process is launched."""
+    answer: PlanAnswer | None = None
+
+    @property
+    def devices(self) -> list[str]:
+        """The devices the steps touch, in order of first use."""
+        return list(dict.fromkeys(step.device for step in self.steps))
+
+
+def encode_task(summary: str, plan: Plan) -> str:
+    """The ``launch_process`` task: the readable ``summary``, then the plan block."""
+    body = json.dumps(plan.model_dump(mode="json", exclude_none=True), ensure_ascii=False)
+    return f"{summary.strip()}\n\n{PLAN_INTRO}\n```{PLAN_FENCE}\n{body}\n```"
+
+
+def has_plan(text: str) -> bool:
+    """Whether ``text`` contains a ``rosaos-plan`` block (valid or not)."""
+    return _BLOCK.search(text) is not None
+
+
+def decode_plan(text: str) -> Plan | None:
+    """The plan in ``text``, or None when there is no block. Raises :class:`PlanError` if it is broken."""
+    match = _BLOCK.search(text)
+    if match is None:
+        return None
+    try:
+        return Plan.model_validate(json.loads(match.group("body")))
+    except (json.JSONDecodeError, ValidationError) as error:
+        raise PlanError(f"the {PLAN_FENCE} block is not a valid plan: {error}") from None
+
+
+def task_summary(text: str) -> str:
+    """The readable part of a task: everything before the plan block and its intro line."""
+    head = text.split(f"```{PLAN_FENCE}", 1)[0]
+    return head.replace(PLAN_INTRO, "").strip()
+
+
+def render_result(result: Any) -> str:
+    """A tool result on one short line, for ``{result}`` in a reply ("on: false, brightness: 100")."""
+    if isinstance(result, dict):
+        return ", ".join(f"{key}: {_scalar(value)}" for key, value in result.items())
+    return _scalar(result)
+
+
+def _scalar(value: Any) -> str:
+    if isinstance(value, str):
+        return value
+    return json.dumps(value, ensure_ascii=False)

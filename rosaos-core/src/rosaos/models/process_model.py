@@ -1,0 +1,214 @@
+"""The process agent's offline model: runs the ``rosaos-plan`` of its task, step by step.
+
+The worker puts the kernel's task in the process agent's system prompt (and sends it as the user
+prompt), so the plan block written by the kernel's local-intent engine is there. Per request this
+model looks at what has been done so far and:
+
+1. calls the next plan step's tool, resolved against the tools the agent really has
+   (``turn_on``, ``kitchen_light_turn_on`` or ``kitchen_light__turn_on``: device + tool, either way);
+2. after the last step, or at the first failed one, works out the reply: the plan's reply with
+   ``{result}`` filled in, the yes/no answer read from the state, or the failure with the error;
+3. if a Reachy Mini is granted and has ``speak``, says that reply through it;
+4. ends with the reply as its text output, which becomes the process's callback output.
+
+A task without a plan gets an answer saying how to configure an LLM for free-form tasks.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Sequence
+from typing import Any
+
+from pydantic_ai.messages import ModelMessage, ModelResponse, ModelResponsePart, TextPart, ToolCallPart
+from pydantic_ai.models import Model, ModelRequestParameters
+from pydantic_ai.settings import ModelSettings
+from pydantic_ai.tools import ToolDefinition
+
+from rosaos.models.conversation import (
+    ToolOutcome,
+    content_text,
+    current_turn,
+    prompt_texts,
+    responses_by,
+    tool_outcomes,
+)
+from rosaos.models.phrases import phrase
+from rosaos.models.plan import Plan, PlanError, decode_plan, render_result
+
+SPEAKER_DRIVER = "reachy"
+SPEAK_TOOL = "speak"
+# The worker heads each granted device's prompt section "## <instance> (<driver>)".
+_DEVICE_HEADING = re.compile(r"^## (?P<name>[\w.-]+) \((?P<driver>[\w-]+)\)\s*$", re.MULTILINE)
+NO_PLAN_REPLY = (
+    "The offline engine only runs planned tasks: a ```rosaos-plan``` block, as the kernel's "
+    "local-intent engine writes them. This task has none. For free-form tasks configure an LLM: "
+    "set [models] process in rosaos.toml (for example 'openai:gpt-5.2', or 'openai-compatible' "
+    "with base_url and model_name)."
+)
+
+
+def resolve_tool(device: str, tool: str, tools: Sequence[str]) -> str | None:
+    """The agent's name for ``tool`` of ``device``: prefixed (``<device>_<tool>``, ``<device>__<tool>``)
+    when the process holds several devices, bare when it holds one."""
+    for candidate in (f"{device}_{tool}", f"{device}__{tool}", f"{device}.{tool}", tool):
+        if candidate in tools:
+            return candidate
+    return None
+
+
+class LocalPlanModel(Model):
+    """The offline process model: executes the task's ``rosaos-plan``; no LLM involved.
+
+    ``language`` is only used for the few messages the engine writes itself; the replies of a
+    plan were written by the kernel, in its language.
+    """
+
+    def __init__(self, language: str = "en") -> None:
+        super().__init__()
+        self.language = language
+
+    @property
+    def model_name(self) -> str:
+        """The name responses carry; routing uses it to keep a run on this model."""
+        return "rosaos-local-plan"
+
+    @property
+    def system(self) -> str:
+        """The provider, for telemetry: rosaOS itself."""
+        return "rosaos"
+
+    def handles(self, messages: Sequence[ModelMessage]) -> bool:
+        """Whether this model should answer: the task carries a plan, and no other model began."""
+        turn = current_turn(messages)
+        if len(turn) > 1 and not responses_by(turn, self.model_name):
+            return False
+        return any("```rosaos-plan" in text for text in prompt_texts(messages, None))
+
+    async def request(
+        self,
+        messages: list[ModelMessage],
+        model_settings: ModelSettings | None,
+        model_request_parameters: ModelRequestParameters,
+    ) -> ModelResponse:
+        """The next step of the plan, or the final reply (see the module docstring)."""
+        model_settings, model_request_parameters = self.prepare_request(
+            model_settings, model_request_parameters
+        )
+        parts = self.respond(messages, model_request_parameters.function_tools)
+        return ModelResponse(parts=parts, model_name=self.model_name)
+
+    def respond(
+        self, messages: Sequence[ModelMessage], tools: Sequence[ToolDefinition]
+    ) -> list[ModelResponsePart]:
+        """The response parts for ``messages`` with ``tools`` available."""
+        texts = prompt_texts(messages, None)
+        plan, problem = _find_plan(texts)
+        if plan is None:
+            return [TextPart(problem or NO_PLAN_REPLY)]
+        definitions = {tool.name: tool for tool in tools}
+        names = list(definitions)
+        outcomes = tool_outcomes(messages)
+        done, failed = _progress(plan, outcomes)
+        if failed is None and done < len(plan.steps):
+            step = plan.steps[done]
+            name = resolve_tool(step.device, step.tool, names)
+            if name is not None:
+                return [ToolCallPart(name, clamp_arguments(step.args, definitions[name]))]
+            reason = phrase(
+                self.language, "no_tool", tool=step.tool, device=step.device, tools=", ".join(names)
+            )
+            reply = plan.failure.replace("{error}", reason)
+        elif failed is not None:
+            reply = plan.failure.replace("{error}", content_text(failed.content))
+        else:
+            reply = final_reply(plan, outcomes[len(plan.steps) - 1].content)
+        speak = self._speak_tool(texts, plan, names)
+        spoken = len(outcomes) > done + (1 if failed is not None else 0)
+        if speak is not None and not spoken:
+            return [ToolCallPart(speak, {_text_argument(definitions[speak]): reply})]
+        return [TextPart(reply)]
+
+    def _speak_tool(self, texts: list[str], plan: Plan, tools: list[str]) -> str | None:
+        """The granted Reachy Mini's ``speak`` tool, unless the plan already ends by speaking."""
+        if plan.steps[-1].tool == SPEAK_TOOL:
+            return None
+        for text in texts:
+            for heading in _DEVICE_HEADING.finditer(text):
+                if heading.group("driver") == SPEAKER_DRIVER:
+                    found = resolve_tool(heading.group("name"), SPEAK_TOOL, tools)
+                    if found is not None:
+                        return found
+        return None
+
+
+def _find_plan(texts: list[str]) -> tuple[Plan | None, str | None]:
+    problem = None
+    for text in texts:
+        try:
+            plan = decode_plan(text)
+        except PlanError as error:
+            problem = f"Sorry, I could not run this task: {error}"
+            continue
+        if plan is not None:
+            return plan, None
+    return None, problem
+
+
+def _progress(plan: Plan, outcomes: list[ToolOutcome]) -> tuple[int, ToolOutcome | None]:
+    """How many plan steps have run, and the first that failed (later calls are the speech)."""
+    for index, outcome in enumerate(outcomes[: len(plan.steps)]):
+        if not outcome.ok:
+            return index, outcome
+    return min(len(outcomes), len(plan.steps)), None
+
+
+def final_reply(plan: Plan, result: Any) -> str:
+    """The plan's reply after its last step returned ``result``."""
+    value = _as_data(result)
+    if plan.answer is None:
+        return plan.reply.replace("{result}", render_result(value))
+    if not isinstance(value, dict):
+        return plan.failure.replace("{error}", f"the device state could not be read: {render_result(value)}")
+    matches = all(value.get(key) == expected for key, expected in plan.answer.when.items())
+    return plan.answer.yes if matches else plan.answer.no
+
+
+def _as_data(content: Any) -> Any:
+    # MCP tools return structured content (a dict) or its JSON text, depending on the server.
+    if isinstance(content, str):
+        try:
+            return json.loads(content)
+        except json.JSONDecodeError:
+            return content
+    return content
+
+
+def clamp_arguments(args: dict[str, Any], tool: ToolDefinition) -> dict[str, Any]:
+    """``args`` with numbers brought within the tool's schema bounds ("30000 K" → the maximum)."""
+    properties = tool.parameters_json_schema.get("properties") or {}
+    clamped = dict(args)
+    for name, value in args.items():
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            continue
+        schema = properties.get(name) or {}
+        bounds = [schema, *schema.get("anyOf", [])]
+        low = next((b["minimum"] for b in bounds if "minimum" in b), None)
+        high = next((b["maximum"] for b in bounds if "maximum" in b), None)
+        if low is not None and value < low:
+            clamped[name] = low
+        elif high is not None and value > high:
+            clamped[name] = high
+    return clamped
+
+
+def _text_argument(tool: ToolDefinition) -> str:
+    """The argument of ``speak`` that takes the sentence: ``text`` or its first string argument."""
+    schema = tool.parameters_json_schema
+    properties: dict[str, Any] = schema.get("properties") or {}
+    if "text" in properties:
+        return "text"
+    strings = [name for name, prop in properties.items() if prop.get("type") == "string"]
+    required = [name for name in schema.get("required", []) if name in strings]
+    return (required or strings or ["text"])[0]

@@ -1,0 +1,170 @@
+"""LocalIntentModel as the kernel agent's model, with a real MCP launch_process tool in-process."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import pytest
+from fastmcp import FastMCP
+from fastmcp.exceptions import ToolError
+from models_support import home_world
+from pydantic_ai import Agent
+from pydantic_ai.mcp import MCPToolset
+from pydantic_ai.messages import ModelMessage, ModelResponse, ToolCallPart
+
+from rosaos.models.kernel_model import LocalIntentModel
+from rosaos.models.plan import decode_plan
+
+
+@dataclass
+class Kernel:
+    """A kernel agent on the local model, whose launch_process records what it is asked."""
+
+    agent: Agent[None, str]
+    launched: list[tuple[str, list[str]]] = field(default_factory=list)
+    held: dict[str, int] = field(default_factory=dict)
+    history: list[ModelMessage] = field(default_factory=list)
+
+    async def say(self, event: str) -> str:
+        result = await self.agent.run(event, message_history=self.history)
+        self.history = result.all_messages()
+        return result.output
+
+    def responses(self) -> list[ModelResponse]:
+        return [message for message in self.history if isinstance(message, ModelResponse)]
+
+
+@pytest.fixture(scope="module")
+def model() -> LocalIntentModel:
+    return LocalIntentModel(home_world(), language="en")
+
+
+@pytest.fixture
+def kernel(model: LocalIntentModel) -> Kernel:
+    tools = FastMCP("kernel-tools")
+    kernel = Kernel(Agent(model, instructions="You are the kernel.", toolsets=[MCPToolset(tools)]))
+
+    @tools.tool
+    async def launch_process(task: str, devices: list[str]) -> dict[str, Any]:
+        """Start a process; refuses a device another process holds."""
+        for device in devices:
+            if device in kernel.held:
+                raise ToolError(f"{device} is held by process {kernel.held[device]}; wait for its callback")
+        kernel.launched.append((task, devices))
+        return {"process_id": len(kernel.launched), "devices": devices, "state": "running"}
+
+    return kernel
+
+
+async def test_a_command_launches_a_process_with_the_plan_and_acknowledges(kernel: Kernel) -> None:
+    reply = await kernel.say("[User said] Turn on the kitchen light")
+    [(task, devices)] = kernel.launched
+    assert devices == ["kitchen_light"]
+    plan = decode_plan(task)
+    assert plan is not None
+    assert [(step.device, step.tool) for step in plan.steps] == [("kitchen_light", "turn_on")]
+    assert reply == "On it: turn on the kitchen light."
+
+
+async def test_all_the_lights_are_parallel_launches_in_one_response(kernel: Kernel) -> None:
+    reply = await kernel.say("[User typed] Turn off all the lights")
+    first = kernel.responses()[0]
+    assert [part.tool_name for part in first.parts if isinstance(part, ToolCallPart)] == [
+        "launch_process"
+    ] * 3
+    assert sorted(devices[0] for _, devices in kernel.launched) == [
+        "bedroom_light",
+        "kitchen_light",
+        "living_room_lamp",
+    ]
+    assert reply == "On it: turn off all the lights."
+
+
+async def test_two_commands_are_two_processes(kernel: Kernel) -> None:
+    await kernel.say("[User said] Turn on the kitchen light and play some jazz")
+    assert [devices for _, devices in kernel.launched] == [["kitchen_light"], ["speaker"]]
+
+
+@pytest.mark.parametrize(
+    ("event", "reply"),
+    [
+        (
+            "[User said] Turn off the light",
+            "Which one do you mean: kitchen light, living room lamp or bedroom light?",
+        ),
+        ("[User said] Turn on the garage light", 'I don\'t know "garage light".'),
+        ("[User said] Tell the drone to take off", "Sorry, I didn't understand"),
+    ],
+)
+async def test_nothing_is_launched_on_a_guess(kernel: Kernel, event: str, reply: str) -> None:
+    assert (await kernel.say(event)).startswith(reply)
+    assert kernel.launched == []
+
+
+async def test_a_refused_launch_is_relayed(kernel: Kernel) -> None:
+    kernel.held["kitchen_light"] = 7
+    reply = await kernel.say("[User said] Turn on the kitchen light")
+    assert reply == "I couldn't start that: kitchen_light is held by process 7; wait for its callback"
+
+
+async def test_the_answer_to_which_one_completes_the_command(kernel: Kernel) -> None:
+    await kernel.say("[User said] Turn off the light")
+    reply = await kernel.say("[User said] the bedroom light")
+    [(task, devices)] = kernel.launched
+    plan = decode_plan(task)
+    assert devices == ["bedroom_light"]
+    assert plan is not None
+    assert plan.steps[0].tool == "turn_off"
+    assert reply == "On it: turn off the light (bedroom light)."
+
+
+async def test_a_question_launches_a_state_read(kernel: Kernel) -> None:
+    reply = await kernel.say("[User said] Is the kitchen light on?")
+    [(task, _)] = kernel.launched
+    plan = decode_plan(task)
+    assert plan is not None
+    assert plan.answer is not None
+    assert reply == "Checking the kitchen light."
+
+
+async def test_a_callback_output_is_the_reply(kernel: Kernel) -> None:
+    event = "[Worker callback] worker=3 status=ok task='Is the kitchen light on?'\noutput: No, the kitchen light is off."
+    assert await kernel.say(event) == "No, the kitchen light is off."
+    assert kernel.launched == []
+
+
+async def test_a_failed_callback_uses_the_plan_failure_text(kernel: Kernel, model: LocalIntentModel) -> None:
+    [process] = model.match("Turn on the kitchen light").processes
+    event = f"[Worker callback] worker=4 status=error task={process.task!r}\nerror: the bulb is offline"
+    assert await kernel.say(event) == "Sorry, I couldn't turn on the kitchen light: the bulb is offline"
+
+
+async def test_a_failed_callback_without_a_plan_still_says_what_failed(kernel: Kernel) -> None:
+    event = "[Worker callback] worker=5 status=timeout task='Patrol the house'\nerror: ran past its timeout"
+    assert await kernel.say(event) == "Sorry, that didn't work (timeout): ran past its timeout"
+
+
+async def test_notices_and_errors_are_acknowledged_without_acting(kernel: Kernel) -> None:
+    assert (
+        await kernel.say("[Device notice] device=turtlebot battery low")
+        == "Noted: device=turtlebot battery low"
+    )
+    assert await kernel.say("[Error] the web page lost its connection") == (
+        "Something went wrong: the web page lost its connection"
+    )
+    assert kernel.launched == []
+
+
+async def test_without_a_launch_tool_it_says_so(model: LocalIntentModel) -> None:
+    result = await Agent(model).run("[User said] Turn on the kitchen light")
+    assert "no launch_process tool" in result.output
+
+
+def test_handles_text_is_true_only_for_what_it_answers_exactly(model: LocalIntentModel) -> None:
+    assert model.handles_text("[User said] Turn on the kitchen light")
+    assert not model.handles_text("[User said] Turn off the light")
+    assert not model.handles_text("[User said] What's the weather like?")
+    [process] = model.match("Turn on the kitchen light").processes
+    assert model.handles_text(f"[Worker callback] worker=1 status=ok task={process.task!r}\noutput: Done.")
+    assert not model.handles_text("[Worker callback] worker=1 status=ok task='free-form'\noutput: Done.")

@@ -1,0 +1,194 @@
+"""LocalPlanModel as a process agent's model: runs the task's plan on real MCP device servers."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import pytest
+from models_support import build_device_server
+from pydantic_ai import Agent
+from pydantic_ai.mcp import MCPToolset
+from pydantic_ai.messages import ToolCallPart
+from pydantic_ai.toolsets import AbstractToolset
+
+from rosaos.models.plan import Plan, PlanAnswer, PlanStep, encode_task
+from rosaos.models.process_model import NO_PLAN_REPLY, LocalPlanModel, resolve_tool
+from rosaos.processes.jobs import GrantedDevice
+from rosaos.processes.prompts import DEFAULT_PROCESS_PROMPT, process_system_prompt
+
+
+def granted(name: str, driver: str = "bulb") -> GrantedDevice:
+    return GrantedDevice(
+        name=name, driver=driver, url="http://unused", token="t", description=name, prompt="-"
+    )
+
+
+async def run_process(
+    task: str, devices: dict[str, tuple[str, Any]], prefix: str | None = "_"
+) -> tuple[str, list[ToolCallPart]]:
+    """Run ``task`` the way the worker does: system prompt with the task, one toolset per device.
+
+    ``devices`` maps names to ``(driver, server)``; with several, tools are prefixed
+    ``<device><prefix><tool>`` (the worker uses ``_``).
+    """
+    toolsets: list[AbstractToolset[Any]] = []
+    for name, (_, server) in devices.items():
+        toolset = MCPToolset(server)
+        toolsets.append(toolset.prefixed(name + prefix[1:]) if len(devices) > 1 and prefix else toolset)
+    prompt = process_system_prompt(
+        DEFAULT_PROCESS_PROMPT, task, [granted(name, driver) for name, (driver, _) in devices.items()]
+    )
+    agent = Agent(LocalPlanModel(), system_prompt=prompt, toolsets=toolsets)
+    result = await agent.run(task)
+    calls = [
+        part for message in result.all_messages() for part in message.parts if isinstance(part, ToolCallPart)
+    ]
+    return result.output, calls
+
+
+def task_for(*steps: PlanStep, answer: PlanAnswer | None = None) -> str:
+    plan = Plan(steps=list(steps), reply="Done: {result}.", failure="Sorry: {error}", answer=answer)
+    return encode_task("Do the thing.", plan)
+
+
+async def test_a_plan_runs_in_order_and_ends_with_its_reply() -> None:
+    state: dict[str, Any] = {"on": False, "brightness": 100}
+    task = task_for(
+        PlanStep(device="lamp", tool="turn_on"),
+        PlanStep(device="lamp", tool="set_brightness", args={"brightness": 20}),
+    )
+    output, calls = await run_process(task, {"lamp": ("bulb", build_device_server("lamp", state))})
+    assert [call.tool_name for call in calls] == ["turn_on", "set_brightness"]
+    assert (state["on"], state["brightness"]) == (True, 20)
+    assert output == "Done: on: true, brightness: 20."
+
+
+@pytest.mark.parametrize("prefix", ["_", "__"])
+async def test_prefixed_tool_names_are_resolved_by_device_and_tool(prefix: str) -> None:
+    lamp: dict[str, Any] = {"on": False}
+    fan: dict[str, Any] = {"on": False}
+    task = task_for(PlanStep(device="fan", tool="turn_on"))
+    servers = {
+        "lamp": ("bulb", build_device_server("lamp", lamp)),
+        "fan": ("bulb", build_device_server("fan", fan)),
+    }
+    _, calls = await run_process(task, servers, prefix=prefix)
+    assert [call.tool_name for call in calls] == [f"fan{prefix}turn_on"]
+    assert (lamp["on"], fan["on"]) == (False, True)
+
+
+@pytest.mark.parametrize(("on", "reply"), [(True, "Yes, it is on."), (False, "No, it is off.")])
+async def test_a_question_is_answered_from_the_state(on: bool, reply: str) -> None:
+    answer = PlanAnswer(when={"on": True}, yes="Yes, it is on.", no="No, it is off.")
+    task = task_for(PlanStep(device="lamp", tool="get_state"), answer=answer)
+    output, _ = await run_process(task, {"lamp": ("bulb", build_device_server("lamp", {"on": on}))})
+    assert output == reply
+
+
+async def test_a_failing_tool_stops_the_plan_and_reports_the_error() -> None:
+    state: dict[str, Any] = {"on": False}
+    task = task_for(PlanStep(device="lamp", tool="turn_on"), PlanStep(device="lamp", tool="turn_off"))
+    output, calls = await run_process(
+        task, {"lamp": ("bulb", build_device_server("lamp", state, fail={"turn_on"}))}
+    )
+    assert [call.tool_name for call in calls] == ["turn_on"]
+    assert output == "Sorry: turn_on failed: the device is offline"
+
+
+async def test_a_tool_the_process_lacks_is_reported_not_guessed() -> None:
+    task = task_for(PlanStep(device="lamp", tool="self_destruct"))
+    output, calls = await run_process(task, {"lamp": ("bulb", build_device_server("lamp", {}))})
+    assert calls == []
+    assert output.startswith("Sorry: the tool self_destruct of lamp is not available to this process")
+
+
+async def test_numbers_are_clamped_to_the_tool_bounds() -> None:
+    state: dict[str, Any] = {}
+    task = task_for(PlanStep(device="lamp", tool="set_brightness", args={"brightness": 150}))
+    await run_process(task, {"lamp": ("bulb", build_device_server("lamp", state))})
+    assert state["brightness"] == 100
+
+
+async def test_a_granted_reachy_speaks_the_reply_last() -> None:
+    lamp: dict[str, Any] = {"on": False}
+    reachy: dict[str, Any] = {}
+    task = task_for(PlanStep(device="lamp", tool="turn_on"))
+    servers = {
+        "reachy": ("reachy", build_device_server("reachy", reachy)),
+        "lamp": ("bulb", build_device_server("lamp", lamp)),
+    }
+    output, calls = await run_process(task, servers)
+    assert [call.tool_name for call in calls] == ["lamp_turn_on", "reachy_speak"]
+    assert calls[1].args_as_dict() == {"text": output}
+    assert reachy["last_spoken"] == output == "Done: on: true."
+
+
+async def test_a_plan_that_already_speaks_is_not_spoken_twice() -> None:
+    reachy: dict[str, Any] = {}
+    task = task_for(PlanStep(device="reachy", tool="speak", args={"text": "Good morning"}))
+    _, calls = await run_process(task, {"reachy": ("reachy", build_device_server("reachy", reachy))})
+    assert [call.tool_name for call in calls] == ["speak"]
+
+
+async def test_a_task_without_a_plan_says_how_to_configure_an_llm() -> None:
+    output, calls = await run_process(
+        "Patrol the house.", {"lamp": ("bulb", build_device_server("lamp", {}))}
+    )
+    assert (output, calls) == (NO_PLAN_REPLY, [])
+
+
+async def test_a_broken_plan_is_reported() -> None:
+    output, _ = await run_process("Do it.\n```rosaos-plan\n{oops\n```", {})
+    assert output.startswith("Sorry, I could not run this task: the rosaos-plan block is not a valid plan")
+
+
+def test_tool_resolution_prefers_the_device_prefix() -> None:
+    assert resolve_tool("lamp", "turn_on", ["turn_on", "lamp_turn_on"]) == "lamp_turn_on"
+    assert resolve_tool("lamp", "turn_on", ["lamp__turn_on"]) == "lamp__turn_on"
+    assert resolve_tool("lamp", "turn_on", ["turn_on"]) == "turn_on"
+    assert resolve_tool("lamp", "turn_on", ["fan_turn_on"]) is None
+
+
+async def test_a_plan_from_the_matcher_changes_a_real_tapo_bulb(tmp_path: Path) -> None:
+    pytest.importorskip("rosaos_tapo")
+    from rosaos.config import DeviceConfig, RosaosConfig
+    from rosaos.devices.serve import open_device
+    from rosaos.devices.world import build_world
+    from rosaos.models.matching import IntentMatcher
+    from rosaos.models.sources import intent_sources
+    from rosaos.plugins import load_drivers
+
+    config = RosaosConfig(
+        devices={
+            "kitchen_light": DeviceConfig(
+                driver="tapo",
+                description="Ceiling light in the kitchen",
+                sim={"on": False, "brightness": 100},
+            )
+        }
+    )
+    world = build_world(config, load_drivers())
+    [process] = IntentMatcher(intent_sources(world)).match("Set the kitchen light to 30 percent").processes
+    async with open_device(world.get("kitchen_light"), tmp_path) as device:
+        output, calls = await run_process(process.task, {"kitchen_light": ("tapo", device.server)})
+        state = await device.backend.state()  # type: ignore[attr-defined]
+    assert [call.tool_name for call in calls] == ["set_brightness"]
+    assert (state.on, state.brightness) == (True, 30)
+    assert output == "Done: set the kitchen light to 30 percent."
+
+
+async def test_the_plan_and_the_devices_are_read_from_instructions_too() -> None:
+    # The worker may pass the process prompt as instructions rather than a system prompt.
+    lamp: dict[str, Any] = {"on": False}
+    reachy: dict[str, Any] = {}
+    task = task_for(PlanStep(device="lamp", tool="turn_on"))
+    prompt = process_system_prompt(
+        DEFAULT_PROCESS_PROMPT, task, [granted("lamp"), granted("reachy", "reachy")]
+    )
+    toolsets = [
+        MCPToolset(build_device_server("lamp", lamp)).prefixed("lamp"),
+        MCPToolset(build_device_server("reachy", reachy)).prefixed("reachy"),
+    ]
+    result = await Agent(LocalPlanModel(), instructions=prompt, toolsets=toolsets).run("Go.")
+    assert (lamp["on"], reachy["last_spoken"], result.output) == (True, "Done: on: true.", "Done: on: true.")
