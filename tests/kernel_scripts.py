@@ -30,6 +30,9 @@ from pydantic_ai.models.function import AgentInfo, FunctionModel
 
 SENTENCES = {"turn on the kitchen light": "kitchen_light: call turn_on {}"}
 
+KERNEL_TOOLS_SEEN: set[str] = set()
+"""Every tool name the scripted kernel was offered (tests check it never sees a device tool)."""
+
 
 def _user_text(messages: list[ModelMessage]) -> str:
     for message in reversed(messages):
@@ -44,6 +47,7 @@ def kernel_model() -> FunctionModel:
     """The scripted kernel."""
 
     async def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        KERNEL_TOOLS_SEEN.update(tool.name for tool in info.function_tools)
         last = messages[-1]
         assert isinstance(last, ModelRequest)
         results = [p for p in last.parts if isinstance(p, ToolReturnPart | RetryPromptPart)]

@@ -24,7 +24,8 @@ from playwright.async_api import async_playwright
 from rosaos.config import load_config
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.world import build_world
-from rosaos.kernel.runtime import Kernel
+from rosaos.kernel.runtime import Kernel, KernelError, _bind_or_explain
+from rosaos.kernel.tools import KERNEL_TOOL_NAMES
 from rosaos.models.select import ModelSpec
 from rosaos.plugins import load_drivers
 
@@ -136,6 +137,22 @@ async def test_chat_turns_on_the_kitchen_light_through_a_process(
     ]
     assert replies == [f"process {process_id}: ok"]
     assert any(u["kind"] == "process_ended" and u["data"]["worker_id"] == process_id for u in updates)
+
+
+async def test_the_kernel_is_offered_its_four_tools_and_no_device_tool(
+    kernel: Kernel, api: httpx.AsyncClient
+) -> None:
+    from kernel_scripts import KERNEL_TOOLS_SEEN
+
+    await chat(api, "slow 0")
+    await eventually(lambda: settled(api))
+    assert set(KERNEL_TOOL_NAMES) == KERNEL_TOOLS_SEEN
+
+
+async def test_a_second_kernel_on_the_same_port_says_what_is_running(kernel: Kernel) -> None:
+    port = int(kernel.url.rsplit(":", 1)[1])
+    with pytest.raises(KernelError, match=r"rosaOS .* is already running at http://127\.0\.0\.1:\d+/"):
+        await _bind_or_explain("127.0.0.1", port, kernel.token)
 
 
 async def _state_is(kernel: Kernel, device: str, key: str, value: Any) -> bool:

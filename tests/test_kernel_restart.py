@@ -61,7 +61,7 @@ def config(tmp_path: Path) -> Path:
     path = tmp_path / "rosaos.toml"
     path.write_text(
         f'data_dir = "{tmp_path / "data"}"\n'
-        "[kernel]\npool_size = 0\n"
+        "[kernel]\npool_size = 1\n"
         '[devices.kitchen_light]\ndriver = "tapo"\n'
     )
     return path
@@ -103,6 +103,23 @@ def test_events_queued_at_a_sigkill_are_each_handled_once_after_restart(config: 
             updates = api.get("/updates", params={"after": 0, "limit": 1000}).json()["updates"]
         replies = [u["event_id"] for u in updates if u["kind"] == "kernel_reply"]
         assert sorted(replies) == sorted(ids)
+        children = child_pids(second.pid)
+        assert children, "rosaos up should have device hosts and warm workers"
     finally:
         second.send_signal(signal.SIGINT)
         assert second.wait(timeout=60) == 0
+    # Ctrl-C leaves nothing behind: every device host and worker is gone.
+    wait_for(lambda: not [pid for pid in children if Path(f"/proc/{pid}").exists()], timeout=10)
+
+
+def child_pids(parent: int) -> list[int]:
+    """Direct children of ``parent``, from /proc."""
+    children = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == parent:
+            children.append(int(stat.parent.name))
+    return children

@@ -1,0 +1,80 @@
+"""The kernel agent's prompt and conversation budget."""
+
+from __future__ import annotations
+
+from pydantic_ai.messages import (
+    ModelMessage,
+    ModelRequest,
+    ModelResponse,
+    TextPart,
+    ToolCallPart,
+    ToolReturnPart,
+    UserPromptPart,
+)
+
+from rosaos.devices.endpoints import DeviceEndpoint
+from rosaos.kernel.agent import describe_devices, kernel_prompt, trim_history
+
+
+def endpoint(name: str, **changes: object) -> DeviceEndpoint:
+    fields: dict[str, object] = {
+        "name": name,
+        "driver": "tapo",
+        "concurrency": "exclusive",
+        "always_attached": False,
+        "description": f"The {name.replace('_', ' ')}",
+        "prompt": "Use the tools.",
+        "url": "http://127.0.0.1:1/mcp",
+        "token": "t",
+        "status": "healthy",
+    }
+    fields.update(changes)
+    return DeviceEndpoint(**fields)  # type: ignore[arg-type]
+
+
+def test_the_prompt_lists_every_device_with_driver_concurrency_and_description() -> None:
+    prompt = kernel_prompt(
+        [endpoint("kitchen_light"), endpoint("reachy", driver="reachy", always_attached=True)]
+    )
+    assert "- kitchen_light (tapo, exclusive): The kitchen light" in prompt
+    assert "- reachy (reachy, exclusive, always attached): The reachy" in prompt
+    assert "launch_process" in prompt
+
+
+def test_an_unavailable_device_is_marked_so_the_kernel_does_not_plan_on_it() -> None:
+    listing = describe_devices([endpoint("turtlebot", url=None, status="failed")])
+    assert listing == "- turtlebot (tapo, exclusive, unavailable: failed): The turtlebot"
+
+
+def test_a_configured_prompt_replaces_the_default_and_gets_the_device_list() -> None:
+    prompt = kernel_prompt([endpoint("lamp")], template="You run a lighthouse.\n{devices}\nBe brief.")
+    assert prompt == "You run a lighthouse.\n- lamp (tapo, exclusive): The lamp\nBe brief."
+
+
+def test_a_configured_prompt_without_the_placeholder_still_gets_the_devices() -> None:
+    prompt = kernel_prompt([endpoint("lamp")], template="You run a lighthouse.")
+    assert prompt.startswith("You run a lighthouse.\n\nDevices:\n- lamp")
+
+
+def turn(n: int) -> list[ModelMessage]:
+    """One user turn with a tool call and its return: four messages."""
+    return [
+        ModelRequest(parts=[UserPromptPart(f"[User typed] {n}")]),
+        ModelResponse(parts=[ToolCallPart("list_devices", {}, tool_call_id=f"c{n}")]),
+        ModelRequest(parts=[ToolReturnPart("list_devices", [], tool_call_id=f"c{n}")]),
+        ModelResponse(parts=[TextPart(f"reply {n}")]),
+    ]
+
+
+def test_history_within_budget_is_kept_whole() -> None:
+    history = turn(1) + turn(2)
+    assert trim_history(history, 8) == history
+
+
+def test_history_is_cut_at_a_user_turn_so_no_tool_return_is_orphaned() -> None:
+    history = turn(1) + turn(2) + turn(3)
+    trimmed = trim_history(history, 6)
+    assert trimmed == history[8:]
+    first = trimmed[0]
+    assert isinstance(first, ModelRequest)
+    assert isinstance(first.parts[0], UserPromptPart)

@@ -1,0 +1,67 @@
+"""How the kernel loop renders events for the model and reports what the model did."""
+
+from __future__ import annotations
+
+from datetime import UTC, datetime
+
+from pydantic_ai.messages import ModelRequest, ModelResponse, ToolCallPart, ToolReturnPart
+
+from rosaos.kernel.events import DeviceNotice, ErrorReport, Event, UserText
+from rosaos.kernel.loop import render_event, tool_activity
+from rosaos.processes.jobs import WorkerCallback
+
+
+def event(kind: str, payload: object) -> Event:
+    return Event(id=1, time=datetime.now(UTC), kind=kind, source="test", payload=payload)  # type: ignore[arg-type]
+
+
+def test_user_input_is_tagged_by_how_it_arrived() -> None:
+    assert render_event(event("user_said", UserText(text="hello"))) == "[User said] hello"
+    assert render_event(event("user_typed", UserText(text="hello"))) == "[User typed] hello"
+
+
+def test_a_worker_callback_carries_worker_status_task_and_output() -> None:
+    callback = WorkerCallback(worker_id=7, status="ok", task="turn on the light", output="it is on")
+    assert render_event(event("worker_callback", callback)) == (
+        "[Worker callback] worker=7 status=ok task='turn on the light'\noutput: it is on"
+    )
+
+
+def test_a_failed_worker_callback_shows_the_error() -> None:
+    callback = WorkerCallback(worker_id=7, status="crashed", error="worker killed by SIGKILL")
+    assert render_event(event("worker_callback", callback)) == (
+        "[Worker callback] worker=7 status=crashed\nerror: worker killed by SIGKILL"
+    )
+
+
+def test_device_notices_and_errors_are_tagged() -> None:
+    notice = DeviceNotice(device="turtlebot", message="battery low")
+    assert render_event(event("device_notice", notice)) == "[Device notice] device=turtlebot battery low"
+    assert render_event(event("error", ErrorReport(message="disk full"))) == "[Error] disk full"
+
+
+def test_launches_and_refusals_become_updates() -> None:
+    messages = [
+        ModelResponse(
+            parts=[
+                ToolCallPart("launch_process", {"task": "a", "devices": ["lamp"]}, tool_call_id="1"),
+                ToolCallPart("launch_process", {"task": "b", "devices": ["lamp"]}, tool_call_id="2"),
+            ]
+        ),
+        ModelRequest(
+            parts=[
+                ToolReturnPart("launch_process", {"process_id": 4, "devices": ["lamp"]}, tool_call_id="1"),
+                ToolReturnPart(
+                    "launch_process", "lamp is held by process 4", tool_call_id="2", outcome="failed"
+                ),
+            ]
+        ),
+    ]
+    kinds = [(kind, text) for kind, text, _ in tool_activity(messages)]
+    assert kinds[:2] == [
+        ("tool_call", 'launch_process({"task":"a","devices":["lamp"]})'),
+        ("tool_call", 'launch_process({"task":"b","devices":["lamp"]})'),
+    ]
+    assert kinds[2] == ("process_launched", "process 4 launched with lamp")
+    assert kinds[3][0] == "notice"
+    assert "lamp is held by process 4" in kinds[3][1]
