@@ -157,12 +157,16 @@ ModelOption = Annotated[
     typer.Option(
         "--model",
         "-m",
-        help="Kernel model: any pydantic-ai model string (openai:gpt-5.2, anthropic:…, google-gla:…, groq:…) "
+        help="Kernel model: any pydantic-ai model string (openai:gpt-5.2, anthropic:…, google:…, groq:…) "
         "or 'openai-compatible' with --base-url and --model-name.",
     ),
 ]
 UrlOption = Annotated[
-    str | None, typer.Option("--url", help="Kernel URL (default: from [kernel] host/port in the config).")
+    str | None,
+    typer.Option(
+        "--url",
+        help="Kernel URL (default: the running kernel of this data directory, else \\[kernel] host/port).",
+    ),
 ]
 
 

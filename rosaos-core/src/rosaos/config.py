@@ -92,7 +92,7 @@ class ModelConfig(BaseModel):
     """``[models]``: which model the kernel and the process agents use.
 
     ``kernel``/``process`` take any pydantic-ai model string (``openai:gpt-5.2``,
-    ``anthropic:...``, ``google-gla:...``, ``groq:...``), or ``openai-compatible`` together with
+    ``anthropic:...``, ``google:...``, ``groq:...``), or ``openai-compatible`` together with
     ``base_url`` and ``model_name`` (vLLM, Ollama, llama.cpp). Unset means the offline default.
     Keys come from the provider's usual environment variable (``OPENAI_API_KEY``, ...).
     """

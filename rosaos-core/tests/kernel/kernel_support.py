@@ -52,8 +52,8 @@ class TestRuntime:
     callbacks: list[tuple[int, WorkerCallback]] = field(default_factory=list)
     terminated: list[int] = field(default_factory=list)
 
-    async def processes(self) -> Sequence[Any]:
-        return [p for p in self.process_list if p.state == "running"]
+    async def processes(self, include_ended: bool = False) -> Sequence[Any]:
+        return [p for p in self.process_list if include_ended or p.state == "running"]
 
     async def terminate(self, process_id: int) -> Any:
         for process in self.process_list:

@@ -26,7 +26,7 @@ async def test_processes_lists_the_running_ones_with_their_devices(
 async def test_processes_accepts_plain_dicts_from_the_runtime(
     client: httpx.AsyncClient, runtime: TestRuntime
 ) -> None:
-    async def as_dicts() -> list[dict[str, object]]:
+    async def as_dicts(include_ended: bool = False) -> list[dict[str, object]]:
         return [{"id": 9, "task": "t", "devices": [], "state": "running"}]
 
     runtime.processes = as_dicts  # type: ignore[method-assign]
@@ -75,3 +75,14 @@ async def test_devices_keep_extra_keys_the_runtime_adds(
     [device] = (await client.get("/devices", headers=AUTH)).json()
     assert device["error"] == "no answer"
     assert device["state"] is None
+
+
+async def test_ended_processes_are_listed_only_when_asked(client: httpx.AsyncClient, runtime: TestRuntime) -> None:
+    runtime.process_list = [
+        Process(id=1, task="done already", devices=[], state="ok"),
+        Process(id=2, task="still going", devices=["lamp"]),
+    ]
+    running = (await client.get("/processes", headers=AUTH)).json()
+    everything = (await client.get("/processes", params={"all": "true"}, headers=AUTH)).json()
+    assert [p["id"] for p in running] == [2]
+    assert [p["id"] for p in everything] == [1, 2]

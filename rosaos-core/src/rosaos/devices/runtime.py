@@ -65,6 +65,8 @@ def write_atomic(path: Path, text: str) -> None:
 
 def pid_alive(pid: int) -> bool:
     """Whether a process with this pid exists: how stale runtime files are recognised."""
+    if pid <= 0:  # 0 and negatives address process groups, not one process
+        return False
     try:
         os.kill(pid, 0)
     except ProcessLookupError:

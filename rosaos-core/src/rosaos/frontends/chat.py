@@ -16,6 +16,7 @@ from typing import Any
 
 from rich.console import Console
 
+from rosaos.config import ConfigError
 from rosaos.frontends.console import console as terminal
 from rosaos.kernel.client import KernelClient, KernelUnavailable
 
@@ -117,13 +118,17 @@ async def send_and_wait(
     conversation = Conversation(await client.chat(text, idempotency_key=f"chat-{uuid.uuid4()}"))
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
+        # Check first, read second: an event's outputs commit with its "handled" mark, so updates
+        # read after seeing it handled include every process it launched.
+        was_settled = await _settled(client, conversation)
+        known = len(conversation.processes)
         updates, cursor = await client.updates_after(cursor)
         for update in updates:
             if conversation.absorb(update) and console is not None:
                 line = format_update(update)
                 if line:
                     console.print(line, style=_STYLE.get(update["kind"]), markup=False, highlight=False)
-        if await _settled(client, conversation):
+        if was_settled and len(conversation.processes) == known:
             return (EXIT_OK if conversation.succeeded else EXIT_FAILED), conversation
         await asyncio.sleep(POLL_SECONDS)
     conversation.errors.append(f"gave up waiting after {timeout:g} s")
@@ -214,6 +219,6 @@ def chat_command(
 
     try:
         return asyncio.run(run())
-    except KernelUnavailable as error:
+    except (KernelUnavailable, ConfigError) as error:
         print(f"rosaos chat: {error}", file=sys.stderr)
         return EXIT_UNAVAILABLE

@@ -80,7 +80,7 @@ class KernelRuntime(Protocol):
     def model_notice(self) -> str | None:
         """Shown as a banner when no model is configured: how to set one. None otherwise."""
 
-    async def processes(self) -> Sequence[Any]:
+    async def processes(self, include_ended: bool = False) -> Sequence[Any]:
         """The processes to show: ``ProcessInfo`` models, or objects/dicts with the same fields."""
 
     async def terminate(self, process_id: int) -> Any:
@@ -311,9 +311,14 @@ async def _stream(updates: UpdateStream, after: int) -> AsyncIterator[ServerSent
 
 
 @protected.get("/processes")
-async def list_processes(runtime: Runtime) -> list[ProcessView]:
+async def list_processes(
+    runtime: Runtime,
+    include_ended: Annotated[
+        bool, Query(alias="all", description="Include processes that have ended.")
+    ] = False,
+) -> list[ProcessView]:
     """The process agents and the devices they hold."""
-    return [ProcessView.model_validate(process) for process in await runtime.processes()]
+    return [ProcessView.model_validate(process) for process in await runtime.processes(include_ended)]
 
 
 @protected.post("/processes/{process_id}/terminate")

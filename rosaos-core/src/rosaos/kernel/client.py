@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import json
+from pathlib import Path
 from types import TracebackType
 from typing import Any
 
@@ -9,6 +11,26 @@ import httpx
 
 from rosaos.auth import token_path
 from rosaos.config import RosaosConfig
+from rosaos.devices.runtime import pid_alive
+
+KERNEL_FILE = "run/kernel.json"
+"""Where a running kernel says where it is, so `rosaos chat/ps/kill` find it even on --port 0."""
+
+
+def kernel_file(data_dir: Path) -> Path:
+    return data_dir / KERNEL_FILE
+
+
+def running_kernel_url(data_dir: Path) -> str | None:
+    """The URL of the kernel running on ``data_dir``, if one is (its process is alive)."""
+    try:
+        info = json.loads(kernel_file(data_dir).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(info, dict) or not pid_alive(int(info.get("pid", 0))):
+        return None
+    url = info.get("url")
+    return url if isinstance(url, str) else None
 
 
 class KernelUnavailable(Exception):
@@ -28,13 +50,17 @@ class KernelClient:
 
     @classmethod
     def from_config(cls, config: RosaosConfig, url: str | None = None) -> KernelClient:
-        """Client for the kernel this configuration runs (``[kernel] host/port``), or ``url``."""
+        """Client for ``url``, else the kernel running on this data directory, else ``[kernel] host/port``."""
         path = token_path(config.data_dir)
         if not path.is_file():
             raise KernelUnavailable(
                 f"no token at {path}: start the kernel with `rosaos up` (it creates the token on first run)"
             )
-        base = url or f"http://{_host_for_client(config.kernel.host)}:{config.kernel.port}"
+        base = (
+            url
+            or running_kernel_url(config.data_dir)
+            or f"http://{_host_for_client(config.kernel.host)}:{config.kernel.port}"
+        )
         return cls(base, path.read_text(encoding="utf-8").strip())
 
     async def __aenter__(self) -> KernelClient:
@@ -77,8 +103,9 @@ class KernelClient:
         result: dict[str, Any] = await self.request("GET", f"/events/{event_id}")
         return result
 
-    async def processes(self) -> list[dict[str, Any]]:
-        result: list[dict[str, Any]] = await self.request("GET", "/processes")
+    async def processes(self, include_ended: bool = False) -> list[dict[str, Any]]:
+        params = {"all": "true"} if include_ended else {}
+        result: list[dict[str, Any]] = await self.request("GET", "/processes", params=params)
         return result
 
     async def terminate(self, process_id: int) -> dict[str, Any]:

@@ -138,7 +138,7 @@ def ps_command(config_path: Path | None, url: str | None, json_output: bool, all
 
     async def run() -> list[dict[str, Any]]:
         async with _client(config_path, url) as client:
-            return await client.processes()
+            return await client.processes(include_ended=all_processes)
 
     try:
         processes = asyncio.run(run())
@@ -179,7 +179,7 @@ def kill_command(config_path: Path | None, url: str | None, process_id: int, jso
         process = asyncio.run(run())
     except (KernelUnavailable, ConfigError) as error:
         print(f"rosaos kill: {error}", file=sys.stderr)
-        return 1
+        return EXIT_CONFIG
     if json_output:
         print(json.dumps(process, indent=2))
     else:

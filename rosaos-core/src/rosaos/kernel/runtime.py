@@ -8,11 +8,13 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import logging
+import os
 import socket
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import httpx
 import uvicorn
@@ -21,13 +23,15 @@ from pydantic_ai.models import Model
 from rosaos.auth import load_or_create_token
 from rosaos.config import RosaosConfig
 from rosaos.devices.endpoints import DeviceEndpoint
+from rosaos.devices.runtime import write_atomic
 from rosaos.devices.serve import bind_socket
 from rosaos.devices.state_cache import DeviceStateCache
-from rosaos.devices.supervisor import DeviceSupervisor
+from rosaos.devices.supervisor import DeviceSupervisor, DirectoryEntry
 from rosaos.devices.world import World
 from rosaos.drivers import DeviceError
 from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
 from rosaos.kernel.api import create_app
+from rosaos.kernel.client import kernel_file, running_kernel_url
 from rosaos.kernel.events import Event, EventStore, WorkerCallbackEvent
 from rosaos.kernel.login import LoginCodes, login_url
 from rosaos.kernel.loop import KernelLoop
@@ -49,6 +53,17 @@ class KernelError(Exception):
     """The kernel cannot start; the message says why and what to do."""
 
 
+class DeviceHosting(Protocol):
+    """Where the kernel's devices come from. :class:`DeviceSupervisor` (one process per instance)
+    in ``rosaos up``; the task benchmark serves its simulators in-process instead."""
+
+    async def start(self) -> None: ...
+
+    async def stop(self) -> None: ...
+
+    def directory(self) -> dict[str, DirectoryEntry]: ...
+
+
 class Kernel:
     """One rosaOS instance: ``await kernel.start()``, then ``await kernel.stop()``."""
 
@@ -60,6 +75,7 @@ class Kernel:
         kernel_model: Model | None = None,
         process_model: ModelSpec | None = None,
         worker_env: Mapping[str, str] | None = None,
+        devices: DeviceHosting | None = None,
     ) -> None:
         self.config = config
         self.world = world
@@ -67,6 +83,7 @@ class Kernel:
         self._models: KernelModels = kernel_models(config, world, override=kernel_model)
         self._process_model = process_model or self._models.process
         self._worker_env = dict(worker_env) if worker_env else None
+        self._hosting = devices
         self._ended_published: set[int] = set()
         self._tasks: list[asyncio.Task[Any]] = []
         self._server: uvicorn.Server | None = None
@@ -96,8 +113,8 @@ class Kernel:
     def model_notice(self) -> str | None:
         return self._models.notice
 
-    async def processes(self) -> Sequence[ProcessInfo]:
-        return self.manager.list()
+    async def processes(self, include_ended: bool = False) -> Sequence[ProcessInfo]:
+        return self.manager.list(include_ended=include_ended)
 
     async def terminate(self, process_id: int) -> ProcessInfo:
         return await self.manager.terminate(process_id)
@@ -171,12 +188,13 @@ class Kernel:
             sock.close()
             raise
         self._started = True
+        write_atomic(kernel_file(self.data_dir), json.dumps({"url": self.url, "pid": os.getpid()}))
         return self.url
 
     async def _start_parts(self, sock: socket.socket) -> None:
         self._store = await EventStore.open(self.data_dir / EVENTS_FILE)
         self._updates = await UpdateStream.open(self._store.database)
-        self.supervisor = DeviceSupervisor(self.world, self.data_dir, self._token)
+        self.supervisor = self._hosting or DeviceSupervisor(self.world, self.data_dir, self._token)
         await self.supervisor.start()
         self.states = DeviceStateCache(self.endpoints)
         pool = WorkerPool(size=self.config.kernel.pool_size, env=self._worker_env)
@@ -243,6 +261,8 @@ class Kernel:
             await self.supervisor.stop()
         if hasattr(self, "_store"):
             await self._store.close()
+        if self._started and running_kernel_url(self.data_dir) == self.url:
+            kernel_file(self.data_dir).unlink(missing_ok=True)
         self._started = False
 
     def login_link(self) -> str:

@@ -31,7 +31,7 @@ class KernelModels:
 OFFLINE_NOTICE = (
     'Running offline: the local-intent engine understands direct commands ("turn on the kitchen '
     'light", "play some jazz"). For open-ended requests set a model: `rosaos up --model '
-    "openai:gpt-5.2` (or anthropic:…, google-gla:…, groq:…), or `--model openai-compatible "
+    "openai:gpt-5.2` (or anthropic:…, google:…, groq:…), or `--model openai-compatible "
     "--base-url http://127.0.0.1:11434/v1 --model-name qwen3:8b`."
 )
 

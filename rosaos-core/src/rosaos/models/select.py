@@ -3,7 +3,7 @@
 A spec crosses the pipe to worker processes, so it is data, not a model object. Its ``model``:
 
 - ``None``: the offline default (no key, no endpoint needed).
-- any pydantic-ai model string: ``openai:gpt-5.2``, ``anthropic:...``, ``google-gla:...``,
+- any pydantic-ai model string: ``openai:gpt-5.2``, ``anthropic:...``, ``google:...``,
   ``groq:...``; keys come from the provider's usual environment variable.
 - ``openai-compatible`` with ``base_url`` and ``model_name`` (vLLM, Ollama, llama.cpp).
 - ``python:package.module:attribute``: a ``Model`` object, or a zero-argument factory returning
@@ -20,6 +20,8 @@ from pydantic_ai.models import Model, infer_model
 
 OPENAI_COMPATIBLE = "openai-compatible"
 PYTHON_PREFIX = "python:"
+LEGACY_PREFIXES = {"google-gla:": "google:"}
+"""Provider prefixes from older pydantic-ai docs, mapped to the names the pinned version knows."""
 
 
 class ModelError(Exception):
@@ -63,8 +65,12 @@ def build_model(spec: ModelSpec, *, offline: Model | None = None) -> Model:
         return _import_model(spec.model[len(PYTHON_PREFIX) :])
     if spec.model == OPENAI_COMPATIBLE:
         return _openai_compatible(spec)
+    name = spec.model
+    for old, new in LEGACY_PREFIXES.items():
+        if name.startswith(old):
+            name = new + name[len(old) :]
     try:
-        return infer_model(spec.model)
+        return infer_model(name)
     except Exception as error:  # pydantic-ai raises UserError / ImportError with useful text
         raise ModelError(f"cannot use model {spec.model!r}: {error}") from None
 
