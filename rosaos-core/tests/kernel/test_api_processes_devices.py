@@ -77,7 +77,9 @@ async def test_devices_keep_extra_keys_the_runtime_adds(
     assert device["state"] is None
 
 
-async def test_ended_processes_are_listed_only_when_asked(client: httpx.AsyncClient, runtime: TestRuntime) -> None:
+async def test_ended_processes_are_listed_only_when_asked(
+    client: httpx.AsyncClient, runtime: TestRuntime
+) -> None:
     runtime.process_list = [
         Process(id=1, task="done already", devices=[], state="ok"),
         Process(id=2, task="still going", devices=["lamp"]),
