@@ -265,3 +265,38 @@ async def test_the_web_page_chats_with_the_kernel_and_shows_the_device_change(
             assert errors == []
         finally:
             await browser.close()
+
+
+async def test_the_emergency_stop_kills_processes_stops_devices_and_latches(
+    kernel: Kernel, api: httpx.AsyncClient
+) -> None:
+    await eventually(lambda: settled(api))
+    await chat(api, "kitchen_light: sleep 30")
+    await eventually(lambda: _running_count(api))
+
+    report = (await api.post("/estop", json={"reason": "test"})).json()
+    assert report["latched"] is True
+    assert len(report["terminated"]) == 1
+    assert {d["name"]: d["ok"] for d in report["devices"]} == {
+        "kitchen_light": True,
+        "living_room_lamp": True,
+    }
+    await eventually(lambda: settled(api))
+
+    refused_event = await chat(api, "kitchen_light: call turn_on {}")
+    await eventually(lambda: settled(api))
+    notices = [
+        u["text"] for u in await updates_for(api) if u["event_id"] == refused_event and u["kind"] == "notice"
+    ]
+    assert len(notices) == 1
+    assert "emergency stop is latched" in notices[0]
+
+    await api.post("/estop/reset")
+    allowed_event = await chat(api, "kitchen_light: call turn_on {}")
+    await eventually(lambda: settled(api))
+    kinds = [u["kind"] for u in await updates_for(api) if u["event_id"] == allowed_event]
+    assert "process_launched" in kinds
+
+
+async def _running_count(api: httpx.AsyncClient) -> int:
+    return len([p for p in (await api.get("/processes")).json() if p["state"] == "running"])

@@ -255,6 +255,84 @@ def kill(
     raise typer.Exit(kill_command(config, url, process_id, json_output))
 
 
+@app.command("estop")
+def estop(
+    reset: Annotated[bool, typer.Option("--reset", help="Unlatch: allow processes to run again.")] = False,
+    reason: Annotated[
+        str, typer.Option(help="Why, for the log and the web page.")
+    ] = "requested from the CLI",
+    config: ConfigOption = None,
+    url: UrlOption = None,
+    json_output: JsonOption = False,
+) -> None:
+    """Emergency stop: kill every process, put every device in its safe state, refuse new work until reset."""
+    from rosaos.kernel.commands import estop_command
+
+    raise typer.Exit(estop_command(config, url, reset, reason, json_output))
+
+
+@app.command("bench")
+def bench(
+    paths: Annotated[
+        list[Path] | None,
+        typer.Argument(
+            help="Task files, or directories of them (e.g. ../shared/bench/tasks).", show_default=False
+        ),
+    ] = None,
+    model: ModelOption = None,
+    process_model: Annotated[
+        str | None, typer.Option(help="Model for process agents (default: the kernel's).")
+    ] = None,
+    base_url: Annotated[
+        str | None, typer.Option(help="OpenAI-compatible endpoint, e.g. http://127.0.0.1:11434/v1.")
+    ] = None,
+    model_name: Annotated[
+        str | None, typer.Option(help="Model name at the OpenAI-compatible endpoint, e.g. qwen3:8b.")
+    ] = None,
+    repeat: Annotated[
+        int, typer.Option(help="Run each task N times and report pass^k for k = 1..N.", min=1, max=100)
+    ] = 1,
+    tasks: Annotated[
+        list[str] | None,
+        typer.Option(
+            "--tasks", "-t", help="Only tasks whose id matches this glob (repeatable), e.g. 'home-*'."
+        ),
+    ] = None,
+    json_output: Annotated[
+        bool, typer.Option("--json", help="Print the result as JSON instead of tables.")
+    ] = False,
+    out: Annotated[
+        Path | None, typer.Option("--out", help="Also write the JSON result to this file.", dir_okay=False)
+    ] = None,
+    fail_under: Annotated[
+        float | None,
+        typer.Option(help="Exit 1 when the success rate is below this (0-1), for CI.", min=0.0, max=1.0),
+    ] = None,
+    config: ConfigOption = None,
+) -> None:
+    """Run task files on simulators through the full system and score them.
+
+    Each task's sentence is posted as [User said]; once the kernel has settled, every device's
+    state is checked against the task's expect. Exits 0 when the run completed (failures
+    included), 1 below --fail-under, 2 for a usage or configuration error.
+    """
+    from rosaos.bench.command import bench_command
+    from rosaos.kernel.commands import model_overrides
+
+    raise typer.Exit(
+        bench_command(
+            paths or [],
+            config_path=config,
+            models=model_overrides(model, process_model, base_url, model_name),
+            repeat=repeat,
+            patterns=tasks or [],
+            json_output=json_output,
+            out=out,
+            fail_under=fail_under,
+        )
+    )
+
+
 def main() -> None:
     """Console-script entry point."""
     try:

@@ -51,6 +51,7 @@ class TestRuntime:
     device_list: list[dict[str, Any]] = field(default_factory=list)
     callbacks: list[tuple[int, WorkerCallback]] = field(default_factory=list)
     terminated: list[int] = field(default_factory=list)
+    estop_reason: str | None = None
 
     async def processes(self, include_ended: bool = False) -> Sequence[Any]:
         return [p for p in self.process_list if include_ended or p.state == "running"]
@@ -65,6 +66,17 @@ class TestRuntime:
 
     async def devices(self) -> Sequence[dict[str, Any]]:
         return self.device_list
+
+    async def emergency_stop(self, reason: str) -> dict[str, Any]:
+        self.estop_reason = reason
+        return self.emergency_stop_state()
+
+    async def reset_emergency_stop(self) -> dict[str, Any]:
+        self.estop_reason = None
+        return self.emergency_stop_state()
+
+    def emergency_stop_state(self) -> dict[str, Any]:
+        return {"latched": self.estop_reason is not None, "reason": self.estop_reason}
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         self.callbacks.append((event_id, callback))

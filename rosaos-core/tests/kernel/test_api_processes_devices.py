@@ -88,3 +88,17 @@ async def test_ended_processes_are_listed_only_when_asked(
     everything = (await client.get("/processes", params={"all": "true"}, headers=AUTH)).json()
     assert [p["id"] for p in running] == [2]
     assert [p["id"] for p in everything] == [1, 2]
+
+
+async def test_the_emergency_stop_latches_until_reset(
+    client: httpx.AsyncClient, runtime: TestRuntime
+) -> None:
+    assert (await client.get("/estop", headers=AUTH)).json() == {"latched": False, "reason": None}
+    stopped = await client.post("/estop", json={"reason": "robot near the stairs"}, headers=AUTH)
+    assert stopped.json() == {"latched": True, "reason": "robot near the stairs"}
+    assert (await client.get("/estop", headers=AUTH)).json()["latched"] is True
+    assert (await client.post("/estop/reset", headers=AUTH)).json() == {"latched": False, "reason": None}
+
+
+async def test_the_emergency_stop_needs_the_token(client: httpx.AsyncClient) -> None:
+    assert (await client.post("/estop")).status_code == 401

@@ -89,6 +89,15 @@ class KernelRuntime(Protocol):
     async def devices(self) -> Sequence[Mapping[str, Any]]:
         """Every device with its live state: see :class:`DeviceView` for the keys."""
 
+    async def emergency_stop(self, reason: str) -> dict[str, Any]:
+        """Terminate every process, call every device's ``safe_stop``, latch until reset."""
+
+    async def reset_emergency_stop(self) -> dict[str, Any]:
+        """Unlatch the emergency stop."""
+
+    def emergency_stop_state(self) -> dict[str, Any]:
+        """``{"latched": bool, "reason": str | None}``."""
+
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         """Called once a ``worker_callback`` is committed (also for a duplicate), so leases are
         released at once. Must be idempotent, e.g. ``ProcessManager.record_callback``."""
@@ -319,6 +328,31 @@ async def list_processes(
 ) -> list[ProcessView]:
     """The process agents and the devices they hold."""
     return [ProcessView.model_validate(process) for process in await runtime.processes(include_ended)]
+
+
+class EmergencyStopRequest(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    reason: str = Field(default="requested by a person", min_length=1, max_length=500)
+
+
+@protected.get("/estop")
+async def emergency_stop_state(runtime: Runtime) -> dict[str, Any]:
+    """Whether the emergency stop is latched, and why."""
+    return runtime.emergency_stop_state()
+
+
+@protected.post("/estop")
+async def emergency_stop(runtime: Runtime, body: EmergencyStopRequest | None = None) -> dict[str, Any]:
+    """Emergency stop: terminate every process, put every device in its safe state, and refuse
+    new processes until a person resets it (``POST /estop/reset``)."""
+    return await runtime.emergency_stop((body or EmergencyStopRequest()).reason)
+
+
+@protected.post("/estop/reset")
+async def reset_emergency_stop(runtime: Runtime) -> dict[str, Any]:
+    """Unlatch the emergency stop."""
+    return await runtime.reset_emergency_stop()
 
 
 @protected.post("/processes/{process_id}/terminate")

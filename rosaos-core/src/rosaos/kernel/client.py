@@ -112,6 +112,14 @@ class KernelClient:
         result: dict[str, Any] = await self.request("POST", f"/processes/{process_id}/terminate")
         return result
 
+    async def emergency_stop(self, reason: str) -> dict[str, Any]:
+        result: dict[str, Any] = await self.request("POST", "/estop", json={"reason": reason})
+        return result
+
+    async def reset_emergency_stop(self) -> dict[str, Any]:
+        result: dict[str, Any] = await self.request("POST", "/estop/reset")
+        return result
+
     async def health(self) -> dict[str, Any]:
         result: dict[str, Any] = await self.request("GET", "/health")
         return result

@@ -168,6 +168,33 @@ def ps_command(config_path: Path | None, url: str | None, json_output: bool, all
     return 0
 
 
+def estop_command(
+    config_path: Path | None, url: str | None, reset: bool, reason: str, json_output: bool
+) -> int:
+    """Latch (or reset) the emergency stop."""
+
+    async def run() -> dict[str, Any]:
+        async with _client(config_path, url) as client:
+            return await (client.reset_emergency_stop() if reset else client.emergency_stop(reason))
+
+    try:
+        report = asyncio.run(run())
+    except (KernelUnavailable, ConfigError) as error:
+        print(f"rosaos estop: {error}", file=sys.stderr)
+        return EXIT_CONFIG
+    if json_output:
+        print(json.dumps(report, indent=2))
+    elif reset:
+        print("emergency stop reset: processes may run again")
+    else:
+        print(f"EMERGENCY STOP latched: {report['reason']}")
+        print(f"  terminated processes: {', '.join(map(str, report['terminated'])) or 'none'}")
+        for device in report["devices"]:
+            print(f"  {device['name']}: {'safe' if device['ok'] else 'FAILED'}: {device['detail']}")
+        print("Reset with `rosaos estop --reset` once it is safe.")
+    return 0 if reset or all(d["ok"] for d in report["devices"]) else 1
+
+
 def kill_command(config_path: Path | None, url: str | None, process_id: int, json_output: bool) -> int:
     """Terminate one process; its leases are released."""
 

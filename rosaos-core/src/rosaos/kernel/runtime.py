@@ -26,7 +26,7 @@ from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.devices.runtime import write_atomic
 from rosaos.devices.serve import bind_socket
 from rosaos.devices.state_cache import DeviceStateCache
-from rosaos.devices.supervisor import DeviceSupervisor, DirectoryEntry
+from rosaos.devices.supervisor import DeviceSupervisor, DirectoryEntry, SafeStopOutcome
 from rosaos.devices.world import World
 from rosaos.drivers import DeviceError
 from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
@@ -62,6 +62,8 @@ class DeviceHosting(Protocol):
     async def stop(self) -> None: ...
 
     def directory(self) -> dict[str, DirectoryEntry]: ...
+
+    async def safe_stop_all(self) -> list[SafeStopOutcome]: ...
 
 
 class Kernel:
@@ -149,6 +151,28 @@ class Kernel:
         await self._updates.publish(
             "process_ended", text, callback.model_dump(mode="json"), event_id=event_id
         )
+
+    async def emergency_stop(self, reason: str) -> dict[str, Any]:
+        """Terminate every process, call every device's safe_stop, and latch until reset."""
+        stopped = await self.manager.latch_emergency_stop(reason)
+        outcomes = await self.supervisor.safe_stop_all()
+        report = {
+            "latched": True,
+            "reason": reason,
+            "terminated": [info.id for info in stopped],
+            "devices": [{"name": o.instance, "ok": o.ok, "detail": o.detail} for o in outcomes],
+        }
+        await self._updates.publish("error", f"EMERGENCY STOP: {reason}", report)
+        return report
+
+    async def reset_emergency_stop(self) -> dict[str, Any]:
+        """Unlatch the emergency stop (a person decided it is safe)."""
+        self.manager.reset_emergency_stop()
+        await self._updates.publish("notice", "emergency stop reset: processes may run again", {})
+        return {"latched": False, "reason": None}
+
+    def emergency_stop_state(self) -> dict[str, Any]:
+        return {"latched": self.manager.emergency_stop is not None, "reason": self.manager.emergency_stop}
 
     # --- devices -----------------------------------------------------------------------------------
 

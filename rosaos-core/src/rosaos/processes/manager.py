@@ -77,6 +77,8 @@ class ProcessManager:
         self._next_id = first_process_id
         self._processes: dict[int, ProcessInfo] = {}
         self.leases = LeaseTable()
+        self.emergency_stop: str | None = None
+        """Why the emergency stop is latched, or None. While latched every launch is refused."""
         pool.on_ended = self._worker_ended
 
     @property
@@ -101,6 +103,18 @@ class ProcessManager:
         for process_id in list(self._processes):
             self.leases.release(process_id)
 
+    async def latch_emergency_stop(self, reason: str) -> builtins.list[ProcessInfo]:
+        """Latch the emergency stop and terminate every running process; return what was stopped."""
+        self.emergency_stop = reason
+        stopped = []
+        for info in self.list():
+            stopped.append(await self.terminate(info.id))
+        return stopped
+
+    def reset_emergency_stop(self) -> None:
+        """Unlatch: processes may be launched again."""
+        self.emergency_stop = None
+
     async def launch(self, task: str, devices: builtins.list[str]) -> ProcessInfo:
         """Start a process for ``task`` holding ``devices`` (plus the always-attached ones).
 
@@ -108,6 +122,11 @@ class ProcessManager:
         empty, a device is unknown, unavailable, or held exclusively by another process.
         """
         task = task.strip()
+        if self.emergency_stop is not None:
+            raise LaunchRefused(
+                f"emergency stop is latched ({self.emergency_stop}); nothing may run until a person "
+                "resets it with `rosaos estop --reset` or the web page"
+            )
         if not task:
             raise LaunchRefused("the task is empty; describe what the process should do")
         endpoints = self._devices()
