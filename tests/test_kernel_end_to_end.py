@@ -262,6 +262,15 @@ async def test_the_web_page_chats_with_the_kernel_and_shows_the_device_change(
             await page.wait_for_selector(f"{brightness}:text-is('10')", timeout=30_000)
             await page.wait_for_selector("#chat-log .msg-kernel", timeout=30_000)
             await page.screenshot(path=str(tmp_path / "web-page.png"), full_page=True)
+
+            # The emergency stop latches from the page and is reset from it, after a confirmation.
+            await page.click("#estop")
+            await page.wait_for_selector("#estop-banner", state="visible")
+            assert (await api.get("/estop")).json()["latched"] is True
+            page.on("dialog", lambda dialog: asyncio.ensure_future(dialog.accept()))
+            await page.click("#estop-reset")
+            await page.wait_for_selector("#estop-banner", state="hidden")
+            assert (await api.get("/estop")).json()["latched"] is False
             assert errors == []
         finally:
             await browser.close()

@@ -7,6 +7,7 @@ import {
   $, api, errorText, login, newKey, page, setConnection, setStatus, signOut, SignedOut, sleep, takeLoginCode,
 } from "./session.js";
 import { followUpdates } from "./stream.js";
+import { renderEmergencyStop, wireEmergencyStop } from "./estop.js";
 
 const POLL_MS = 1000;
 
@@ -84,6 +85,7 @@ function start() {
   followUpdates();
   pollForever("/processes", renderProcesses);
   pollForever("/devices", renderDevices);
+  pollForever("/estop", renderEmergencyStop);
 }
 
 async function main() {
@@ -93,6 +95,7 @@ async function main() {
     if (button) terminate(button);
   });
   $("#sign-out").addEventListener("click", () => signOut("Signed out."));
+  wireEmergencyStop();
   // A new login link pasted into this tab changes only the fragment, which does not reload the
   // page: start over so the new code is used.
   window.addEventListener("hashchange", () => {
