@@ -78,9 +78,12 @@ class KernelLoop:
 
     async def run_forever(self) -> None:
         """Handle events until cancelled."""
-        while True:
-            await self.run_pending()
-            await self.store.wait_for_pending()
+        # One session with the kernel's tools for the loop's life, not one per event: opening it
+        # was two thirds of handling a simple event.
+        async with self.agent:
+            while True:
+                await self.run_pending()
+                await self.store.wait_for_pending()
 
     async def run_pending(self) -> int:
         """Handle every pending event, oldest first; return how many were handled."""

@@ -111,11 +111,58 @@ async def run_job(job: WorkerJob) -> WorkerCallback:
     )
 
 
+class DeviceSessions:
+    """MCP sessions to devices, kept open across the jobs of this worker.
+
+    Opening a session and listing its tools cost more than the tool call itself; a warm worker
+    that keeps them answers the next job on the same device at once. A kept session is pinged
+    before reuse and reopened if its device went away (a restarted host keeps its URL).
+    """
+
+    def __init__(self) -> None:
+        self._open: dict[tuple[str, str], MCPToolset[Any]] = {}
+
+    async def toolset(self, device: GrantedDevice) -> MCPToolset[Any]:
+        key = (device.url, device.token)
+        kept = self._open.get(key)
+        if kept is not None:
+            try:
+                async with asyncio.timeout(CONNECT_TIMEOUT):
+                    await kept.client.ping()
+                return kept
+            except Exception:
+                await self._close(key)
+        toolset = await _connect(device)
+        self._open[key] = toolset
+        return toolset
+
+    async def forget(self, devices: Sequence[GrantedDevice]) -> None:
+        """Close the sessions of a job that failed: the next job starts from fresh ones."""
+        for device in devices:
+            await self._close((device.url, device.token))
+
+    async def close_all(self) -> None:
+        for key in list(self._open):
+            await self._close(key)
+
+    async def _close(self, key: tuple[str, str]) -> None:
+        toolset = self._open.pop(key, None)
+        if toolset is not None:
+            with contextlib.suppress(Exception):
+                await toolset.__aexit__(None, None, None)
+
+
+SESSIONS = DeviceSessions()
+
+
 async def _run_agent(job: WorkerJob) -> str:
     model = process_model(job)
     prefixed = len(job.devices) > 1
-    async with contextlib.AsyncExitStack() as stack:
-        toolsets = [await _connect(stack, device, prefixed) for device in job.devices]
+    try:
+        toolsets: list[AbstractToolset[Any]] = []
+        for device in job.devices:
+            toolset = await SESSIONS.toolset(device)
+            toolsets.append(toolset.prefixed(tool_prefix(device.name)) if prefixed else toolset)
         agent = Agent(
             model,
             instructions=process_system_prompt(job.base_prompt, job.task, job.devices),
@@ -123,12 +170,13 @@ async def _run_agent(job: WorkerJob) -> str:
             name=f"process-{job.process_id}",
         )
         result = await agent.run(job.task, usage_limits=UsageLimits(request_limit=job.request_limit))
-        return str(result.output)
+    except BaseException:
+        await SESSIONS.forget(job.devices)
+        raise
+    return str(result.output)
 
 
-async def _connect(
-    stack: contextlib.AsyncExitStack, device: GrantedDevice, prefixed: bool
-) -> AbstractToolset[Any]:
+async def _connect(device: GrantedDevice) -> MCPToolset[Any]:
     """Open the device's MCP session up front, so a dead device is reported by name, not as a stack."""
     client: Client[Any] = Client(
         device.url, auth=device.token, name=f"rosaos-{device.name}", init_timeout=CONNECT_TIMEOUT
@@ -137,7 +185,7 @@ async def _connect(
     # tool result it can read and report, instead of ending the whole run.
     toolset: MCPToolset[Any] = MCPToolset(client, id=device.name, tool_error_behavior="failed")
     try:
-        await stack.enter_async_context(toolset)
+        await toolset.__aenter__()
     except Exception as failure:
         refused = await _refused_token(device)
         if refused:
@@ -149,7 +197,7 @@ async def _connect(
             f"cannot reach device {device.name} at {device.url}: {describe_error(failure)}; "
             "check that it is served and healthy (rosaos devices list)"
         ) from failure
-    return toolset.prefixed(tool_prefix(device.name)) if prefixed else toolset
+    return toolset
 
 
 async def _refused_token(device: GrantedDevice) -> str | None:
