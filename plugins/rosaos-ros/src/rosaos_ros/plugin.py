@@ -1,0 +1,112 @@
+"""The ``ros`` driver: what it declares to rosaOS, and how its backends are built.
+
+Registered under the ``rosaos.drivers`` entry point as ``ros`` (see ``pyproject.toml``).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+from rosaos import hookimpl
+from rosaos.drivers import DemoInstance, DeviceContext, DeviceError, DriverSpec, read_packaged_text
+from rosaos_ros.backend import RosBackend
+from rosaos_ros.profiles import Profile, ProfileError, load_profile
+from rosaos_ros.server import build_server
+from rosaos_ros.settings import RosSettings
+from rosaos_ros.sim import Simulator, SimulatorError, SimulatorThread, sim_state
+
+
+def profiles_dir(ctx: DeviceContext) -> Path:
+    """Where a user's own profiles are found by name: ``<data_dir>/drivers/ros/profiles``."""
+    return ctx.data_dir / "drivers" / "ros" / "profiles"
+
+
+def _settings(ctx: DeviceContext) -> RosSettings:
+    if not isinstance(ctx.settings, RosSettings):  # the hosting layer validates with spec.settings
+        raise DeviceError(f"{ctx.instance}: expected RosSettings, got {type(ctx.settings).__name__}")
+    return ctx.settings
+
+
+def _profile(ctx: DeviceContext, settings: RosSettings, sim_profile: str | None = None) -> Profile:
+    where = f"[devices.{ctx.instance}]"
+    if settings.profile and sim_profile and settings.profile != sim_profile:
+        raise DeviceError(
+            f"{where} says profile = {settings.profile!r} but its sim table says profile = {sim_profile!r}; keep one"
+        )
+    try:
+        profile = load_profile(
+            settings.profile or sim_profile or "generic",
+            path=settings.profile_file,
+            user_dir=profiles_dir(ctx),
+        )
+    except ProfileError as error:
+        raise DeviceError(f"{where} profile: {error}") from None
+    return profile.namespaced(settings.namespace)
+
+
+def real_backend(ctx: DeviceContext) -> RosBackend:
+    """The ``real`` backend: a robot running rosbridge at ``host:rosbridge_port``."""
+    settings = _settings(ctx)
+    return RosBackend(ctx.instance, settings, _profile(ctx, settings), ctx.images_dir)
+
+
+def sim_backend(ctx: DeviceContext) -> RosBackend:
+    """The ``sim`` backend: the rosbridge simulator in a thread on a free loopback port, reached over its socket.
+
+    ``ctx.sim`` is the simulator's initial state (``x``, ``y``, ``yaw``, ``docked``, ``battery``,
+    ``dock``) and may name the ``profile``; ``host`` and ``rosbridge_port`` are not used.
+    """
+    settings = _settings(ctx)
+    try:
+        state = sim_state(ctx.sim)
+    except SimulatorError as error:
+        raise DeviceError(f"[devices.{ctx.instance}] {error}") from None
+    profile = _profile(ctx, settings, state.profile)
+    token = settings.rosbridge_token.get_secret_value() if settings.rosbridge_token else None
+    simulator = Simulator(profile, state, host="127.0.0.1", port=0, token=token)
+    return RosBackend(ctx.instance, settings, profile, ctx.images_dir, simulator=SimulatorThread(simulator))
+
+
+async def stop_robot(backend: RosBackend) -> None:
+    """Emergency stop: zero velocity, end the running motion, cancel every running action goal."""
+    await backend.safe_stop()
+
+
+SPEC = DriverSpec(
+    name="ros",
+    title="ROS 2 robot (via rosbridge)",
+    description=(
+        "A ROS 2 robot reached through rosbridge (TurtleBot 4, PuppyPi, or any base with a velocity topic): "
+        "drive it, move a distance or turn an angle on odometry, stop, dock and undock, take a picture, "
+        "read its pose, battery and docking state, and use its topics, services, actions, parameters and "
+        "nodes within allow-lists and velocity limits."
+    ),
+    concurrency="exclusive",
+    prompt=read_packaged_text(__file__, "prompt.md"),
+    settings=RosSettings,
+    server=build_server,
+    backends={"sim": sim_backend, "real": real_backend},
+    intents=Path(__file__).parent / "intents.yaml",
+    safe_stop=stop_robot,
+    demo={
+        "turtlebot": DemoInstance(
+            description="TurtleBot 4 wheeled mobile robot with a camera and a charging dock",
+            settings={"profile": "turtlebot4"},
+            sim={"x": 0.0, "y": 0.0, "yaw": 0.0, "docked": True},
+            aliases=["turtle bot", "turtlebot 4"],
+        ),
+        "dog": DemoInstance(
+            description="Hiwonder PuppyPi quadruped robot dog",
+            settings={"profile": "puppypi"},
+            sim={"x": 0.0, "y": 0.0, "yaw": 0.0},
+            aliases=["puppypi", "puppy", "robot dog"],
+        ),
+    },
+)
+
+
+@hookimpl
+def register_drivers(register: Callable[[DriverSpec], None]) -> None:
+    """Register the ``ros`` driver."""
+    register(SPEC)

@@ -1,0 +1,111 @@
+"""intents.yaml: the offline engine's sentence templates for robots, read by core's loader."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+from hassil import recognize
+from hassil.intents import TextSlotList
+
+from rosaos.models.intents_file import IntentsFile, load_intents_file
+from rosaos_ros.plugin import SPEC
+
+DEVICES = TextSlotList.from_tuples([("turtlebot", "turtlebot"), ("dog", "dog"), ("robot dog", "dog")])
+BENCH = Path(__file__).resolve().parents[4] / "shared" / "bench" / "tasks"
+
+
+@pytest.fixture(scope="module")
+def intents_file() -> IntentsFile:
+    assert SPEC.intents is not None
+    return load_intents_file(SPEC.intents)
+
+
+def tool_call(intents_file: IntentsFile, sentence: str) -> tuple[str, str, dict[str, Any]] | None:
+    """``(device, tool, args)`` for a sentence, filling ``"{slot}"`` args as the engine does."""
+    result = recognize(sentence, intents_file.intents(), slot_lists={"device": DEVICES})
+    if result is None:
+        return None
+    action = intents_file.actions[result.intent.name]
+    slots = {name: entity.value for name, entity in result.entities.items()}
+    references = action.slot_arguments()
+    args = {
+        name: slots[references[name]] if name in references else value for name, value in action.args.items()
+    }
+    return slots["device"], action.tool, args
+
+
+@pytest.mark.parametrize(
+    ("sentence", "expected"),
+    [
+        # The robot commands of the public bench tasks (robots.yaml, multi.yaml).
+        ("Undock the turtlebot", ("turtlebot", "undock", {})),
+        ("Send the turtlebot back to its dock", ("turtlebot", "dock", {})),
+        ("Drive the turtlebot forward one meter", ("turtlebot", "move_distance", {"meters": 1})),
+        ("Turn the turtlebot 90 degrees to the left", ("turtlebot", "rotate", {"degrees": 90})),
+        ("Make the dog walk forward", ("dog", "move_distance", {"meters": 0.5})),
+        # Obvious variants.
+        ("dock the turtlebot", ("turtlebot", "dock", {})),
+        ("take the turtlebot off the dock", ("turtlebot", "undock", {})),
+        ("drive the turtlebot forward 2.5 meters", ("turtlebot", "move_distance", {"meters": 2.5})),
+        ("move the turtlebot two metres forward", ("turtlebot", "move_distance", {"meters": 2})),
+        ("drive the turtlebot backwards one meter", ("turtlebot", "move_distance", {"meters": -1.0})),
+        ("back the turtlebot up 0.5 meters", ("turtlebot", "move_distance", {"meters": -0.5})),
+        ("drive the turtlebot backwards half a meter", ("turtlebot", "move_distance", {"meters": -0.5})),
+        ("make the dog walk forward half a metre", ("dog", "move_distance", {"meters": 0.5})),
+        ("turn the turtlebot 45 degrees to the right", ("turtlebot", "rotate", {"degrees": -45.0})),
+        ("turn the dog right by ninety degrees", ("dog", "rotate", {"degrees": -90.0})),
+        ("rotate the turtlebot ninety degrees left", ("turtlebot", "rotate", {"degrees": 90})),
+        ("turn the robot dog left", ("dog", "rotate", {"degrees": 90})),
+        ("turn the turtlebot around", ("turtlebot", "rotate", {"degrees": 180})),
+        ("stop the turtlebot", ("turtlebot", "stop", {})),
+        ("dog stop", ("dog", "stop", {})),
+        ("take a picture with the turtlebot", ("turtlebot", "capture_image", {})),
+    ],
+)
+def test_sentence_maps_to_tool_call(
+    intents_file: IntentsFile, sentence: str, expected: tuple[str, str, dict[str, Any]]
+) -> None:
+    assert tool_call(intents_file, sentence) == expected
+
+
+@pytest.mark.parametrize(
+    "sentence",
+    ["Tell the drone to take off", "Drive the car forward one meter", "Stop the music", "Turn off the lamp"],
+)
+def test_other_devices_and_requests_do_not_match(intents_file: IntentsFile, sentence: str) -> None:
+    assert tool_call(intents_file, sentence) is None
+
+
+def test_left_and_right_number_words_keep_their_signs_in_any_order(intents_file: IntentsFile) -> None:
+    # hassil caches number words per range and ignores the multiplier: the lists must not share ranges.
+    right = tool_call(intents_file, "turn the turtlebot thirty degrees to the right")
+    left = tool_call(intents_file, "turn the turtlebot thirty degrees to the left")
+    assert (right, left) == (
+        ("turtlebot", "rotate", {"degrees": -30.0}),
+        ("turtlebot", "rotate", {"degrees": 30}),
+    )
+
+
+def test_signed_lists_do_not_share_a_range_with_positive_ones(intents_file: IntentsFile) -> None:
+    ranges = {name: spec["range"] for name, spec in intents_file.hassil["lists"].items() if "range" in spec}
+    key = lambda r: (r["from"], r["to"], r.get("step", 1), r.get("fractions"))  # noqa: E731
+    negative = {key(r) for r in ranges.values() if r.get("multiplier", 1) < 0}
+    positive = {key(r) for r in ranges.values() if r.get("multiplier", 1) > 0}
+    assert not negative & positive
+
+
+@pytest.mark.skipif(not BENCH.is_dir(), reason="the public bench tasks are not next to this checkout")
+def test_every_robot_command_of_the_bench_matches_except_the_unknown_robot(intents_file: IntentsFile) -> None:
+    sentences = [
+        task["say"]
+        for name in ("robots.yaml", "multi.yaml")
+        for task in yaml.safe_load((BENCH / name).read_text(encoding="utf-8"))["tasks"]
+        if any(word in task["say"].lower() for word in ("turtlebot", "dog", "drone"))
+    ]
+    clauses = [clause.strip() for sentence in sentences for clause in sentence.split(" and ")]
+    robot_clauses = [c for c in clauses if "turtlebot" in c.lower() or "dog" in c.lower()]
+    assert all(tool_call(intents_file, clause) for clause in robot_clauses), robot_clauses
+    assert tool_call(intents_file, "Tell the drone to take off") is None
