@@ -15,7 +15,15 @@ say() { printf '\033[1;34m[rosaos setup]\033[0m %s\n' "$*" >&2; }
 #   git              copier (rosaos new-driver) and the template test
 #   chromium         the web page's end-to-end test (Playwright drives the Debian build; no browser download)
 #   espeak-ng, sox   offline text-to-speech and the voice tests
-APT_PACKAGES=(python3 python3-venv python3-dev gcc git chromium espeak-ng sox)
+#   libcairo2-dev, libgirepository1.0-dev, pkg-config
+#                    build PyGObject (reachy-mini pins pygobject<=3.46, which builds from source)
+#   gir1.2-gstreamer-1.0, gir1.2-gst-plugins-base-1.0
+#                    GStreamer typelibs (Gst, GstApp, GstPbutils) the reachy-mini SDK imports at start
+#   libegl1, libgl1, libosmesa6
+#                    OpenGL/EGL/OSMesa for MuJoCo, the Reachy Mini daemon's headless simulator
+APT_PACKAGES=(python3 python3-venv python3-dev gcc git chromium espeak-ng sox
+  libcairo2-dev libgirepository1.0-dev pkg-config gir1.2-gstreamer-1.0 gir1.2-gst-plugins-base-1.0
+  libegl1 libgl1 libosmesa6)
 
 missing_apt() {
   local pkg missing=()
@@ -78,6 +86,10 @@ install_python_packages() {
   for plugin in "$ROOT"/plugins/*/; do editables+=(-e "$plugin"); done
   VIRTUAL_ENV="$VENV" "$VENV/bin/uv" pip install --quiet --python "$VENV/bin/python" \
     -c "$ROOT/constraints.txt" "${editables[@]}" --group "$ROOT/pyproject.toml:dev"
+  # Write .pyc files now (up-to-date ones are skipped). Where PYTHONDONTWRITEBYTECODE is set, every
+  # worker and device host would otherwise recompile fastmcp and pydantic-ai: ~5 s a start, not ~1 s.
+  say "compiling bytecode"
+  "$VENV/bin/python" -m compileall -q -j 0 "$VENV/lib" "$ROOT/rosaos-core/src" "$ROOT"/plugins/*/src >/dev/null || true
   echo "$want" > "$VENV/.bootstrap-stamp"
 }
 
