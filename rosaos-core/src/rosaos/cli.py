@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Literal
 
 import typer
 
@@ -227,6 +227,50 @@ def chat(
         return KernelClient.from_config(load_config(config), url=url)
 
     raise typer.Exit(chat_command(client, message, wait, timeout, json_output))
+
+
+@app.command("voice")
+def voice(
+    wav: Annotated[
+        Path | None,
+        typer.Option(
+            "--wav",
+            help="Listen to a 16 kHz mono WAV file instead (other PCM WAVs are converted); exit when done.",
+            dir_okay=False,
+        ),
+    ] = None,
+    source: Annotated[
+        str | None,
+        typer.Option("--source", help="mic or reachy (default: \\[voice] source, else mic)."),
+    ] = None,
+    url: UrlOption = None,
+    config: ConfigOption = None,
+    json_output: Annotated[
+        bool, typer.Option("--json", help="Print one JSON object per step (heard, sent, ...).")
+    ] = False,
+) -> None:
+    """Listen for the wake phrase and speak to the kernel: VAD, speech-to-text, POST /stt.
+
+    Offline by default (Silero VAD, Moonshine); needs the voice extra: pip install 'rosaos\\[voice]'.
+    """
+    if wav is not None and source is not None:
+        typer.echo("error: give --wav FILE or --source, not both", err=True)
+        raise typer.Exit(2)
+    if source not in (None, "mic", "reachy"):
+        typer.echo(f"error: --source must be mic or reachy, not {source!r}", err=True)
+        raise typer.Exit(2)
+    try:
+        from rosaos.frontends.voice.command import voice_command
+    except ImportError as error:
+        typer.echo(
+            f"error: rosaos voice needs the voice extra ({error}): pip install 'rosaos[voice]'", err=True
+        )
+        raise typer.Exit(1) from None
+
+    chosen: Literal["mic", "reachy"] | None = (
+        "reachy" if source == "reachy" else "mic" if source == "mic" else None
+    )
+    raise typer.Exit(voice_command(config, wav, chosen, url, json_output))
 
 
 @app.command("ps")

@@ -1,4 +1,4 @@
-"""Helpers for the local-intent engine tests: test worlds, device servers, and bench expectations.
+"""Helpers for the local-intent engine tests: test worlds, device servers, and the bench task files.
 
 Two test drivers live in ``intents/``: ``bulb`` (a light, like Tapo) and ``speaker`` (a media
 player, like the coming Spotify driver). :func:`build_device_server` gives either one an
@@ -86,60 +86,3 @@ def build_device_server(name: str, state: dict[str, Any], fail: set[str] | None 
         return act("play", playing=query)
 
     return server
-
-
-def fix_yaml_keys(value: Any) -> Any:
-    """Undo YAML 1.1 reading ``on:``/``off:`` keys as booleans (task files write ``{on: true}``)."""
-    if isinstance(value, dict):
-        return {
-            ("on" if key is True else "off" if key is False else key): fix_yaml_keys(v)
-            for key, v in value.items()
-        }
-    if isinstance(value, list):
-        return [fix_yaml_keys(item) for item in value]
-    return value
-
-
-def expectation_problems(
-    expected: dict[str, Any], before: dict[str, Any], after: dict[str, Any]
-) -> list[str]:
-    """Differences between a device's state and a task's ``expect``, per the bench README rules.
-
-    Keys of ``before`` that ``expected`` does not name must keep their value.
-    """
-    problems = [
-        f"{key}: expected {want!r}, got {after.get(key)!r}"
-        for key, want in expected.items()
-        if not _meets(want, before.get(key), after.get(key))
-    ]
-    problems += [
-        f"{key} moved: {before[key]!r} -> {after.get(key)!r}"
-        for key in before
-        if key not in expected and not _meets(before[key], None, after.get(key))
-    ]
-    return problems
-
-
-def _meets(want: Any, before: Any, got: Any) -> bool:
-    if (
-        isinstance(want, dict)
-        and len(want) == 1
-        and next(iter(want)) in ("gt", "lt", "between", "contains", "changed")
-    ):
-        operator, operand = next(iter(want.items()))
-        if operator == "changed":
-            return (got != before) == bool(operand)
-        if got is None:
-            return False
-        if operator == "gt":
-            return bool(got > operand)
-        if operator == "lt":
-            return bool(got < operand)
-        if operator == "between":
-            return bool(operand[0] <= got <= operand[1])
-        return str(operand).lower() in str(got).lower()
-    if isinstance(want, bool) or not isinstance(want, int | float):
-        return bool(want == got)
-    if isinstance(got, bool) or not isinstance(got, int | float):
-        return False
-    return abs(got - want) <= max(0.02 * abs(want), 0.05)

@@ -11,22 +11,22 @@ of home.yaml), or when it expects no change at all (ambiguous, unknown, question
   names, and leave them as ``expect`` says (and every other initial key as it was);
 - a task that expects no change must not actuate: either it is not an exact match (the engine
   asks or refuses), or its plans only read state;
-- a ``reply`` regex must match some reply: the kernel's, or a process output.
+- a ``reply`` regex must match some reply (the kernel's, or a process output), by ``rosaos.bench``'s rule.
 """
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 from typing import Any
 
 import pytest
-import yaml
 from fastmcp import Client
-from models_support import BENCH_TASKS, expectation_problems, fix_yaml_keys
+from models_support import BENCH_TASKS
 from pydantic_ai import Agent
 from pydantic_ai.mcp import MCPToolset
 
+from rosaos.bench.expect import device_differences, reply_matches
+from rosaos.bench.tasks import BenchTask, TaskFile, load_task_file
 from rosaos.config import DeviceConfig, RosaosConfig
 from rosaos.devices.serve import open_device
 from rosaos.devices.world import build_world
@@ -48,34 +48,30 @@ REGISTRY = load_drivers()
 def _tasks() -> list[Any]:
     params = []
     for path in sorted(BENCH_TASKS.glob("*.yaml")):
-        document = fix_yaml_keys(yaml.safe_load(path.read_text(encoding="utf-8")))
-        for task in document["tasks"]:
-            params.append(pytest.param(document["world"], task, id=task["id"]))
+        task_file = load_task_file(path)
+        for task in task_file.tasks:
+            params.append(pytest.param(task_file, task, id=task.id))
     return params
 
 
-def _covered(world: dict[str, Any], task: dict[str, Any], registry: DriverRegistry) -> str | None:
+def _covered(world: TaskFile, task: BenchTask, registry: DriverRegistry) -> str | None:
     """Why the offline engine cannot be held to ``task`` yet, or None when it can."""
-    for device in task["expect"]:
-        info = registry.drivers.get(world[device]["driver"])
+    for device in task.expect:
+        driver = world.world[device].driver
+        info = registry.drivers.get(driver)
         if info is None or not info.spec.implemented or info.spec.intents is None:
-            return f"{device}: driver {world[device]['driver']!r} is a placeholder or ships no intents yet"
+            return f"{device}: driver {driver!r} is a placeholder or ships no intents yet"
     return None
 
 
-def _devices(world: dict[str, Any], task: dict[str, Any]) -> tuple[dict[str, DeviceConfig], dict[str, Any]]:
+def _devices(world: TaskFile, task: BenchTask) -> tuple[dict[str, DeviceConfig], dict[str, Any]]:
     """The task's devices as config tables, each starting in its state plus the task's setup."""
-    initial = {
-        name: {**entry.get("state", {}), **task.get("setup", {}).get(name, {})}
-        for name, entry in world.items()
-    }
+    initial = world.initial_state(task)
     devices = {
         name: DeviceConfig(
-            driver=entry["driver"],
-            description=entry.get("description"),
-            sim={**entry.get("sim", {}), **initial[name]},
+            driver=entry.driver, description=entry.description, sim={**entry.sim, **initial[name]}
         )
-        for name, entry in world.items()
+        for name, entry in world.world.items()
     }
     return devices, initial
 
@@ -106,43 +102,39 @@ async def _run(
     return output, state
 
 
-def _match(world: dict[str, Any], task: dict[str, Any]) -> Any:
+def _match(world: TaskFile, task: BenchTask) -> Any:
     """Skip an uncovered task; otherwise match its sentence in its world and check the plan's shape."""
     if (reason := _covered(world, task, REGISTRY)) is not None:
         pytest.skip(reason)
     devices, initial = _devices(world, task)
-    result = IntentMatcher(sources_from_config(devices, REGISTRY)).match(task["say"])
+    result = IntentMatcher(sources_from_config(devices, REGISTRY)).match(task.say)
     planned = {step.tool for process in result.processes for step in process.plan.steps}
-    if not task["expect"] and result.is_exact:
-        assert planned <= READ_ONLY_TOOLS, f"{task['say']!r} must change nothing, but plans {sorted(planned)}"
-    if task["expect"]:
-        assert result.is_exact, f"{task['say']!r} did not match: {result.reply}"
-        assert {device for process in result.processes for device in process.devices} == set(task["expect"])
+    if not task.expect and result.is_exact:
+        assert planned <= READ_ONLY_TOOLS, f"{task.say!r} must change nothing, but plans {sorted(planned)}"
+    if task.expect:
+        assert result.is_exact, f"{task.say!r} did not match: {result.reply}"
+        assert {device for process in result.processes for device in process.devices} == set(task.expect)
     return result, devices, initial
 
 
 @pytest.mark.skipif(not BENCH_TASKS.is_dir(), reason=f"no bench task files at {BENCH_TASKS}")
 @pytest.mark.parametrize(("world", "task"), _tasks())
-def test_bench_sentence_plans_the_expected_devices(world: dict[str, Any], task: dict[str, Any]) -> None:
+def test_bench_sentence_plans_the_expected_devices(world: TaskFile, task: BenchTask) -> None:
     _match(world, task)
 
 
 @pytest.mark.skipif(not BENCH_TASKS.is_dir(), reason=f"no bench task files at {BENCH_TASKS}")
 @pytest.mark.parametrize(("world", "task"), _tasks())
-async def test_bench_task_runs_on_simulators(
-    world: dict[str, Any], task: dict[str, Any], tmp_path: Path
-) -> None:
-    if task["id"] in TASK_FILE_ISSUES:
-        pytest.xfail(TASK_FILE_ISSUES[task["id"]])
+async def test_bench_task_runs_on_simulators(world: TaskFile, task: BenchTask, tmp_path: Path) -> None:
+    if task.id in TASK_FILE_ISSUES:
+        pytest.xfail(TASK_FILE_ISSUES[task.id])
     result, devices, initial = _match(world, task)
     replies = [result.reply]
     for process in result.processes:
         [device] = process.devices
         output, state = await _run(process.task, device, devices[device], tmp_path)
         replies.append(output)
-        problems = expectation_problems(task["expect"].get(device, {}), initial[device], state)
-        assert not problems, f"{task['say']!r} on {device}: {problems}"
-    if "reply" in task:
-        assert any(re.search(task["reply"], reply) for reply in replies), (
-            f"no reply matches {task['reply']!r}: {replies}"
-        )
+        problems = device_differences(task.expect.get(device, {}), initial[device], state, device)
+        assert not problems, f"{task.say!r} on {device}: {[str(p) for p in problems]}"
+    if task.reply is not None:
+        assert reply_matches(task.reply, replies), f"no reply matches {task.reply!r}: {replies}"

@@ -110,7 +110,7 @@ async def test_numbers_are_clamped_to_the_tool_bounds() -> None:
     assert state["brightness"] == 100
 
 
-async def test_a_granted_reachy_speaks_the_reply_last() -> None:
+async def test_an_attached_reachy_is_left_alone_unless_the_plan_speaks() -> None:
     lamp: dict[str, Any] = {"on": False}
     reachy: dict[str, Any] = {}
     task = task_for(PlanStep(device="lamp", tool="turn_on"))
@@ -119,16 +119,17 @@ async def test_a_granted_reachy_speaks_the_reply_last() -> None:
         "lamp": ("bulb", build_device_server("lamp", lamp)),
     }
     output, calls = await run_process(task, servers)
-    assert [call.tool_name for call in calls] == ["lamp_turn_on", "reachy_speak"]
-    assert calls[1].args_as_dict() == {"text": output}
-    assert reachy["last_spoken"] == output == "Done: on: true."
+    assert [call.tool_name for call in calls] == ["lamp_turn_on"]
+    assert output == "Done: on: true."
+    assert "last_spoken" not in reachy
 
 
-async def test_a_plan_that_already_speaks_is_not_spoken_twice() -> None:
+async def test_a_plan_that_says_something_speaks_once() -> None:
     reachy: dict[str, Any] = {}
     task = task_for(PlanStep(device="reachy", tool="speak", args={"text": "Good morning"}))
     _, calls = await run_process(task, {"reachy": ("reachy", build_device_server("reachy", reachy))})
     assert [call.tool_name for call in calls] == ["speak"]
+    assert reachy["last_spoken"] == "Good morning"
 
 
 async def test_a_task_without_a_plan_says_how_to_configure_an_llm() -> None:
@@ -191,4 +192,5 @@ async def test_the_plan_and_the_devices_are_read_from_instructions_too() -> None
         MCPToolset(build_device_server("reachy", reachy)).prefixed("reachy"),
     ]
     result = await Agent(LocalPlanModel(), instructions=prompt, toolsets=toolsets).run("Go.")
-    assert (lamp["on"], reachy["last_spoken"], result.output) == (True, "Done: on: true.", "Done: on: true.")
+    assert (lamp["on"], result.output) == (True, "Done: on: true.")
+    assert "last_spoken" not in reachy

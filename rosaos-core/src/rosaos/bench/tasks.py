@@ -104,9 +104,7 @@ class TaskFile(BaseModel):
 
     def initial_state(self, task: BenchTask) -> dict[str, dict[str, Any]]:
         """Every device's initial ``state`` with the task's ``setup`` applied, key by key."""
-        return {
-            name: {**device.state, **task.setup.get(name, {})} for name, device in self.world.items()
-        }
+        return {name: {**device.state, **task.setup.get(name, {})} for name, device in self.world.items()}
 
 
 @dataclass(frozen=True)

@@ -8,8 +8,12 @@ model looks at what has been done so far and:
    (``turn_on``, ``kitchen_light_turn_on`` or ``kitchen_light__turn_on``: device + tool, either way);
 2. after the last step, or at the first failed one, works out the reply: the plan's reply with
    ``{result}`` filled in, the yes/no answer read from the state, or the failure with the error;
-3. if a Reachy Mini is granted and has ``speak``, says that reply through it;
-4. ends with the reply as its text output, which becomes the process's callback output.
+3. ends with the reply as its text output, which becomes the process's callback output.
+
+It does not speak the reply itself: the kernel's reply goes to the updates stream, and the voice
+front end speaks replies to what it heard through the Reachy Mini. A process that spoke every
+confirmation would move the robot's ``last_spoken`` on typed commands and in the task benchmark,
+where only an explicit "say …" may change it.
 
 A task without a plan gets an answer saying how to configure an LLM for free-form tasks.
 """
@@ -17,7 +21,6 @@ A task without a plan gets an answer saying how to configure an LLM for free-for
 from __future__ import annotations
 
 import json
-import re
 from collections.abc import Sequence
 from typing import Any
 
@@ -37,10 +40,7 @@ from rosaos.models.conversation import (
 from rosaos.models.phrases import phrase
 from rosaos.models.plan import Plan, PlanError, decode_plan, render_result
 
-SPEAKER_DRIVER = "reachy"
-SPEAK_TOOL = "speak"
 # The worker heads each granted device's prompt section "## <instance> (<driver>)".
-_DEVICE_HEADING = re.compile(r"^## (?P<name>[\w.-]+) \((?P<driver>[\w-]+)\)\s*$", re.MULTILINE)
 NO_PLAN_REPLY = (
     "The offline engine only runs planned tasks: a ```rosaos-plan``` block, as the kernel's "
     "local-intent engine writes them. This task has none. For free-form tasks configure an LLM: "
@@ -124,23 +124,7 @@ class LocalPlanModel(Model):
             reply = plan.failure.replace("{error}", content_text(failed.content))
         else:
             reply = final_reply(plan, outcomes[len(plan.steps) - 1].content)
-        speak = self._speak_tool(texts, plan, names)
-        spoken = len(outcomes) > done + (1 if failed is not None else 0)
-        if speak is not None and not spoken:
-            return [ToolCallPart(speak, {_text_argument(definitions[speak]): reply})]
         return [TextPart(reply)]
-
-    def _speak_tool(self, texts: list[str], plan: Plan, tools: list[str]) -> str | None:
-        """The granted Reachy Mini's ``speak`` tool, unless the plan already ends by speaking."""
-        if plan.steps[-1].tool == SPEAK_TOOL:
-            return None
-        for text in texts:
-            for heading in _DEVICE_HEADING.finditer(text):
-                if heading.group("driver") == SPEAKER_DRIVER:
-                    found = resolve_tool(heading.group("name"), SPEAK_TOOL, tools)
-                    if found is not None:
-                        return found
-        return None
 
 
 def _find_plan(texts: list[str]) -> tuple[Plan | None, str | None]:
@@ -201,14 +185,3 @@ def clamp_arguments(args: dict[str, Any], tool: ToolDefinition) -> dict[str, Any
         elif high is not None and value > high:
             clamped[name] = high
     return clamped
-
-
-def _text_argument(tool: ToolDefinition) -> str:
-    """The argument of ``speak`` that takes the sentence: ``text`` or its first string argument."""
-    schema = tool.parameters_json_schema
-    properties: dict[str, Any] = schema.get("properties") or {}
-    if "text" in properties:
-        return "text"
-    strings = [name for name, prop in properties.items() if prop.get("type") == "string"]
-    required = [name for name in schema.get("required", []) if name in strings]
-    return (required or strings or ["text"])[0]
