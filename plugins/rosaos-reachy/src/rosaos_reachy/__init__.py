@@ -1,1 +1,1 @@
-"""rosaOS driver for Pollen Robotics Reachy Mini (placeholder; see ``rosaos_reachy.plugin``)."""
+"""rosaOS driver for the Pollen Robotics Reachy Mini (see ``rosaos_reachy.plugin``)."""

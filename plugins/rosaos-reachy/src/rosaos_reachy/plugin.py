@@ -1,38 +1,72 @@
-"""The ``reachy`` driver: what it declares to rosaOS. A placeholder until the driver lands.
+"""The ``reachy`` driver: what it declares to rosaOS, and how its backends are built.
 
 Registered under the ``rosaos.drivers`` entry point as ``reachy`` (see ``pyproject.toml``).
-``implemented=False`` keeps it listed but never served; the concurrency, demo instance and
-name are the real ones, so configurations written today keep working.
+The Reachy Mini is rosaOS's user interface: ``always_attached`` grants it to every process, so
+any task can speak to the user, and ``shared`` lets them all hold it at once (the driver
+serializes motion itself).
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 
 from rosaos import hookimpl
-from rosaos.drivers import DemoInstance, DriverSpec, read_packaged_text
-from rosaos_reachy.backend import sim_backend
+from rosaos.drivers import DemoInstance, DeviceContext, DeviceError, DriverSpec, read_packaged_text
+from rosaos_reachy.backend import ReachyBackend
 from rosaos_reachy.server import build_server
+from rosaos_reachy.settings import ReachySettings, SimSettings
+
+
+def _settings(ctx: DeviceContext) -> ReachySettings:
+    settings = ctx.settings
+    if not isinstance(settings, ReachySettings):  # the hosting layer validates with spec.settings
+        raise DeviceError(f"{ctx.instance}: expected ReachySettings, got {type(settings).__name__}")
+    return settings
+
+
+def real_backend(ctx: DeviceContext) -> ReachyBackend:
+    """The ``real`` backend: the daemon of a Reachy Mini Lite or Wireless at ``host``:``daemon_port``."""
+    return ReachyBackend(ctx, _settings(ctx), sim=None)
+
+
+def sim_backend(ctx: DeviceContext) -> ReachyBackend:
+    """The ``sim`` backend: starts the SDK's daemon in simulation, in the state ``ctx.sim`` gives."""
+    return ReachyBackend(ctx, _settings(ctx), sim=SimSettings.from_sim(ctx.instance, dict(ctx.sim)))
+
+
+async def stop_moving_and_talking(backend: ReachyBackend) -> None:
+    """Emergency stop: stop every motion where it is and stop speaking. Motors stay on, holding
+    the pose: a head dropping limp would be a motion too."""
+    await backend.safe_stop()
+
 
 SPEC = DriverSpec(
     name="reachy",
     title="Pollen Robotics Reachy Mini",
     description=(
-        "Not implemented yet — see the Reachy Mini driver issue. "
-        "The Reachy Mini desktop robot, rosaOS's voice terminal: speak to the user, move its head and "
-        "antennas, and look through its camera."
+        "The Reachy Mini desktop robot, the user's companion and rosaOS's voice: speak to the user, "
+        "turn its head and body, move its antennas, show emotions and dance, wake up and sleep, take "
+        "pictures, find, remember and look at faces, and describe what its camera sees."
     ),
     concurrency="shared",
     always_attached=True,  # the user interface: every process can speak to the user
     prompt=read_packaged_text(__file__, "prompt.md"),
+    settings=ReachySettings,
     server=build_server,
-    backends={"sim": sim_backend},
-    demo={"reachy": DemoInstance(description="The Reachy Mini on the desk (placeholder: not served yet)")},
-    implemented=False,
+    backends={"sim": sim_backend, "real": real_backend},
+    intents=Path(__file__).parent / "intents.yaml",
+    safe_stop=stop_moving_and_talking,
+    demo={
+        "reachy": DemoInstance(
+            description="Reachy Mini desktop robot, the user's companion on the desk",
+            sim={"awake": True, "last_spoken": ""},
+        )
+    },
 )
 
 
 @hookimpl
 def register_drivers(register: Callable[[DriverSpec], None]) -> None:
-    """Register the ``reachy`` driver (a placeholder)."""
+    """Register the ``reachy`` driver."""
     register(SPEC)

@@ -1,23 +1,55 @@
-"""The MCP server of a ``reachy`` instance. Only ``get_state`` until the driver is implemented."""
+"""The MCP server of one Reachy Mini: state, speech, and the motion and vision tools.
+
+The tools are grouped by role: :mod:`rosaos_reachy.motion_tools` (head, body, antennas,
+emotions, wake and sleep) and :mod:`rosaos_reachy.vision_tools` (camera, faces, vision model).
+This module builds the server and holds ``get_state`` and ``speak``.
+"""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Annotated
 
 from fastmcp import FastMCP
+from pydantic import Field
 
-from rosaos.drivers import DeviceBackend, DeviceContext
+from rosaos.drivers import DeviceContext
+from rosaos_reachy.annotations import ACT, READ_ONLY
+from rosaos_reachy.backend import ReachyBackend
+from rosaos_reachy.motion_tools import register_motion_tools
+from rosaos_reachy.speech import SpeechReport
+from rosaos_reachy.state import ReachyState
+from rosaos_reachy.vision_tools import register_vision_tools
 
-READ_ONLY: dict[str, Any] = {"readOnlyHint": True, "destructiveHint": False, "idempotentHint": True}
+SpokenText = Annotated[
+    str,
+    Field(min_length=1, max_length=1000, description="What to say, as plain text in the user's language."),
+]
 
 
-def build_server(ctx: DeviceContext, backend: DeviceBackend) -> FastMCP:
-    """Build the FastMCP server for one instance: ``get_state`` says the driver is a placeholder."""
+def build_server(ctx: DeviceContext, backend: ReachyBackend) -> FastMCP:
+    """Build the FastMCP server for one Reachy Mini instance on a started backend."""
     mcp = FastMCP(name=ctx.instance, instructions=f"{ctx.description} (Pollen Robotics Reachy Mini).")
 
     @mcp.tool(annotations=READ_ONLY)
-    async def get_state() -> dict[str, Any]:
-        """Read the device state. For now: only that the driver is not implemented yet."""
-        return {"implemented": False, "driver": "reachy"}
+    async def get_state() -> ReachyState:
+        """Read the robot: head pose (x, y, z mm; roll, pitch, yaw degrees), antennas [left, right]
+        degrees, body_yaw degrees, awake, last_spoken, and whether it is speaking or moving.
 
+        Angles: yaw + is left, pitch + is down, roll + tilts right; the head's yaw is measured
+        from the base, so it includes body_yaw.
+        """
+        return backend.state()
+
+    @mcp.tool(annotations=ACT)
+    async def speak(text: SpokenText) -> SpeechReport:
+        """Say ``text`` out loud to the user. Returns once the robot has started speaking, with the
+        duration; it keeps talking while you go on. A sentence said while another is still being
+        spoken follows it.
+
+        This is how to answer the user: keep it short and conversational.
+        """
+        return await backend.speaker.say(text)
+
+    register_motion_tools(mcp, backend)
+    register_vision_tools(mcp, backend)
     return mcp

@@ -1,0 +1,95 @@
+"""intents.yaml: the offline engine's sentence templates for the robot, read by core's loader."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+from hassil import recognize_all
+from hassil.intents import TextSlotList
+
+from rosaos.models.intents_file import IntentsFile, load_intents_file
+from rosaos_reachy.emotions import MoveLibrary
+from rosaos_reachy.plugin import SPEC
+from rosaos_reachy.settings import DANCES_DATASET, EMOTIONS_DATASET
+
+DEVICES = TextSlotList.from_tuples([("reachy", "reachy")])
+
+
+@pytest.fixture(scope="module")
+def intents_file() -> IntentsFile:
+    assert SPEC.intents is not None
+    return load_intents_file(SPEC.intents)
+
+
+def tool_call(intents_file: IntentsFile, sentence: str) -> tuple[str, dict[str, Any]] | None:
+    """``(tool, args)`` for a sentence, as the engine picks it: the match with the most literal text."""
+    results = list(recognize_all(sentence, intents_file.intents(), slot_lists={"device": DEVICES}))
+    if not results:
+        return None
+    result = max(results, key=lambda r: r.text_chunks_matched)
+    action = intents_file.actions[result.intent.name]
+    slots = {name: entity.value for name, entity in result.entities.items()}
+    references = action.slot_arguments()
+    return action.tool, {
+        name: slots[references[name]] if name in references else value for name, value in action.args.items()
+    }
+
+
+@pytest.mark.parametrize(
+    ("sentence", "expected"),
+    [
+        # The Reachy tasks of the bench (../shared/bench/tasks/robots.yaml).
+        ("Reachy, look to your left", ("look", {"direction": "left"})),
+        ("Say good morning to everyone", ("speak", {"text": "good morning to everyone"})),
+        # Other phrasings.
+        ("look right", ("look", {"direction": "right"})),
+        ("reachy turn your head up", ("look", {"direction": "up"})),
+        ("look down reachy", ("look", {"direction": "down"})),
+        ("look straight ahead", ("reset_head", {})),
+        ("look at me", ("look_at_face", {})),
+        ("reachy say hello there", ("speak", {"text": "hello there"})),
+        ("wake up", ("wake_up", {})),
+        ("wake up reachy", ("wake_up", {})),
+        ("go to sleep", ("sleep", {})),
+        ("reachy time to rest", ("sleep", {})),
+        ("nod", ("play_emotion", {"name": "yes"})),
+        ("shake your head no", ("play_emotion", {"name": "no"})),
+        ("be happy", ("play_emotion", {"name": "happy"})),
+        ("look sad", ("play_emotion", {"name": "sad"})),
+        ("make a surprised face", ("play_emotion", {"name": "surprised"})),
+        ("be in love", ("play_emotion", {"name": "love"})),
+        ("laugh", ("play_emotion", {"name": "laugh"})),
+        ("dance", ("dance", {})),
+        ("reachy dance for me", ("dance", {})),
+        ("do the robot dance", ("dance", {"name": "robot"})),
+        ("stop moving", ("stop_motion", {})),
+        ("reachy stop", ("stop_motion", {})),
+        ("turn your body to the left", ("rotate_body", {"degrees": 45})),
+        ("turn your body back", ("rotate_body", {"degrees": 0})),
+        ("take a photo", ("take_picture", {})),
+        ("what do you see", ("describe_image", {})),
+        ("how many people do you see", ("detect_faces", {})),
+    ],
+)
+def test_sentence_maps_to_tool_call(
+    intents_file: IntentsFile, sentence: str, expected: tuple[str, dict[str, Any]]
+) -> None:
+    assert tool_call(intents_file, sentence) == expected
+
+
+@pytest.mark.parametrize(
+    "sentence",
+    ["stop", "Tell the drone to take off", "Turn the turtlebot 90 degrees to the left", "turn on the lamp"],
+)
+def test_other_robots_and_bare_verbs_are_not_claimed(intents_file: IntentsFile, sentence: str) -> None:
+    assert tool_call(intents_file, sentence) is None
+
+
+def test_every_emotion_and_dance_in_the_lists_exists(intents_file: IntentsFile) -> None:
+    moves = MoveLibrary(EMOTIONS_DATASET, DANCES_DATASET)
+    lists = intents_file.hassil["lists"]
+    for kind, key in (("emotions", "emotion"), ("dances", "dance")):
+        for value in lists[key]["values"]:
+            name = value["out"] if isinstance(value, dict) else value
+            assert moves.resolve(kind, str(name)).spec is not None, name
