@@ -220,8 +220,9 @@ class DeviceSupervisor:
             return SafeStopOutcome(entry.name, True, str(detail))
 
         outcomes = list(await asyncio.gather(*(one(e) for e in entries)))
+        # A device that is not served has nothing running to stop: reported, not a failure.
         outcomes += [
-            SafeStopOutcome(e.name, False, f"not served ({e.status})")
+            SafeStopOutcome(e.name, True, f"not served ({e.status}): nothing to stop")
             for e in self.directory().values()
             if not e.url
         ]

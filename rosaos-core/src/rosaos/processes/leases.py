@@ -89,7 +89,7 @@ class LeaseTable:
             if holder is not None:
                 held[name] = holder
                 problems.append(
-                    f"{name} is held by process {holder.process_id} ({holder.task!r}); "
+                    f"{name} is held by process {holder.process_id} ({_headline(holder.task)!r}); "
                     f"wait for it, or terminate_process({holder.process_id})"
                 )
         if problems:
@@ -122,3 +122,9 @@ class LeaseTable:
                 if lease.device == name:
                     return lease
         return None
+
+
+def _headline(task: str, limit: int = 80) -> str:
+    """A task's first line, short: a refusal names the holder's task, not its whole plan."""
+    line = task.strip().splitlines()[0] if task.strip() else ""
+    return line if len(line) <= limit else line[: limit - 1] + "…"
