@@ -132,13 +132,51 @@ def test_list_probes_a_served_instance_at_its_url(
     assert row["health"] == "healthy"
 
 
+PLACEHOLDER_MODULE = """
+from fastmcp import FastMCP
+from rosaos import hookimpl
+from rosaos.drivers import DeviceError, DriverSpec
+
+
+def _sim(ctx):
+    raise DeviceError("someday is not implemented yet")
+
+
+SPEC = DriverSpec(
+    name="someday", title="Someday", description="A driver not written yet.", concurrency="exclusive",
+    prompt="Not yet.", server=lambda ctx, backend: FastMCP("someday"), backends={"sim": _sim},
+    implemented=False,
+)
+
+
+@hookimpl
+def register_drivers(register):
+    register(SPEC)
+"""
+
+
+@pytest.fixture
+def placeholder_driver(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> str:
+    """A placeholder driver installed the way pip would: a module plus a dist-info with its entry point."""
+    site = tmp_path / "site"
+    dist = site / "rosaos_test_placeholder-0.1.dist-info"
+    dist.mkdir(parents=True)
+    (site / "rosaos_test_placeholder.py").write_text(PLACEHOLDER_MODULE)
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: rosaos-test-placeholder\nVersion: 0.1\n")
+    (dist / "entry_points.txt").write_text("[rosaos.drivers]\nsomeday = rosaos_test_placeholder\n")
+    monkeypatch.syspath_prepend(str(site))
+    assert not load_drivers().get("someday").spec.implemented
+    return "someday"
+
+
 def test_list_table_shows_placeholders_as_not_implemented(
-    tmp_path: Path, data_dir: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+    tmp_path: Path,
+    data_dir: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    placeholder_driver: str,
 ) -> None:
-    placeholders = [n for n, info in load_drivers().drivers.items() if not info.spec.implemented]
-    if not placeholders:
-        pytest.skip("no placeholder driver installed")
-    body = KITCHEN + f'\n[devices.someday]\ndriver = "{placeholders[0]}"\n'
+    body = KITCHEN + f'\n[devices.someday]\ndriver = "{placeholder_driver}"\n'
     monkeypatch.setenv("COLUMNS", "200")
     assert list_devices(write_config(tmp_path / "rosaos.toml", data_dir, body), check=True) == 0
     out = capsys.readouterr().out
@@ -199,13 +237,10 @@ def test_check_of_an_unknown_name_lists_the_known_ones(
 
 
 def test_check_of_a_placeholder_says_not_implemented(
-    tmp_path: Path, data_dir: Path, capsys: pytest.CaptureFixture[str]
+    tmp_path: Path, data_dir: Path, capsys: pytest.CaptureFixture[str], placeholder_driver: str
 ) -> None:
-    placeholders = [n for n, info in load_drivers().drivers.items() if not info.spec.implemented]
-    if not placeholders:
-        pytest.skip("no placeholder driver installed")
     config = write_config(
-        tmp_path / "rosaos.toml", data_dir, f'[devices.bot]\ndriver = "{placeholders[0]}"\n'
+        tmp_path / "rosaos.toml", data_dir, f'[devices.bot]\ndriver = "{placeholder_driver}"\n'
     )
     assert check_device("bot", config) == 1
     assert "is not implemented yet" in capsys.readouterr().err
