@@ -7,13 +7,15 @@ The worker subprocess and its pipe protocol are exercised by the pool tests; her
 from __future__ import annotations
 
 import json
+from typing import Any
 
 import pytest
-from processes_support import KernelStandIn, LoopbackDevice, make_job, model_spec
+from processes_support import TOKEN, KernelStandIn, LoopbackDevice, build_test_device, make_job, model_spec
 
+from rosaos.devices.serve import serve_http
 from rosaos.models.select import ModelSpec
 from rosaos.processes.jobs import WorkerCallback
-from rosaos.processes.worker import deliver_callback, run_job
+from rosaos.processes.worker import SESSIONS, deliver_callback, run_job
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 
@@ -135,3 +137,25 @@ async def test_callback_with_a_wrong_token_is_not_delivered(kernel: KernelStandI
     job = make_job(kernel, "unused").model_copy(update={"callback_token": "wrong"})
     assert not await deliver_callback(job, WorkerCallback(worker_id=job.process_id, status="ok"))
     assert kernel.callbacks_for(job.process_id) == []
+
+
+async def test_a_warm_worker_keeps_its_device_session_for_the_next_job(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    lamp = devices["lamp"]
+    assert (await run_job(make_job(kernel, "sets_level", [lamp]))).status == "ok"
+    first = SESSIONS._open[(lamp.url, TOKEN)]
+    assert (await run_job(make_job(kernel, "sets_level", [lamp]))).status == "ok"
+    assert SESSIONS._open[(lamp.url, TOKEN)] is first
+
+
+async def test_a_device_restarted_at_the_same_url_gets_a_fresh_session(kernel: KernelStandIn) -> None:
+    state: dict[str, Any] = {"level": 0}
+    async with serve_http(build_test_device("heater", state), TOKEN) as served:
+        heater = LoopbackDevice("heater", served.url, state)
+        port = int(served.url.rsplit(":", 1)[1].split("/")[0])
+        assert (await run_job(make_job(kernel, "sets_level", [heater]))).status == "ok"
+    state["level"] = 0
+    async with serve_http(build_test_device("heater", state), TOKEN, port=port):
+        callback = await run_job(make_job(kernel, "sets_level", [heater]))
+    assert (callback.status, state["level"]) == ("ok", 42)
