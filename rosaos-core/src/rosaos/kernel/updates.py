@@ -127,27 +127,7 @@ class UpdateStream:
         event_id: int | None = None,
     ) -> int:
         """Persist one update, hand it to every follower without waiting, and return its id."""
-        at = time.time()
-        encoded = json.dumps(data or {}, default=str)
-
-        def insert(connection: sqlite3.Connection) -> int:
-            rows = connection.execute(
-                "INSERT INTO updates (time, kind, text, data, event_id) VALUES (?, ?, ?, ?, ?) RETURNING id",
-                (at, kind, text, encoded, event_id),
-            ).fetchall()
-            return int(rows[0][0])
-
-        update_id = await self._database.run(insert)
-        update = Update(
-            id=update_id,
-            time=datetime.fromtimestamp(at, UTC),
-            kind=kind,
-            text=text,
-            data=json.loads(encoded),
-            event_id=event_id,
-        )
-        for follower in list(self._followers):
-            follower.offer(update)
+        [update_id] = await self._publish([(kind, text, data)], event_id, mark_handled=False)
         return update_id
 
     async def publish_and_mark_handled(
@@ -158,6 +138,14 @@ class UpdateStream:
         A kernel killed at any point therefore shows an event's outputs exactly once: either
         none of them (the event is redelivered) or all of them (it is not).
         """
+        return await self._publish(items, event_id, mark_handled=True)
+
+    async def _publish(
+        self,
+        items: Sequence[tuple[UpdateKind, str, dict[str, Any] | None]],
+        event_id: int | None,
+        mark_handled: bool,
+    ) -> list[int]:
         at = time.time()
         encoded = [(kind, text, json.dumps(data or {}, default=str)) for kind, text, data in items]
 
@@ -171,7 +159,8 @@ class UpdateStream:
                 )
                 for kind, text, data in encoded
             ]
-            mark_handled_in(connection, event_id)
+            if mark_handled and event_id is not None:
+                mark_handled_in(connection, event_id)
             return ids
 
         ids = await self._database.run(commit)
