@@ -161,6 +161,15 @@ ModelOption = Annotated[
         "or 'openai-compatible' with --base-url and --model-name.",
     ),
 ]
+ProcessModelOption = Annotated[
+    str | None, typer.Option(help="Model for process agents (default: the kernel's).")
+]
+BaseUrlOption = Annotated[
+    str | None, typer.Option(help="OpenAI-compatible endpoint, e.g. http://127.0.0.1:11434/v1.")
+]
+ModelNameOption = Annotated[
+    str | None, typer.Option(help="Model name at the OpenAI-compatible endpoint, e.g. qwen3:8b.")
+]
 UrlOption = Annotated[
     str | None,
     typer.Option(
@@ -174,15 +183,9 @@ UrlOption = Annotated[
 def up(
     config: ConfigOption = None,
     model: ModelOption = None,
-    process_model: Annotated[
-        str | None, typer.Option(help="Model for process agents (default: the kernel's).")
-    ] = None,
-    base_url: Annotated[
-        str | None, typer.Option(help="OpenAI-compatible endpoint, e.g. http://127.0.0.1:11434/v1.")
-    ] = None,
-    model_name: Annotated[
-        str | None, typer.Option(help="Model name at the OpenAI-compatible endpoint, e.g. qwen3:8b.")
-    ] = None,
+    process_model: ProcessModelOption = None,
+    base_url: BaseUrlOption = None,
+    model_name: ModelNameOption = None,
     host: Annotated[
         str | None, typer.Option(help="Address for the API and web page (default 127.0.0.1).")
     ] = None,
@@ -324,15 +327,9 @@ def bench(
         ),
     ] = None,
     model: ModelOption = None,
-    process_model: Annotated[
-        str | None, typer.Option(help="Model for process agents (default: the kernel's).")
-    ] = None,
-    base_url: Annotated[
-        str | None, typer.Option(help="OpenAI-compatible endpoint, e.g. http://127.0.0.1:11434/v1.")
-    ] = None,
-    model_name: Annotated[
-        str | None, typer.Option(help="Model name at the OpenAI-compatible endpoint, e.g. qwen3:8b.")
-    ] = None,
+    process_model: ProcessModelOption = None,
+    base_url: BaseUrlOption = None,
+    model_name: ModelNameOption = None,
     repeat: Annotated[
         int, typer.Option(help="Run each task N times and report pass^k for k = 1..N.", min=1, max=100)
     ] = 1,
