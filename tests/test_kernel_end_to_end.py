@@ -11,23 +11,19 @@ import asyncio
 import os
 import shutil
 import signal
-import time
-from collections.abc import AsyncIterator, Awaitable, Callable
+from collections.abc import AsyncIterator
 from pathlib import Path
 from typing import Any
 
 import httpx
 import pytest
 import pytest_asyncio
+from kernel_support import device_state, eventually, kernel_api, running_kernel
 from playwright.async_api import async_playwright
 
-from rosaos.config import load_config
-from rosaos.devices.client import DeviceClient
-from rosaos.devices.world import build_world
 from rosaos.kernel.runtime import Kernel, KernelError, _bind_or_explain
 from rosaos.kernel.tools import KERNEL_TOOL_NAMES
 from rosaos.models.select import ModelSpec
-from rosaos.plugins import load_drivers
 
 HERE = Path(__file__).parent
 pytestmark = pytest.mark.asyncio(loop_scope="module")
@@ -45,48 +41,24 @@ sim = { on = true, brightness = 60 }
 """
 
 
-async def eventually(check: Callable[[], Awaitable[Any]], timeout: float = 30.0) -> Any:
-    """Poll ``check`` until it returns something truthy; fail with the last value after ``timeout``."""
-    deadline = time.monotonic() + timeout
-    value = None
-    while time.monotonic() < deadline:
-        value = await check()
-        if value:
-            return value
-        await asyncio.sleep(0.05)
-    raise AssertionError(f"condition not met within {timeout} s (last value: {value!r})")
-
-
 @pytest_asyncio.fixture(scope="module", loop_scope="module")
 async def kernel(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Kernel]:
-    home = tmp_path_factory.mktemp("kernel")
-    (home / "rosaos.toml").write_text(f'data_dir = "{home / "data"}"\n' + WORLD)
-    config = load_config(home / "rosaos.toml")
     from kernel_scripts import kernel_model
 
-    kernel = Kernel(
-        config,
-        build_world(config, load_drivers()),
+    async with running_kernel(
+        tmp_path_factory.mktemp("kernel"),
+        WORLD,
         kernel_model=kernel_model(),
         process_model=ModelSpec(model="python:kernel_scripts:worker_model"),
         worker_env={"PYTHONPATH": str(HERE)},
-    )
-    await kernel.start(port=0)
-    yield kernel
-    await kernel.stop()
+    ) as kernel:
+        yield kernel
 
 
 @pytest_asyncio.fixture(loop_scope="module")
 async def api(kernel: Kernel) -> AsyncIterator[httpx.AsyncClient]:
-    headers = {"Authorization": f"Bearer {kernel.token}"}
-    async with httpx.AsyncClient(base_url=kernel.url, headers=headers, timeout=10) as client:
+    async with kernel_api(kernel) as client:
         yield client
-
-
-async def device_state(kernel: Kernel, name: str) -> dict[str, Any]:
-    endpoint = kernel.endpoints()[name]
-    assert endpoint.url is not None
-    return await DeviceClient(endpoint.url, endpoint.token, 5, name).get_state()
 
 
 async def updates_for(api: httpx.AsyncClient, after: int = 0) -> list[dict[str, Any]]:

@@ -16,8 +16,7 @@ import os
 import shutil
 import subprocess
 import sys
-import time
-from collections.abc import AsyncIterator, Awaitable, Callable
+from collections.abc import AsyncIterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -25,10 +24,8 @@ from typing import Any
 import httpx
 import pytest
 import pytest_asyncio
+from kernel_support import device_state, eventually, kernel_api, running_kernel
 
-from rosaos.config import load_config
-from rosaos.devices.client import DeviceClient
-from rosaos.devices.world import build_world
 from rosaos.kernel.runtime import Kernel
 from rosaos.plugins import load_drivers
 
@@ -56,17 +53,6 @@ def reachy_implemented() -> bool:
         return False
 
 
-async def eventually(check: Callable[[], Awaitable[Any]], timeout: float = 60.0) -> Any:
-    deadline = time.monotonic() + timeout
-    value = None
-    while time.monotonic() < deadline:
-        value = await check()
-        if value:
-            return value
-        await asyncio.sleep(0.1)
-    raise AssertionError(f"condition not met within {timeout} s (last value: {value!r})")
-
-
 @pytest.fixture(scope="module")
 def spoken_wav(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """The issue's sentence, as espeak-ng's default voice says it (22.05 kHz; rosaos voice converts)."""
@@ -77,27 +63,16 @@ def spoken_wav(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 @pytest_asyncio.fixture(scope="module", loop_scope="module")
 async def kernel(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Kernel]:
-    home = tmp_path_factory.mktemp("voice-kernel")
     world = WORLD + (REACHY if reachy_implemented() else "")
-    (home / "rosaos.toml").write_text(f'data_dir = "{home / "data"}"\n' + world)
-    config = load_config(home / "rosaos.toml")
-    kernel = Kernel(config, build_world(config, load_drivers()))  # no model: the local-intent engine
-    await kernel.start(port=0)
-    yield kernel
-    await kernel.stop()
+    # No model: the local-intent engine, as `rosaos up` with no key.
+    async with running_kernel(tmp_path_factory.mktemp("voice-kernel"), world) as kernel:
+        yield kernel
 
 
 @pytest_asyncio.fixture(loop_scope="module")
 async def api(kernel: Kernel) -> AsyncIterator[httpx.AsyncClient]:
-    headers = {"Authorization": f"Bearer {kernel.token}"}
-    async with httpx.AsyncClient(base_url=kernel.url, headers=headers, timeout=10) as client:
+    async with kernel_api(kernel) as client:
         yield client
-
-
-async def device_state(kernel: Kernel, name: str) -> dict[str, Any]:
-    endpoint = kernel.endpoints()[name]
-    assert endpoint.url is not None
-    return await DeviceClient(endpoint.url, endpoint.token, 10, name).get_state()
 
 
 async def rosaos_voice(kernel: Kernel, wav: Path) -> tuple[int, list[dict[str, Any]], str]:
@@ -165,9 +140,9 @@ async def test_spoken_hello_turns_on_the_kitchen_light(
             u for u in page["updates"] if u["event_id"] == event["id"] and u["kind"] == "process_launched"
         ]
 
-    await eventually(launched)
+    await eventually(launched, timeout=60)
     # ... and the Tapo simulator turned on ...
-    await eventually(lambda: _is_on(kernel))
+    await eventually(lambda: _is_on(kernel), timeout=60)
     # ... and rosaos voice waited for the kernel's answer before it exited.
     replies = [h["text"] for h in voice_run.heard if h["kind"] == "reply"]
     assert replies and "kitchen light" in replies[-1].lower()
@@ -179,7 +154,7 @@ async def test_spoken_hello_turns_on_the_kitchen_light(
 async def test_reachy_speaks_the_confirmation(kernel: Kernel, voice_run: VoiceRun) -> None:
     """The last step of the issue's scenario: the process confirms through Reachy's speak tool."""
     assert voice_run.code == 0, voice_run.stderr
-    spoken = await eventually(lambda: _spoken_since(kernel, voice_run.spoken_before))
+    spoken = await eventually(lambda: _spoken_since(kernel, voice_run.spoken_before), timeout=60)
     assert "kitchen light" in spoken.lower()
     said = [h for h in voice_run.heard if h["kind"] == "reply" and h["spoken"]]
     assert [h["text"] for h in said][-1] == spoken

@@ -1,0 +1,58 @@
+"""Helpers the cross-package kernel tests share: a kernel on loopback, its API, polling, device state."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import time
+from collections.abc import AsyncIterator, Awaitable, Callable
+from pathlib import Path
+from typing import Any
+
+import httpx
+
+from rosaos.config import load_config
+from rosaos.devices.client import DeviceClient
+from rosaos.devices.world import build_world
+from rosaos.kernel.runtime import Kernel
+from rosaos.plugins import load_drivers
+
+
+async def eventually(check: Callable[[], Awaitable[Any]], timeout: float = 30.0) -> Any:
+    """Poll ``check`` until it returns something truthy; fail with the last value after ``timeout``."""
+    deadline = time.monotonic() + timeout
+    value = None
+    while time.monotonic() < deadline:
+        value = await check()
+        if value:
+            return value
+        await asyncio.sleep(0.05)
+    raise AssertionError(f"condition not met within {timeout} s (last value: {value!r})")
+
+
+@contextlib.asynccontextmanager
+async def running_kernel(home: Path, world: str, **options: Any) -> AsyncIterator[Kernel]:
+    """A kernel on 127.0.0.1:0 whose rosaos.toml is ``world`` with its data in ``home/data``."""
+    (home / "rosaos.toml").write_text(f'data_dir = "{home / "data"}"\n' + world)
+    config = load_config(home / "rosaos.toml")
+    kernel = Kernel(config, build_world(config, load_drivers()), **options)
+    await kernel.start(port=0)
+    try:
+        yield kernel
+    finally:
+        await kernel.stop()
+
+
+@contextlib.asynccontextmanager
+async def kernel_api(kernel: Kernel) -> AsyncIterator[httpx.AsyncClient]:
+    """An HTTP client for the kernel's API, with its token."""
+    headers = {"Authorization": f"Bearer {kernel.token}"}
+    async with httpx.AsyncClient(base_url=kernel.url, headers=headers, timeout=10) as client:
+        yield client
+
+
+async def device_state(kernel: Kernel, name: str) -> dict[str, Any]:
+    """``get_state`` of one of the kernel's devices, over MCP HTTP."""
+    endpoint = kernel.endpoints()[name]
+    assert endpoint.url is not None
+    return await DeviceClient(endpoint.url, endpoint.token, 10, name).get_state()
