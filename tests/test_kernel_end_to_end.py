@@ -18,7 +18,7 @@ from typing import Any
 import httpx
 import pytest
 import pytest_asyncio
-from kernel_support import device_state, eventually, kernel_api, running_kernel
+from e2e_support import device_state, eventually, kernel_api, running_kernel
 from playwright.async_api import async_playwright
 
 from rosaos.kernel.runtime import Kernel, KernelError, _bind_or_explain

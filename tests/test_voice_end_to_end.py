@@ -24,7 +24,7 @@ from typing import Any
 import httpx
 import pytest
 import pytest_asyncio
-from kernel_support import device_state, eventually, kernel_api, running_kernel
+from e2e_support import device_state, eventually, kernel_api, running_kernel
 
 from rosaos.kernel.runtime import Kernel
 from rosaos.plugins import load_drivers
