@@ -28,6 +28,7 @@ PACKAGE_FILES = [
     "src/rosaos_acme_plug/prompt.md",
     "src/rosaos_acme_plug/intents.yaml",
     "tests/test_conformance.py",
+    "tests/test_intents.py",
 ]
 
 
@@ -108,8 +109,9 @@ def test_the_rendered_tests_pass_in_a_fresh_venv(venv: Path, rendered: Path, tmp
         XDG_DATA_HOME=str(tmp_path / "data"),
     )
     summary = result.stdout.strip().splitlines()[-1]
-    # 18 kit checks plus the behaviour test; nothing skipped: the template covers every check.
-    assert summary.startswith("19 passed"), result.stdout
+    # 18 kit checks, the behaviour test and 4 intents tests; nothing skipped: the template covers
+    # every check.
+    assert summary.startswith("23 passed"), result.stdout
 
 
 def test_the_driver_is_in_the_demo_world_of_the_fresh_venv(venv: Path, tmp_path: Path) -> None:

@@ -5,35 +5,23 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from hassil import recognize_all
-from hassil.intents import TextSlotList
 
-from rosaos.models.intents_file import IntentsFile, load_intents_file
+from rosaos.models.intents_file import IntentsFile
+from rosaos.testing import IntentProbe
 from rosaos_reachy.emotions import MoveLibrary
 from rosaos_reachy.plugin import SPEC
 from rosaos_reachy.settings import DANCES_DATASET, EMOTIONS_DATASET
 
-DEVICES = TextSlotList.from_tuples([("reachy", "reachy")])
+
+@pytest.fixture(scope="module")
+def probe() -> IntentProbe:
+    """The templates, with the one robot in the {device} list."""
+    return IntentProbe(SPEC, devices={"reachy": "reachy"})
 
 
 @pytest.fixture(scope="module")
-def intents_file() -> IntentsFile:
-    assert SPEC.intents is not None
-    return load_intents_file(SPEC.intents)
-
-
-def tool_call(intents_file: IntentsFile, sentence: str) -> tuple[str, dict[str, Any]] | None:
-    """``(tool, args)`` for a sentence, as the engine picks it: the match with the most literal text."""
-    results = list(recognize_all(sentence, intents_file.intents(), slot_lists={"device": DEVICES}))
-    if not results:
-        return None
-    result = max(results, key=lambda r: r.text_chunks_matched)
-    action = intents_file.actions[result.intent.name]
-    slots = {name: entity.value for name, entity in result.entities.items()}
-    references = action.slot_arguments()
-    return action.tool, {
-        name: slots[references[name]] if name in references else value for name, value in action.args.items()
-    }
+def intents_file(probe: IntentProbe) -> IntentsFile:
+    return probe.intents_file
 
 
 @pytest.mark.parametrize(
@@ -73,17 +61,17 @@ def tool_call(intents_file: IntentsFile, sentence: str) -> tuple[str, dict[str, 
     ],
 )
 def test_sentence_maps_to_tool_call(
-    intents_file: IntentsFile, sentence: str, expected: tuple[str, dict[str, Any]]
+    probe: IntentProbe, sentence: str, expected: tuple[str, dict[str, Any]]
 ) -> None:
-    assert tool_call(intents_file, sentence) == expected
+    assert probe.match(sentence) == ("reachy", *expected)
 
 
 @pytest.mark.parametrize(
     "sentence",
     ["stop", "Tell the drone to take off", "Turn the turtlebot 90 degrees to the left", "turn on the lamp"],
 )
-def test_other_robots_and_bare_verbs_are_not_claimed(intents_file: IntentsFile, sentence: str) -> None:
-    assert tool_call(intents_file, sentence) is None
+def test_other_robots_and_bare_verbs_are_not_claimed(probe: IntentProbe, sentence: str) -> None:
+    assert probe.match(sentence) is None
 
 
 def test_every_emotion_and_dance_in_the_lists_exists(intents_file: IntentsFile) -> None:

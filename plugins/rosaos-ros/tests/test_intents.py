@@ -7,34 +7,23 @@ from typing import Any
 
 import pytest
 import yaml
-from hassil import recognize
-from hassil.intents import TextSlotList
 
-from rosaos.models.intents_file import IntentsFile, load_intents_file
+from rosaos.models.intents_file import IntentsFile
+from rosaos.testing import IntentProbe
 from rosaos_ros.plugin import SPEC
 
-DEVICES = TextSlotList.from_tuples([("turtlebot", "turtlebot"), ("dog", "dog"), ("robot dog", "dog")])
 BENCH = Path(__file__).resolve().parents[4] / "shared" / "bench" / "tasks"
 
 
 @pytest.fixture(scope="module")
-def intents_file() -> IntentsFile:
-    assert SPEC.intents is not None
-    return load_intents_file(SPEC.intents)
+def probe() -> IntentProbe:
+    """The templates, with a turtlebot and a dog in the {device} list."""
+    return IntentProbe(SPEC, devices={"turtlebot": "turtlebot", "dog": "dog", "robot dog": "dog"})
 
 
-def tool_call(intents_file: IntentsFile, sentence: str) -> tuple[str, str, dict[str, Any]] | None:
-    """``(device, tool, args)`` for a sentence, filling ``"{slot}"`` args as the engine does."""
-    result = recognize(sentence, intents_file.intents(), slot_lists={"device": DEVICES})
-    if result is None:
-        return None
-    action = intents_file.actions[result.intent.name]
-    slots = {name: entity.value for name, entity in result.entities.items()}
-    references = action.slot_arguments()
-    args = {
-        name: slots[references[name]] if name in references else value for name, value in action.args.items()
-    }
-    return slots["device"], action.tool, args
+@pytest.fixture(scope="module")
+def intents_file(probe: IntentProbe) -> IntentsFile:
+    return probe.intents_file
 
 
 @pytest.mark.parametrize(
@@ -66,23 +55,23 @@ def tool_call(intents_file: IntentsFile, sentence: str) -> tuple[str, str, dict[
     ],
 )
 def test_sentence_maps_to_tool_call(
-    intents_file: IntentsFile, sentence: str, expected: tuple[str, str, dict[str, Any]]
+    probe: IntentProbe, sentence: str, expected: tuple[str, str, dict[str, Any]]
 ) -> None:
-    assert tool_call(intents_file, sentence) == expected
+    assert probe.match(sentence) == expected
 
 
 @pytest.mark.parametrize(
     "sentence",
     ["Tell the drone to take off", "Drive the car forward one meter", "Stop the music", "Turn off the lamp"],
 )
-def test_other_devices_and_requests_do_not_match(intents_file: IntentsFile, sentence: str) -> None:
-    assert tool_call(intents_file, sentence) is None
+def test_other_devices_and_requests_do_not_match(probe: IntentProbe, sentence: str) -> None:
+    assert probe.match(sentence) is None
 
 
-def test_left_and_right_number_words_keep_their_signs_in_any_order(intents_file: IntentsFile) -> None:
+def test_left_and_right_number_words_keep_their_signs_in_any_order(probe: IntentProbe) -> None:
     # hassil caches number words per range and ignores the multiplier: the lists must not share ranges.
-    right = tool_call(intents_file, "turn the turtlebot thirty degrees to the right")
-    left = tool_call(intents_file, "turn the turtlebot thirty degrees to the left")
+    right = probe.match("turn the turtlebot thirty degrees to the right")
+    left = probe.match("turn the turtlebot thirty degrees to the left")
     assert (right, left) == (
         ("turtlebot", "rotate", {"degrees": -30.0}),
         ("turtlebot", "rotate", {"degrees": 30}),
@@ -98,7 +87,7 @@ def test_signed_lists_do_not_share_a_range_with_positive_ones(intents_file: Inte
 
 
 @pytest.mark.skipif(not BENCH.is_dir(), reason="the public bench tasks are not next to this checkout")
-def test_every_robot_command_of_the_bench_matches_except_the_unknown_robot(intents_file: IntentsFile) -> None:
+def test_every_robot_command_of_the_bench_matches_except_the_unknown_robot(probe: IntentProbe) -> None:
     sentences = [
         task["say"]
         for name in ("robots.yaml", "multi.yaml")
@@ -107,5 +96,5 @@ def test_every_robot_command_of_the_bench_matches_except_the_unknown_robot(inten
     ]
     clauses = [clause.strip() for sentence in sentences for clause in sentence.split(" and ")]
     robot_clauses = [c for c in clauses if "turtlebot" in c.lower() or "dog" in c.lower()]
-    assert all(tool_call(intents_file, clause) for clause in robot_clauses), robot_clauses
-    assert tool_call(intents_file, "Tell the drone to take off") is None
+    assert all(probe.match(clause) for clause in robot_clauses), robot_clauses
+    assert probe.match("Tell the drone to take off") is None

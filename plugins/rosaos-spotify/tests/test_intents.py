@@ -5,39 +5,25 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from hassil import recognize_all
-from hassil.intents import TextSlotList
 
-from rosaos.models.intents_file import IntentsFile, load_intents_file
+from rosaos.models.intents_file import IntentsFile
+from rosaos.testing import IntentProbe
 from rosaos_spotify.catalog import KNOWN_GENRES
 from rosaos_spotify.plugin import SPEC
 
-# The {device} list as the engine fills it for the demo instance: its name, and "music" read
-# off the description "Music on the living room speaker".
-DEVICES = TextSlotList.from_tuples([("spotify", "spotify"), ("music", "spotify")])
+
+@pytest.fixture(scope="module")
+def probe() -> IntentProbe:
+    """The templates, with the {device} list the engine fills for the demo instance.
+
+    Its name, and "music" read off the description "Music on the living room speaker".
+    """
+    return IntentProbe(SPEC, devices={"spotify": "spotify", "music": "spotify"})
 
 
 @pytest.fixture(scope="module")
-def intents_file() -> IntentsFile:
-    assert SPEC.intents is not None
-    return load_intents_file(SPEC.intents)
-
-
-def tool_call(intents_file: IntentsFile, sentence: str) -> tuple[str, dict[str, Any]] | None:
-    """``(tool, args)`` for a sentence, as the engine picks it: the match with the most literal text."""
-    results = list(recognize_all(sentence, intents_file.intents(), slot_lists={"device": DEVICES}))
-    if not results:
-        return None
-    result = max(results, key=lambda r: r.text_chunks_matched)
-    action = intents_file.actions[result.intent.name]
-    slots = {name: entity.value for name, entity in result.entities.items()}
-    references = action.slot_arguments()
-    args = {
-        name: slots[references[name]] if name in references else value for name, value in action.args.items()
-    }
-    # hassil reads "20 percent" as 20.0; the engine passes whole numbers as int.
-    args = {k: int(v) if isinstance(v, float) and v.is_integer() else v for k, v in args.items()}
-    return action.tool, args
+def intents_file(probe: IntentProbe) -> IntentsFile:
+    return probe.intents_file
 
 
 @pytest.mark.parametrize(
@@ -77,15 +63,15 @@ def tool_call(intents_file: IntentsFile, sentence: str) -> tuple[str, dict[str, 
     ],
 )
 def test_sentence_maps_to_tool_call(
-    intents_file: IntentsFile, sentence: str, expected: tuple[str, dict[str, Any]]
+    probe: IntentProbe, sentence: str, expected: tuple[str, dict[str, Any]]
 ) -> None:
-    assert tool_call(intents_file, sentence) == expected
+    assert probe.match(sentence) == ("spotify", *expected)
 
 
 @pytest.mark.parametrize("sentence", ["Turn on the kitchen light", "Is the music on?", "stop"])
-def test_other_devices_questions_and_bare_stop_do_not_match(intents_file: IntentsFile, sentence: str) -> None:
+def test_other_devices_questions_and_bare_stop_do_not_match(probe: IntentProbe, sentence: str) -> None:
     # "stop" alone may be meant for a robot: the player must not claim it.
-    assert tool_call(intents_file, sentence) is None
+    assert probe.match(sentence) is None
 
 
 def test_genre_list_holds_exactly_the_known_genres(intents_file: IntentsFile) -> None:

@@ -5,43 +5,31 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from hassil import recognize
-from hassil.intents import TextSlotList
 
-from rosaos.models.intents_file import IntentsFile, load_intents_file
+from rosaos.models.intents_file import IntentsFile
 from rosaos.models.matching import IntentMatcher
 from rosaos.models.sources import DeviceIntentSource
+from rosaos.testing import IntentProbe
 from rosaos_tapo.colors import NAMED_COLORS
 from rosaos_tapo.plugin import SPEC
 
-# Instance names as the engine would fill the {device} list: spoken form in, instance out.
-DEVICES = TextSlotList.from_tuples(
-    [
-        ("kitchen light", "kitchen_light"),
-        ("living room lamp", "living_room_lamp"),
-        ("bedroom light", "bedroom_light"),
-    ]
-)
+
+@pytest.fixture(scope="module")
+def probe() -> IntentProbe:
+    """The templates, with three bulbs in the {device} list."""
+    return IntentProbe(
+        SPEC,
+        devices={
+            "kitchen light": "kitchen_light",
+            "living room lamp": "living_room_lamp",
+            "bedroom light": "bedroom_light",
+        },
+    )
 
 
 @pytest.fixture(scope="module")
-def intents_file() -> IntentsFile:
-    assert SPEC.intents is not None
-    return load_intents_file(SPEC.intents)
-
-
-def tool_call(intents_file: IntentsFile, sentence: str) -> tuple[str, str, dict[str, Any]] | None:
-    """``(device, tool, args)`` for a sentence, filling ``"{slot}"`` args as the engine does."""
-    result = recognize(sentence, intents_file.intents(), slot_lists={"device": DEVICES})
-    if result is None:
-        return None
-    action = intents_file.actions[result.intent.name]
-    slots = {name: entity.value for name, entity in result.entities.items()}
-    args = {
-        name: slots[action.slot_arguments()[name]] if name in action.slot_arguments() else value
-        for name, value in action.args.items()
-    }
-    return slots["device"], action.tool, args
+def intents_file(probe: IntentProbe) -> IntentsFile:
+    return probe.intents_file
 
 
 @pytest.mark.parametrize(
@@ -70,19 +58,17 @@ def tool_call(intents_file: IntentsFile, sentence: str) -> tuple[str, str, dict[
     ],
 )
 def test_sentence_maps_to_tool_call(
-    intents_file: IntentsFile, sentence: str, expected: tuple[str, str, dict[str, Any]]
+    probe: IntentProbe, sentence: str, expected: tuple[str, str, dict[str, Any]]
 ) -> None:
-    assert tool_call(intents_file, sentence) == expected
+    assert probe.match(sentence) == expected
 
 
 @pytest.mark.parametrize(
     "sentence", ["Turn off the light", "Turn on the garage light", "Is the kitchen light on?"]
 )
-def test_ambiguous_unknown_or_question_sentences_do_not_match(
-    intents_file: IntentsFile, sentence: str
-) -> None:
+def test_ambiguous_unknown_or_question_sentences_do_not_match(probe: IntentProbe, sentence: str) -> None:
     # bench: these must change nothing, so the offline engine must not act on them.
-    assert tool_call(intents_file, sentence) is None
+    assert probe.match(sentence) is None
 
 
 def test_color_list_holds_exactly_the_named_colours(intents_file: IntentsFile) -> None:

@@ -7,7 +7,9 @@ Install ``rosaos[testing]`` and write one class in your driver's tests::
     class TestMyDriver(DriverConformance):
         driver = "my_driver"
 
-:class:`RunningDevice` and :func:`run_device` serve an instance over HTTP for your own tests.
+For your own tests: :class:`RunningDevice` and :func:`run_device` serve an instance over HTTP;
+:func:`open_sim_device` drives your server in memory on the ``sim`` backend (a :class:`SimDevice`);
+:class:`IntentProbe` checks which tool call your ``intents.yaml`` makes of a sentence.
 """
 
 from __future__ import annotations
@@ -18,16 +20,32 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from rosaos.testing.conformance import DriverConformance
     from rosaos.testing.device_runner import RunningDevice, build_instance, load_all_drivers, run_device
+    from rosaos.testing.intents import IntentMatch, IntentProbe
+    from rosaos.testing.sim_device import SimDevice, open_sim_device
 
-__all__ = ["DriverConformance", "RunningDevice", "build_instance", "load_all_drivers", "run_device"]
+__all__ = [
+    "DriverConformance",
+    "IntentMatch",
+    "IntentProbe",
+    "RunningDevice",
+    "SimDevice",
+    "build_instance",
+    "load_all_drivers",
+    "open_sim_device",
+    "run_device",
+]
 
 # Imported on first use: pytest loads this package (the pytest11 plugin lives in it) in every
 # session of an environment that has rosaos[testing], and fastmcp takes seconds to import.
 _HOMES = {
     "DriverConformance": "rosaos.testing.conformance",
+    "IntentMatch": "rosaos.testing.intents",
+    "IntentProbe": "rosaos.testing.intents",
     "RunningDevice": "rosaos.testing.device_runner",
+    "SimDevice": "rosaos.testing.sim_device",
     "build_instance": "rosaos.testing.device_runner",
     "load_all_drivers": "rosaos.testing.device_runner",
+    "open_sim_device": "rosaos.testing.sim_device",
     "run_device": "rosaos.testing.device_runner",
 }
 

@@ -18,11 +18,12 @@ from types import ModuleType
 from typing import Any
 
 from fastmcp import Client
-from pydantic import ValidationError
+from pydantic import BaseModel, ValidationError
 
 from rosaos.config import format_validation_error
 from rosaos.devices.serve import open_device, serve_http
 from rosaos.devices.world import DeviceInstance
+from rosaos.drivers import DriverSpec
 from rosaos.hookspecs import ENTRY_POINT_GROUP
 from rosaos.plugins import DriverInfo, DriverRegistry, load_drivers
 
@@ -64,18 +65,25 @@ def build_instance(
     Raises ``ValueError`` naming the bad setting when ``settings`` does not fit the driver's model.
     """
     spec = info.spec
-    try:
-        validated = spec.settings.model_validate(dict(settings or {}))
-    except ValidationError as error:
-        raise ValueError(format_validation_error("settings", error, prefix=f"devices.{name}")) from None
     return DeviceInstance(
         name=name,
         driver=info,
         backend="sim",
         description=description or spec.description,
-        settings=validated,
+        settings=validate_settings(spec, name, settings),
         sim=dict(sim or {}),
     )
+
+
+def validate_settings(spec: DriverSpec, name: str, settings: Mapping[str, Any] | None) -> BaseModel:
+    """``settings`` validated by ``spec.settings``, like ``[devices.NAME]`` in ``rosaos.toml``.
+
+    Raises ``ValueError`` naming the bad setting.
+    """
+    try:
+        return spec.settings.model_validate(dict(settings or {}))
+    except ValidationError as error:
+        raise ValueError(format_validation_error("settings", error, prefix=f"devices.{name}")) from None
 
 
 @contextlib.contextmanager
