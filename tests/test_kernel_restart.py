@@ -1,7 +1,9 @@
-"""A kernel killed with SIGKILL loses nothing: on restart it handles every queued event exactly once.
+"""A kernel killed with SIGKILL loses nothing: on restart it handles every queued event exactly
+once, and an emergency stop latched before the kill is still latched.
 
-Runs the real ``rosaos up`` command twice on one data directory, with a scripted kernel model
-(``slow SECONDS``: sleep, then answer) so events pile up in the queue before the kill.
+Runs the real ``rosaos up`` command more than once on one data directory, with a scripted kernel
+model (``slow SECONDS``: sleep, then answer, so events pile up in the queue before the kill;
+``DEVICES: TASK``: launch a process) and scripted process agents.
 """
 
 from __future__ import annotations
@@ -13,6 +15,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import httpx
 import pytest
@@ -22,8 +25,8 @@ ROSAOS = Path(sys.executable).with_name("rosaos")
 EVENTS = 6
 
 
-def start_kernel(config: Path) -> tuple[subprocess.Popen[str], str]:
-    """Start ``rosaos up`` and return it with its base URL, read from its banner."""
+def start_kernel(config: Path) -> tuple[subprocess.Popen[str], str, str]:
+    """Start ``rosaos up`` and return it with its base URL and its whole start-up banner."""
     env = {**os.environ, "PYTHONPATH": str(HERE), "COLUMNS": "200"}
     process = subprocess.Popen(
         [
@@ -35,6 +38,8 @@ def start_kernel(config: Path) -> tuple[subprocess.Popen[str], str]:
             "0",
             "--model",
             "python:kernel_scripts:kernel_model",
+            "--process-model",
+            "python:kernel_scripts:worker_model",
         ],
         stdout=subprocess.PIPE,
         stderr=subprocess.STDOUT,
@@ -43,6 +48,7 @@ def start_kernel(config: Path) -> tuple[subprocess.Popen[str], str]:
     )
     assert process.stdout is not None
     seen = []
+    url = None
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline:
         line = process.stdout.readline()
@@ -51,7 +57,9 @@ def start_kernel(config: Path) -> tuple[subprocess.Popen[str], str]:
         seen.append(line)
         match = re.search(r"rosaOS is up at (http://\S+?)/?$", line.strip())
         if match:
-            return process, match.group(1)
+            url = match.group(1)
+        if url and line.startswith("Chat with `rosaos chat`"):  # the banner's last line
+            return process, url, "".join(seen)
     process.kill()
     raise AssertionError("rosaos up did not start:\n" + "".join(seen))
 
@@ -78,7 +86,7 @@ def wait_for(check, timeout: float = 60.0):  # type: ignore[no-untyped-def]
 
 
 def test_events_queued_at_a_sigkill_are_each_handled_once_after_restart(config: Path) -> None:
-    first, url = start_kernel(config)
+    first, url, _ = start_kernel(config)
     token = (config.parent / "data" / "token").read_text().strip()
     headers = {"Authorization": f"Bearer {token}"}
     try:
@@ -93,7 +101,7 @@ def test_events_queued_at_a_sigkill_are_each_handled_once_after_restart(config: 
         first.send_signal(signal.SIGKILL)
         first.wait()
 
-    second, url = start_kernel(config)
+    second, url, _ = start_kernel(config)
     try:
         with httpx.Client(base_url=url, headers=headers, timeout=10) as api:
             # A client retrying after the crash gets the first event back, not a new one.
@@ -110,6 +118,57 @@ def test_events_queued_at_a_sigkill_are_each_handled_once_after_restart(config: 
         assert second.wait(timeout=60) == 0
     # Ctrl-C leaves nothing behind: every device host and worker is gone.
     wait_for(lambda: not [pid for pid in children if Path(f"/proc/{pid}").exists()], timeout=10)
+
+
+def test_an_emergency_stop_latched_before_a_sigkill_holds_after_restart_until_reset(config: Path) -> None:
+    first, url, _ = start_kernel(config)
+    headers = {"Authorization": f"Bearer {(config.parent / 'data' / 'token').read_text().strip()}"}
+    try:
+        with httpx.Client(base_url=url, headers=headers, timeout=30) as api:
+            report = api.post("/estop", json={"reason": "robot near the stairs"}).json()
+            assert (report["latched"], report["saved"]) == (True, True)
+    finally:
+        first.send_signal(signal.SIGKILL)
+        first.wait()
+
+    second, url, banner = start_kernel(config)
+    try:
+        assert "EMERGENCY STOP is still latched" in banner
+        assert "robot near the stairs" in banner
+        assert "rosaos estop --reset" in banner
+        with httpx.Client(base_url=url, headers=headers, timeout=10) as api:
+            latched = {"latched": True, "reason": "robot near the stairs", "time": report["time"]}
+            assert api.get("/estop").json() == latched
+            # Events still arrive and are handled; the launch they ask for is refused, naming the latch.
+            updates = said(api, "kitchen_light: call turn_on {}")
+            notices = [u["text"] for u in updates if u["kind"] == "notice"]
+            assert len(notices) == 1
+            assert "emergency stop is latched (robot near the stairs)" in notices[0]
+            assert "process_launched" not in [u["kind"] for u in updates]
+            assert api.get("/processes", params={"all": "true"}).json() == []
+            assert api.post("/estop/reset").json() == {"latched": False, "reason": None, "time": None}
+    finally:
+        second.send_signal(signal.SIGKILL)  # the reset must be on disk too, not only in memory
+        second.wait()
+
+    third, url, banner = start_kernel(config)
+    try:
+        assert "EMERGENCY STOP" not in banner
+        with httpx.Client(base_url=url, headers=headers, timeout=10) as api:
+            assert api.get("/estop").json() == {"latched": False, "reason": None, "time": None}
+            updates = said(api, "kitchen_light: call turn_on {}")
+            assert "process_launched" in [u["kind"] for u in updates]
+    finally:
+        third.send_signal(signal.SIGINT)
+        assert third.wait(timeout=60) == 0
+
+
+def said(api: httpx.Client, text: str) -> list[dict[str, Any]]:
+    """Type ``text``, wait until the kernel has handled it, and return the updates it caused."""
+    event_id = api.post("/chat", json={"text": text}).json()["id"]
+    wait_for(lambda: api.get(f"/events/{event_id}").json()["handled"])
+    updates = api.get("/updates", params={"after": 0, "limit": 1000}).json()["updates"]
+    return [update for update in updates if update["event_id"] == event_id]
 
 
 def child_pids(parent: int) -> list[int]:

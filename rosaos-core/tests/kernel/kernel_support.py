@@ -52,6 +52,7 @@ class TestRuntime:
     callbacks: list[tuple[int, WorkerCallback]] = field(default_factory=list)
     terminated: list[int] = field(default_factory=list)
     estop_reason: str | None = None
+    estop_time: datetime | None = None
 
     async def processes(self, include_ended: bool = False) -> Sequence[Any]:
         return [p for p in self.process_list if include_ended or p.state == "running"]
@@ -68,15 +69,19 @@ class TestRuntime:
         return self.device_list
 
     async def emergency_stop(self, reason: str) -> dict[str, Any]:
-        self.estop_reason = reason
+        self.estop_reason, self.estop_time = reason, datetime.now(UTC)
         return self.emergency_stop_state()
 
     async def reset_emergency_stop(self) -> dict[str, Any]:
-        self.estop_reason = None
+        self.estop_reason = self.estop_time = None
         return self.emergency_stop_state()
 
     def emergency_stop_state(self) -> dict[str, Any]:
-        return {"latched": self.estop_reason is not None, "reason": self.estop_reason}
+        return {
+            "latched": self.estop_reason is not None,
+            "reason": self.estop_reason,
+            "time": self.estop_time.isoformat() if self.estop_time else None,
+        }
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         self.callbacks.append((event_id, callback))

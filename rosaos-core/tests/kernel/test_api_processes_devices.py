@@ -93,11 +93,12 @@ async def test_ended_processes_are_listed_only_when_asked(
 async def test_the_emergency_stop_latches_until_reset(
     client: httpx.AsyncClient, runtime: TestRuntime
 ) -> None:
-    assert (await client.get("/estop", headers=AUTH)).json() == {"latched": False, "reason": None}
-    stopped = await client.post("/estop", json={"reason": "robot near the stairs"}, headers=AUTH)
-    assert stopped.json() == {"latched": True, "reason": "robot near the stairs"}
-    assert (await client.get("/estop", headers=AUTH)).json()["latched"] is True
-    assert (await client.post("/estop/reset", headers=AUTH)).json() == {"latched": False, "reason": None}
+    unlatched = {"latched": False, "reason": None, "time": None}
+    assert (await client.get("/estop", headers=AUTH)).json() == unlatched
+    stopped = (await client.post("/estop", json={"reason": "robot near the stairs"}, headers=AUTH)).json()
+    assert (stopped["latched"], stopped["reason"]) == (True, "robot near the stairs")
+    assert (await client.get("/estop", headers=AUTH)).json() == stopped
+    assert (await client.post("/estop/reset", headers=AUTH)).json() == unlatched
 
 
 async def test_the_emergency_stop_needs_the_token(client: httpx.AsyncClient) -> None:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import re
 import shutil
 from collections.abc import AsyncIterator
+from datetime import UTC, datetime
 
 import httpx
 import pytest
@@ -137,4 +138,24 @@ async def test_the_page_falls_back_to_polling_without_streaming(
     await p.wait_for_selector("#connection[data-state='polling']")
     await updates.publish("kernel_reply", "Polled reply.")
     await p.wait_for_selector("#chat-log .msg-kernel:has-text('Polled reply.')")
+    assert p.errors == []  # type: ignore[attr-defined]
+
+
+async def test_a_stop_latched_before_the_page_loads_shows_at_once_with_reason_and_time(
+    browser_page: Page, runtime: TestRuntime
+) -> None:
+    # A kernel restarted while latched: the first GET /estop already says so.
+    p = browser_page
+    runtime.estop_reason = "robot near the stairs"
+    runtime.estop_time = datetime(2025, 3, 4, 5, 6, 7, tzinfo=UTC)
+    await p.goto(f"/#login={runtime.login_codes.mint()}")
+    await p.wait_for_selector("#estop-banner", state="visible")
+    assert await p.inner_text("#estop-reason") == "robot near the stairs"
+    assert await p.get_attribute("#estop-time", "datetime") == "2025-03-04T05:06:07+00:00"
+    assert "2025" in await p.inner_text("#estop-time")
+    assert await p.is_hidden("#estop")
+
+    runtime.estop_reason = runtime.estop_time = None  # reset elsewhere, e.g. `rosaos estop --reset`
+    await p.wait_for_selector("#estop-banner", state="hidden")
+    assert await p.is_visible("#estop")
     assert p.errors == []  # type: ignore[attr-defined]

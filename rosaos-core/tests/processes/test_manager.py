@@ -10,6 +10,7 @@ import asyncio
 import os
 import signal
 from collections.abc import AsyncIterator
+from datetime import UTC, datetime
 
 import pytest
 import pytest_asyncio
@@ -25,7 +26,7 @@ from processes_support import (
 
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.processes.jobs import WorkerCallback
-from rosaos.processes.manager import LaunchRefused, ProcessManager
+from rosaos.processes.manager import EmergencyStop, LaunchRefused, ProcessManager
 from rosaos.processes.pool import WorkerPool
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
@@ -42,7 +43,11 @@ def world(devices: dict[str, LoopbackDevice]) -> dict[str, DeviceEndpoint]:
 
 
 def new_manager(
-    devices: dict[str, LoopbackDevice], kernel: KernelStandIn, endings: Endings, pool_size: int
+    devices: dict[str, LoopbackDevice],
+    kernel: KernelStandIn,
+    endings: Endings,
+    pool_size: int,
+    emergency_stop: EmergencyStop | None = None,
 ) -> ProcessManager:
     endpoints = world(devices)
     return ProcessManager(
@@ -56,6 +61,7 @@ def new_manager(
         pool=WorkerPool(size=pool_size, env=worker_env()),
         on_ended=endings.record,
         first_process_id=FIRST_ID,
+        emergency_stop=emergency_stop,
     )
 
 
@@ -175,6 +181,34 @@ async def test_refused_launches_do_not_use_up_process_ids(
     with pytest.raises(LaunchRefused, match="the task is empty"):
         await manager.launch("  ", ["lamp"])
     assert manager.next_process_id == FIRST_ID
+
+
+async def test_a_manager_created_latched_refuses_launches_naming_the_emergency_stop(
+    devices: dict[str, LoopbackDevice], kernel: KernelStandIn
+) -> None:
+    # What a kernel restarted after an emergency stop builds: the latch comes from its disk.
+    latched = EmergencyStop(reason="robot near the stairs", time=datetime(2025, 1, 2, tzinfo=UTC))
+    manager = new_manager(devices, kernel, Endings(), pool_size=0, emergency_stop=latched)
+    with pytest.raises(
+        LaunchRefused,
+        match=r"emergency stop is latched \(robot near the stairs\); .* `rosaos estop --reset`",
+    ):
+        await manager.launch("set the lamp level", ["lamp"])
+    assert manager.next_process_id == FIRST_ID
+
+
+async def test_stopping_again_replaces_the_reason_and_time_and_reset_unlatches(
+    devices: dict[str, LoopbackDevice], kernel: KernelStandIn
+) -> None:
+    manager = new_manager(devices, kernel, Endings(), pool_size=0)
+    assert await manager.latch_emergency_stop("first") == []
+    first = manager.emergency_stop
+    await manager.latch_emergency_stop("second")
+    assert manager.emergency_stop is not None and first is not None
+    assert manager.emergency_stop.reason == "second"
+    assert manager.emergency_stop.time >= first.time
+    manager.reset_emergency_stop()
+    assert manager.emergency_stop is None
 
 
 async def test_stop_terminates_running_processes_and_kills_every_worker(

@@ -96,7 +96,7 @@ class KernelRuntime(Protocol):
         """Unlatch the emergency stop."""
 
     def emergency_stop_state(self) -> dict[str, Any]:
-        """``{"latched": bool, "reason": str | None}``."""
+        """``{"latched": bool, "reason": str | None, "time": ISO 8601 str | None}``; survives a restart."""
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         """Called once a ``worker_callback`` is committed (also for a duplicate), so leases are
@@ -338,7 +338,7 @@ class EmergencyStopRequest(BaseModel):
 
 @protected.get("/estop")
 async def emergency_stop_state(runtime: Runtime) -> dict[str, Any]:
-    """Whether the emergency stop is latched, and why."""
+    """Whether the emergency stop is latched, why, and since when (kept across kernel restarts)."""
     return runtime.emergency_stop_state()
 
 
@@ -351,7 +351,7 @@ async def emergency_stop(runtime: Runtime, body: EmergencyStopRequest | None = N
 
 @protected.post("/estop/reset")
 async def reset_emergency_stop(runtime: Runtime) -> dict[str, Any]:
-    """Unlatch the emergency stop."""
+    """Unlatch the emergency stop, on disk too: the next start is unlatched."""
     return await runtime.reset_emergency_stop()
 
 

@@ -126,6 +126,16 @@ def _print_banner(kernel: Kernel, url: str, console: Console) -> None:
     for entry in kernel.supervisor.directory().values():
         where = entry.url or "-"
         console.print(f"  Device:    {entry.name:<20} {entry.status:<16} {where}", markup=False)
+    if latch := kernel.manager.emergency_stop:
+        since = latch.time.astimezone().strftime("%Y-%m-%d %H:%M:%S")
+        console.print(
+            f"EMERGENCY STOP is still latched, since {since}: {latch.reason}", style="bold red", markup=False
+        )
+        console.print(
+            "  No process will run until a person resets it: `rosaos estop --reset`, or the web page.",
+            style="red",
+            markup=False,
+        )
     console.print("Chat with `rosaos chat`; stop with Ctrl-C.", markup=False)
 
 
@@ -191,8 +201,12 @@ def estop_command(
         print(f"  terminated processes: {', '.join(map(str, report['terminated'])) or 'none'}")
         for device in report["devices"]:
             print(f"  {device['name']}: {'safe' if device['ok'] else 'FAILED'}: {device['detail']}")
+        if not report.get("saved", True):
+            print(
+                "  WARNING: the latch could not be saved (see the kernel log): a kernel restart would clear it"
+            )
         print("Reset with `rosaos estop --reset` once it is safe.")
-    return 0 if reset or all(d["ok"] for d in report["devices"]) else 1
+    return 0 if reset or (report.get("saved", True) and all(d["ok"] for d in report["devices"])) else 1
 
 
 def kill_command(config_path: Path | None, url: str | None, process_id: int, json_output: bool) -> int:

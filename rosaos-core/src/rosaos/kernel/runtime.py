@@ -12,12 +12,15 @@ import json
 import logging
 import os
 import socket
+import sqlite3
 from collections.abc import Mapping, Sequence
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, Protocol
 
 import httpx
 import uvicorn
+from pydantic import ValidationError
 from pydantic_ai.models import Model
 
 from rosaos.auth import load_or_create_token
@@ -32,7 +35,7 @@ from rosaos.drivers import DeviceError
 from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
 from rosaos.kernel.api import create_app
 from rosaos.kernel.client import kernel_file, running_kernel_url
-from rosaos.kernel.events import Event, EventStore, WorkerCallbackEvent
+from rosaos.kernel.events import Event, EventStore, StoreClosedError, WorkerCallbackEvent
 from rosaos.kernel.login import LoginCodes, login_url
 from rosaos.kernel.loop import KernelLoop
 from rosaos.kernel.tools import build_kernel_tools
@@ -40,13 +43,15 @@ from rosaos.kernel.updates import UpdateStream
 from rosaos.models.defaults import KernelModels, kernel_models
 from rosaos.models.select import ModelSpec
 from rosaos.processes.jobs import WorkerCallback, callback_idempotency_key
-from rosaos.processes.manager import ProcessInfo, ProcessManager
+from rosaos.processes.manager import EmergencyStop, ProcessInfo, ProcessManager
 from rosaos.processes.pool import WorkerPool
 from rosaos.processes.prompts import base_process_prompt
 
 log = logging.getLogger(__name__)
 
 EVENTS_FILE = "kernel.sqlite3"
+EMERGENCY_STOP_KEY = "emergency_stop"
+"""The event store's key for the latched emergency stop (``EmergencyStop`` as JSON, or null)."""
 
 
 class KernelError(Exception):
@@ -153,26 +158,51 @@ class Kernel:
         )
 
     async def emergency_stop(self, reason: str) -> dict[str, Any]:
-        """Terminate every process, call every device's safe_stop, and latch until reset."""
+        """Terminate every process, call every device's safe_stop, and latch until reset.
+
+        The latch is in memory at once, and saved in the event store while the devices stop: the
+        stop never waits on the disk, and the answer comes once the latch survives a restart.
+        """
         stopped = await self.manager.latch_emergency_stop(reason)
-        outcomes = await self.supervisor.safe_stop_all()
+        latch = self.manager.emergency_stop
+        assert latch is not None
+        outcomes, saved = await asyncio.gather(self.supervisor.safe_stop_all(), self._save_latch(latch))
         report = {
             "latched": True,
-            "reason": reason,
+            **latch.model_dump(mode="json"),
             "terminated": [info.id for info in stopped],
             "devices": [{"name": o.instance, "ok": o.ok, "detail": o.detail} for o in outcomes],
+            "saved": saved,
         }
         await self._updates.publish("error", f"EMERGENCY STOP: {reason}", report)
         return report
 
     async def reset_emergency_stop(self) -> dict[str, Any]:
-        """Unlatch the emergency stop (a person decided it is safe)."""
-        self.manager.reset_emergency_stop()
-        await self._updates.publish("notice", "emergency stop reset: processes may run again", {})
-        return {"latched": False, "reason": None}
+        """Unlatch the emergency stop (a person decided it is safe).
+
+        The latch is cleared on disk first: if that fails, the stop stays latched and this raises.
+        """
+        latch = self.manager.emergency_stop
+        await self._store.set_value(EMERGENCY_STOP_KEY, None)
+        if self.manager.emergency_stop is latch:  # not if a new stop came while the disk was busy
+            self.manager.reset_emergency_stop()
+            await self._updates.publish("notice", "emergency stop reset: processes may run again", {})
+        return self.emergency_stop_state()
 
     def emergency_stop_state(self) -> dict[str, Any]:
-        return {"latched": self.manager.emergency_stop is not None, "reason": self.manager.emergency_stop}
+        latch = self.manager.emergency_stop
+        if latch is None:
+            return {"latched": False, "reason": None, "time": None}
+        return {"latched": True, **latch.model_dump(mode="json")}
+
+    async def _save_latch(self, latch: EmergencyStop) -> bool:
+        """Save the latch for the next start; False (and a log entry) if the store failed."""
+        try:
+            await self._store.set_value(EMERGENCY_STOP_KEY, latch.model_dump(mode="json"))
+        except (sqlite3.Error, StoreClosedError):
+            log.exception("the emergency stop is latched, but could not be saved: a restart would forget it")
+            return False
+        return True
 
     # --- devices -----------------------------------------------------------------------------------
 
@@ -233,6 +263,7 @@ class Kernel:
             pool=pool,
             on_ended=self._process_ended,
             first_process_id=await self._store.next_process_id(),
+            emergency_stop=await _stored_emergency_stop(self._store),
         )
         await self.manager.start()
         tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._store.note_process_id)
@@ -333,6 +364,24 @@ async def _bind_or_explain(host: str, port: int, token: str) -> socket.socket:
                 "use `rosaos chat` to talk to it, or stop it first, or start this one with --port"
             )
     raise KernelError(f"port {port} on {host} is in use by another program; start rosaOS with --port N")
+
+
+async def _stored_emergency_stop(store: EventStore) -> EmergencyStop | None:
+    """The emergency stop latched before this start, if any.
+
+    A stored latch this version cannot read stays latched (with a reason saying so): only a
+    person may unlatch it.
+    """
+    stored = await store.get_value(EMERGENCY_STOP_KEY)
+    if stored is None:
+        return None
+    try:
+        return EmergencyStop.model_validate(stored)
+    except ValidationError:
+        return EmergencyStop(
+            reason=f"a stored emergency stop could not be read ({json.dumps(stored)[:200]})",
+            time=datetime.now(UTC),
+        )
 
 
 def events_path(data_dir: Path) -> Path:

@@ -42,6 +42,13 @@ class ProcessInfo(BaseModel):
     worker_pid: int | None = None
 
 
+class EmergencyStop(BaseModel):
+    """A latched emergency stop: why, and when it was (last) pressed."""
+
+    reason: str
+    time: datetime
+
+
 class LaunchRefused(Exception):
     """A process that was not launched; the message says why and what to do instead."""
 
@@ -62,6 +69,7 @@ class ProcessManager:
         pool: WorkerPool,
         on_ended: Callable[[WorkerCallback, bool], Awaitable[None]],
         first_process_id: int = 1,
+        emergency_stop: EmergencyStop | None = None,
     ) -> None:
         if first_process_id < 1:
             raise ValueError("first_process_id must be 1 or more")
@@ -77,8 +85,9 @@ class ProcessManager:
         self._next_id = first_process_id
         self._processes: dict[int, ProcessInfo] = {}
         self.leases = LeaseTable()
-        self.emergency_stop: str | None = None
-        """Why the emergency stop is latched, or None. While latched every launch is refused."""
+        self.emergency_stop = emergency_stop
+        """The latched emergency stop, or None. While latched every launch is refused. The kernel
+        keeps it on disk and passes it in at start, so a restart does not unlatch it."""
         pool.on_ended = self._worker_ended
 
     @property
@@ -104,8 +113,11 @@ class ProcessManager:
             self.leases.release(process_id)
 
     async def latch_emergency_stop(self, reason: str) -> builtins.list[ProcessInfo]:
-        """Latch the emergency stop and terminate every running process; return what was stopped."""
-        self.emergency_stop = reason
+        """Latch the emergency stop and terminate every running process; return what was stopped.
+
+        Stopping again while latched stops everything again and replaces the reason and time.
+        """
+        self.emergency_stop = EmergencyStop(reason=reason, time=_now())
         stopped = []
         for info in self.list():
             stopped.append(await self.terminate(info.id))
@@ -124,7 +136,7 @@ class ProcessManager:
         task = task.strip()
         if self.emergency_stop is not None:
             raise LaunchRefused(
-                f"emergency stop is latched ({self.emergency_stop}); nothing may run until a person "
+                f"emergency stop is latched ({self.emergency_stop.reason}); nothing may run until a person "
                 "resets it with `rosaos estop --reset` or the web page"
             )
         if not task:

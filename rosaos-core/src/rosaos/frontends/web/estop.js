@@ -1,11 +1,15 @@
 // The emergency-stop control: one button that latches the stop, and a banner with a reset while latched.
+// The latch survives a kernel restart, so the first GET /estop after the page loads may already show it.
 import { $, api } from "./session.js";
 
 export function renderEmergencyStop(state) {
   const banner = $("#estop-banner");
+  const time = $("#estop-time");
   $("#estop").hidden = state.latched;
   banner.hidden = !state.latched;
   $("#estop-reason").textContent = state.latched ? state.reason : "";
+  time.dateTime = state.latched && state.time ? state.time : "";
+  time.textContent = state.latched && state.time ? new Date(state.time).toLocaleString() : "";
 }
 
 async function post(path, json) {
