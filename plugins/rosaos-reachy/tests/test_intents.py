@@ -37,6 +37,7 @@ def intents_file(probe: IntentProbe) -> IntentsFile:
         ("look straight ahead", ("reset_head", {})),
         ("look at me", ("look_at_face", {})),
         ("reachy say hello there", ("speak", {"text": "hello there"})),
+        ("Tell everyone that dinner is ready", ("speak", {"text": "dinner is ready"})),
         ("wake up", ("wake_up", {})),
         ("wake up reachy", ("wake_up", {})),
         ("go to sleep", ("sleep", {})),

@@ -20,6 +20,8 @@ INTENTS = Path(__file__).parent / "intents"
 BULB = INTENTS / "bulb.yaml"
 SPEAKER = INTENTS / "speaker.yaml"
 BENCH_TASKS = Path(__file__).resolve().parents[3].parent / "shared" / "bench" / "tasks"
+OWN_TASKS = Path(__file__).resolve().parents[3] / "benchmarks" / "tasks"
+"""rosaOS's own task files (everyday variants of the public sentences), in the same format."""
 
 
 def bulb(name: str, description: str = "", **extra: Any) -> DeviceIntentSource:

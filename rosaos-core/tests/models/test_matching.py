@@ -5,7 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from models_support import speaker
+from models_support import bulb, speaker
 
 from rosaos.models.matching import IntentMatcher, MatchResult
 from rosaos.models.sources import DeviceIntentSource
@@ -153,6 +153,88 @@ def test_two_commands_on_one_device_share_its_process(matcher: IntentMatcher) ->
 def test_one_unclear_command_stops_the_whole_sentence(matcher: IntentMatcher) -> None:
     result = matcher.match("Turn on the kitchen light and turn off the garage light")
     assert (result.kind, result.processes) == ("clarify", ())
+
+
+# A device left out, as people do: the device of the command before, or the only one that fits
+
+
+@pytest.mark.parametrize(
+    "sentence",
+    [
+        "turn on the kitchen light and set it to 30 percent",  # a pronoun
+        "turn on the kitchen light, then set to 30 percent",  # the name left out
+    ],
+)
+def test_a_second_command_without_a_device_means_the_device_before(
+    matcher: IntentMatcher, sentence: str
+) -> None:
+    result = matcher.match(sentence)
+    assert [process.devices for process in result.processes] == [("kitchen_light",)]
+    assert calls(result) == [
+        ("kitchen_light", "turn_on", {}),
+        ("kitchen_light", "set_brightness", {"brightness": 30}),
+    ]
+    # The task tells the process what the user said, not the engine's rewording.
+    assert result.processes[0].summary.startswith("Turn on the kitchen light. Set ")
+
+
+def test_a_device_left_out_is_not_carried_across_a_command_on_several(matcher: IntentMatcher) -> None:
+    # "them" after "all the lights" could mean three devices: not guessed, not understood.
+    result = matcher.match("turn on all the lights and set it to 30 percent")
+    assert result.processes == ()
+
+
+@pytest.mark.parametrize("sentence", ["set it to 30 percent", "set to 30 percent"])
+def test_a_device_left_out_from_the_start_asks_among_those_that_fit(
+    matcher: IntentMatcher, sentence: str
+) -> None:
+    result = matcher.match(sentence)
+    assert (result.kind, result.processes) == ("clarify", ())
+    for light in ("kitchen light", "living room lamp", "bedroom light"):
+        assert light in result.reply
+    assert "speaker" not in result.reply  # a speaker has no brightness
+    answered = matcher.follow_up(sentence, "the bedroom one")
+    assert answered is not None
+    assert calls(answered) == [("bedroom_light", "set_brightness", {"brightness": 30})]
+
+
+def test_a_device_left_out_means_the_only_one_that_fits() -> None:
+    alone = IntentMatcher([bulb("desk_lamp", "Lamp on the desk"), speaker()], "en")
+    assert calls(alone.match("set it to 30 percent")) == [("desk_lamp", "set_brightness", {"brightness": 30})]
+
+
+def test_a_sentence_naming_no_known_device_is_still_not_understood(matcher: IntentMatcher) -> None:
+    assert matcher.match("tell the drone to take off").kind == "no_match"
+
+
+@pytest.mark.parametrize(
+    ("sentence", "tool"),
+    [
+        ("Turn off the kitchen light and the bedroom light", "turn_off"),
+        ("turn on the kitchen light, the bedroom light and the living room lamp", "turn_on"),
+    ],
+)
+def test_a_list_of_names_repeats_the_command_for_each(
+    matcher: IntentMatcher, sentence: str, tool: str
+) -> None:
+    result = matcher.match(sentence)
+    assert {call[0] for call in calls(result)} >= {"kitchen_light", "bedroom_light"}
+    assert {call[1] for call in calls(result)} == {tool}
+    assert all(len(process.devices) == 1 for process in result.processes)
+
+
+def test_a_listed_name_takes_the_command_with_its_arguments(matcher: IntentMatcher) -> None:
+    result = matcher.match("Set the kitchen light to 30 percent and the bedroom light")
+    assert calls(result) == [
+        ("kitchen_light", "set_brightness", {"brightness": 30}),
+        ("bedroom_light", "set_brightness", {"brightness": 30}),
+    ]
+
+
+@pytest.mark.parametrize("sentence", ["the kitchen light", "kitchen light", "please the kitchen light"])
+def test_a_lone_device_name_actuates_nothing(matcher: IntentMatcher, sentence: str) -> None:
+    # Home Assistant's bare "{name}" templates (for scenes) would read it as "turn it on".
+    assert matcher.match(sentence).processes == ()
 
 
 # Media (the speaker stands in for the coming Spotify driver: its intents need no engine change)

@@ -12,6 +12,13 @@ from Home Assistant's built-in intents for the configured language (see
 A sentence with several commands ("turn on the lamp and play some jazz") is split at
 conjunctions, but only when the whole sentence does not match by itself, or matched only by a
 wildcard swallowing a conjunction ("play {search_query}").
+
+A command may leave its device out, as people do: "undock the turtlebot and drive it forward one
+meter" or "... and drive forward one meter" mean the turtlebot of the command before. Such a
+clause is read again with that device's name in place of the pronoun, or inserted after its first
+words; it is taken only when that reading is exact and about that device alone. A sentence that
+leaves its device out from the start ("drive forward one meter") is read the same way against
+every device: one that fits is acted on, several get "which one?", exactly as a missing name does.
 """
 
 from __future__ import annotations
@@ -19,7 +26,7 @@ from __future__ import annotations
 import itertools
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cache
 
 from hassil import Intents, recognize_all
@@ -28,7 +35,7 @@ from hassil.recognize import MISSING_ENTITY, RecognizeResult
 
 from rosaos.models.ha_intents import NO_AREA, load_ha_intents
 from rosaos.models.intents_file import IntentsFile
-from rosaos.models.phrases import conjunctions, phrase
+from rosaos.models.phrases import conjunctions, phrase, pronouns
 from rosaos.models.readings import (
     Reading,
     ReadingContext,
@@ -51,6 +58,9 @@ MAX_UNKNOWN_WORDS = 3
 MIN_KIND_WORD = 3
 """Shortest word that counts when comparing an unknown name with known ones ("light", not "a")."""
 UNKNOWN_SLOTS = frozenset({"name", "device"})
+MAX_ELIDED_POSITION = 3
+"""A left-out device name is tried after each of a clause's first words, up to this many: the
+verb, and a particle ("turn off", "set to"); templates name the device right there."""
 CACHE_SIZE = 512
 
 
@@ -76,6 +86,8 @@ class IntentMatcher:
         targets = {"name"} | ({"area"} if self.context.areas else set())
         self._ha = load_ha_intents(language, mapped, domains, targets)
         self._skip_words = list(self._ha.skip_words) if self._ha is not None else []
+        self._filler = {article.strip() for article in ARTICLES.get(language, ()) + ARTICLES["en"]}
+        self._filler |= {word for skip in self._skip_words for word in skip.lower().split()}
         self._ha_lists: dict[str, SlotList] = {
             "name": TextSlotList.from_tuples(
                 [
@@ -133,9 +145,7 @@ class IntentMatcher:
         """The devices ``text`` picks when it is only a choice ("the kitchen one", "bedroom light"),
         else nothing: "is the kitchen light on?" names a device too, but is a new command."""
         focus, leftover = self.context.named_in(text)
-        filler = {article.strip() for article in ARTICLES.get(self.language, ()) + ARTICLES["en"]}
-        filler |= {word for skip in self._skip_words for word in skip.lower().split()}
-        return focus if len([word for word in leftover if word not in filler]) <= 1 else frozenset()
+        return focus if len([word for word in leftover if word not in self._filler]) <= 1 else frozenset()
 
     def follow_up(self, question: str, answer: str) -> MatchResult | None:
         """``question`` (a sentence that got "which one?") again, limited to the devices ``answer``
@@ -169,6 +179,9 @@ class IntentMatcher:
         unknown = self._unknown(text)
         if unknown is not None:
             return build_result(self.context, text, [unknown], False)
+        elided = self._elided_anywhere(text)
+        if elided is not None:
+            return build_result(self.context, text, [elided], self._focus is not None)
         return no_match(self.context, text)
 
     # Recognition
@@ -185,6 +198,8 @@ class IntentMatcher:
         # is only consulted when no driver template settled the clause.
         if self._ha is not None and not any(reading.actionable for reading in readings):
             for result in self._recognize(clause, self._ha, self._ha_lists, ha=True):
+                if self._only_names(clause, result):
+                    continue
                 reading = ha_reading(self.context, clause, result, self._focus)
                 if reading is not None:
                     readings.append(reading)
@@ -209,6 +224,18 @@ class IntentMatcher:
         )
         return list(itertools.islice(results, MAX_RESULTS_PER_SOURCE))
 
+    def _only_names(self, clause: str, result: RecognizeResult) -> bool:
+        """Whether ``clause`` says nothing but the names it matched ("the desk lamp").
+
+        HA's bare "{name}" templates (meant for scenes and scripts) would read a lone device name
+        as "turn it on". A command needs a word of its own; a lone name is at most a choice.
+        """
+        text = clause.lower()
+        for entity in result.entities.values():
+            if entity.text.strip():
+                text = text.replace(entity.text.strip().lower(), " ", 1)
+        return all(word in self._filler for word in re.findall(r"[\w']+", text))
+
     def _best(self, clause: str) -> Reading | None:
         # Cached: a split tries the same clauses again, and users repeat themselves.
         key = (clause, self._focus)
@@ -224,11 +251,15 @@ class IntentMatcher:
         return any(len(self._splitter.split(text)) > 1 for text in reading.wildcards)
 
     def _partition(self, pieces: tuple[str, ...], allow_unknown: bool) -> list[Reading] | None:
-        """Cut ``pieces`` (texts and separators, alternating) into the fewest clauses that all match."""
+        """Cut ``pieces`` (texts and separators, alternating) into the fewest clauses that all match.
+
+        A clause may lean on the one before it (``before``: its device and its text): "... and
+        set it to 30 percent" means that device, "... and the desk lamp" means that command.
+        """
         texts, separators = pieces[0::2], pieces[1::2]
 
         @cache
-        def clause(start: int, end: int) -> Reading | None:
+        def clause(start: int, end: int, before: tuple[str, str] | None) -> Reading | None:
             words = [texts[start]]
             for index in range(start + 1, end):
                 words += [separators[index - 1], texts[index]]
@@ -236,23 +267,97 @@ class IntentMatcher:
             if not texts[start].strip() or not texts[end - 1].strip():
                 return None
             found = self._best(joined)
+            if before is not None and (found is None or not found.actionable):
+                found = self._elided(joined, before[0]) or self._same_command(joined, *before) or found
             if found is None and allow_unknown:
                 found = self._unknown(joined)
             return found
 
         @cache
-        def rest(start: int) -> list[Reading] | None:
+        def rest(start: int, before: tuple[str, str] | None) -> list[Reading] | None:
             if start == len(texts):
                 return []
             # The whole sentence as one clause was tried already: a split has two clauses or more.
             for end in range(len(texts) - (start == 0), start, -1):
-                head = clause(start, end)
-                tail = rest(end) if head is not None else None
+                head = clause(start, end, before)
+                tail = rest(end, _leaned_on(head)) if head is not None else None
                 if head is not None and tail is not None:
                     return [head, *tail]
             return None
 
-        return rest(0)
+        return rest(0, None)
+
+    def _same_command(self, clause: str, device: str, command: str) -> Reading | None:
+        """``clause`` is only another device's name: ``command`` (which acted on ``device``) again,
+        for that device. "Turn off the kitchen light and the desk lamp" turns off both."""
+        named, leftover = self.context.named_in(clause)
+        if len(named) != 1 or any(word not in self._filler for word in leftover):
+            return None
+        [other] = named
+        said = next(
+            (
+                name
+                for name in sorted(self.devices[device].spoken_names(self.language), key=len, reverse=True)
+                if re.search(rf"(?<!\w){re.escape(name)}(?!\w)", command, re.IGNORECASE)
+            ),
+            None,
+        )
+        if said is None or other == device:
+            return None
+        spoken = self.devices[other].spoken_names(self.language)[0]
+        again = re.sub(rf"(?<!\w){re.escape(said)}(?!\w)", spoken, command, count=1, flags=re.IGNORECASE)
+        focus = self._focus
+        if focus is not None and other not in focus:
+            return None
+        self._focus = frozenset({other})
+        try:
+            found = self._best(again)
+        finally:
+            self._focus = focus
+        if found is None or not found.actionable or set(found.calls) != {other}:
+            return None
+        return found
+
+    def _elided(self, clause: str, device: str) -> Reading | None:
+        """``clause`` read as a command to ``device`` that does not name it, or None.
+
+        "drive it forward" becomes "drive turtlebot forward"; "drive forward" is tried as "drive
+        turtlebot forward", "drive forward turtlebot", ... The reading must be exact and about
+        ``device`` alone.
+        """
+        if self._focus is not None and device not in self._focus:
+            return None
+        words = clause.split()
+        name = self.devices[device].spoken_names(self.language)[0]
+        refer = pronouns(self.language)
+        if any(word.lower() in refer for word in words):
+            candidates = [" ".join(name if word.lower() in refer else word for word in words)]
+        else:
+            last = min(MAX_ELIDED_POSITION, len(words))
+            candidates = [" ".join([*words[:at], name, *words[at:]]) for at in range(1, last + 1)]
+        focus = self._focus
+        self._focus = frozenset({device})
+        try:
+            for candidate in candidates:
+                found = self._best(candidate)
+                if found is not None and found.actionable and set(found.calls) == {device}:
+                    return replace(found, clause=clause)
+        finally:
+            self._focus = focus
+        return None
+
+    def _elided_anywhere(self, clause: str) -> Reading | None:
+        """``clause`` as a command that leaves out its device, read against every device.
+
+        One device fits: its reading. Several: "which one?". None: None. A pronoun with nothing
+        before it to refer to ("turn it off") is read the same way.
+        """
+        fits = [device for device in self.devices if self._elided(clause, device) is not None]
+        if len(fits) == 1:
+            return self._elided(clause, fits[0])
+        if fits:
+            return self.context.clarify(clause, 0, 0, fits)
+        return None
 
     def _unknown(self, clause: str) -> Reading | None:
         """A refusal naming what exists, when the sentence matches except for the device's name.
@@ -324,4 +429,10 @@ class IntentMatcher:
             for name in self.devices[device].spoken_names(self.language)
         )
 
-    # Results
+
+def _leaned_on(reading: Reading | None) -> tuple[str, str] | None:
+    """What a following clause may lean on: the one device an exact reading acts on, and the
+    command it read (the clause as rewritten for that device, when it was)."""
+    if reading is None or not reading.actionable or len(reading.calls) != 1:
+        return None
+    return next(iter(reading.calls)), reading.clause

@@ -70,6 +70,15 @@ CONJUNCTIONS: dict[str, tuple[str, ...]] = {
 }
 
 
+# Words that stand for the device of the previous command ("undock the turtlebot and drive it
+# forward"). Only where object pronouns are separate words that are never articles: French "la",
+# Spanish "lo" and Dutch "het" are also articles or clitics, so those languages rely on the
+# device being left out instead ("... et avance d'un mètre"), which works in every language.
+PRONOUNS: dict[str, frozenset[str]] = {
+    "en": frozenset({"it", "him", "her", "them"}),
+}
+
+
 # Words that make "the lights" mean every one of them. HA's own "all" templates need an extra
 # word ("partout"), and HA's "toutes les lumières" means "here"; rosaOS has no "here", so "all"
 # means the whole world.
@@ -102,6 +111,11 @@ def join_options(items: Sequence[str], language: str) -> str:
     if len(items) <= 1:
         return "".join(items)
     return f"{', '.join(items[:-1])} {phrase(language, 'or')} {items[-1]}"
+
+
+def pronouns(language: str) -> frozenset[str]:
+    """Words that refer back to the device of the previous command in ``language`` (may be empty)."""
+    return PRONOUNS.get(language.split("-")[0], frozenset())
 
 
 def conjunctions(language: str) -> tuple[str, ...]:
