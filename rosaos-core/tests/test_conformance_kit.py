@@ -20,6 +20,7 @@ from rosaos.testing import pytest_plugin
 
 DRIVER = '''
 import sys
+from pathlib import Path
 from typing import Annotated, Any
 
 from fastmcp import FastMCP
@@ -83,11 +84,28 @@ def spec(**overrides):
     return DriverSpec(**(fields | overrides))
 
 
+ASKING_INTENTS = Path(__file__).parent / "asking_intents.yaml"
+ASKING_INTENTS.write_text(
+    "intents:\\n"
+    "  Level:\\n"
+    "    data: [{sentences: ['what is [the] level']}]\\n"
+    "    tool: get_state\\n"
+    "    reply: 'Level {level}.'\\n"
+    "  LevelUp:\\n"
+    "    data: [{sentences: ['is [the] level up']}]\\n"
+    "    tool: set_level\\n"
+    "    args: {level: 100}\\n"
+    "    answer: {when: {level: 100}, 'yes': 'Yes.', 'no': 'No.'}\\n",
+    encoding="utf-8",
+)
+
+
 @hookimpl
 def register_drivers(register):
     register(spec())
     register(spec(name="sloppy", server=sloppy_server))
     register(spec(name="placeholder", implemented=False))
+    register(spec(name="asks", intents=ASKING_INTENTS))
 
 
 class Kit(DriverConformance):
@@ -124,6 +142,10 @@ class TestExempt(Kit):
 
 class TestMissing(Kit):
     driver = "fridge"
+
+
+class TestAsksWithATool(Kit):
+    driver = "asks"
 """
 
 
@@ -210,6 +232,13 @@ def test_failure_messages_name_the_tool_and_the_fix(report: Report) -> None:
         "set_level({'level': 101}) was accepted"
         in sloppy["test_out_of_range_argument_is_a_tool_error"].message
     )
+
+
+def test_a_question_intent_that_calls_an_acting_tool_fails(report: Report) -> None:
+    assert not_passed(report, "TestAsksWithATool") == {"test_intents_name_existing_tools": "failed"}
+    message = report["TestAsksWithATool"]["test_intents_name_existing_tools"].message
+    assert "LevelUp: a question (answer/reply) must call a read-only tool" in message
+    assert "Level:" not in message  # the get_state question is fine
 
 
 def test_an_explicit_out_of_range_call_is_used(report: Report) -> None:

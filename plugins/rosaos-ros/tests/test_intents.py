@@ -98,3 +98,20 @@ def test_every_robot_command_of_the_bench_matches_except_the_unknown_robot(probe
     robot_clauses = [c for c in clauses if "turtlebot" in c.lower() or "dog" in c.lower()]
     assert all(probe.match(clause) for clause in robot_clauses), robot_clauses
     assert probe.match("Tell the drone to take off") is None
+
+
+@pytest.mark.parametrize(
+    ("sentence", "intent"),
+    [
+        ("is the turtlebot docked", "RosIsDocked"),
+        ("What's the turtlebot's battery level?", "RosBattery"),
+        ("how much battery does the turtlebot have left", "RosBattery"),
+        ("where is the robot dog", "RosWhere"),
+    ],
+)
+def test_questions_read_the_state_and_say_what_they_found(
+    probe: IntentProbe, intents_file: IntentsFile, sentence: str, intent: str
+) -> None:
+    match = probe.match(sentence)
+    assert match is not None and (match.tool, match.args) == ("get_state", {})
+    assert intents_file.actions[intent].is_question

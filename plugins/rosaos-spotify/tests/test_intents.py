@@ -103,3 +103,19 @@ def test_volume_steps_map_up_and_down(intents_file: IntentsFile) -> None:
     up = [a.fill({}) for a in actions if a.applies({"volume_step": "up"})]
     down = [a.fill({}) for a in actions if a.applies({"volume_step": "down"})]
     assert (up, down) == ([{"delta": 15}], [{"delta": -15}])
+
+
+@pytest.mark.parametrize(
+    ("sentence", "intent"),
+    [
+        ("What's playing?", "SpotifyWhatIsPlaying"),
+        ("what song is this", "SpotifyWhatIsPlaying"),
+        ("Is the music playing?", "SpotifyIsPlaying"),
+        ("what's the volume", "SpotifyWhatVolume"),
+    ],
+)
+def test_questions_read_the_state_and_say_what_they_found(
+    probe: IntentProbe, intents_file: IntentsFile, sentence: str, intent: str
+) -> None:
+    assert probe.match(sentence) == ("spotify", "get_state", {})
+    assert intents_file.actions[intent].is_question

@@ -153,3 +153,11 @@ def test_ha_sentences_reach_the_bulbs_through_the_engine(
         (step.device, step.tool, step.args) for process in result.processes for step in process.plan.steps
     ]
     assert planned == expected
+
+
+@pytest.mark.parametrize(
+    "sentence", ["How bright is the kitchen light?", "what's the brightness of the bedroom light"]
+)
+def test_a_brightness_question_reads_the_state(probe: IntentProbe, sentence: str) -> None:
+    match = probe.match(sentence)
+    assert match is not None and (match.tool, match.args) == ("get_state", {})

@@ -103,3 +103,48 @@ def test_a_bad_file_is_an_error_naming_file_intent_and_fix(tmp_path: Path, text:
         load_intents_file(path)
     assert str(raised.value).startswith(f"{path}: ")
     assert message in str(raised.value)
+
+
+QUESTIONS = """
+intents:
+  LampHowBright:
+    data: [{sentences: ["how bright is [the] lamp"]}]
+    tool: get_state
+    answer:
+      when: {"on": true}
+      yes: "The {device} is at {brightness}%."
+      no: "The {device} is off."
+  LampLevel:
+    data: [{sentences: ["what is the lamp level"]}]
+    tool: get_state
+    reply: "Level {brightness}."
+"""
+
+
+def test_a_question_intent_carries_its_answer_or_reply(tmp_path: Path) -> None:
+    actions = load_intents_file(intents_file(tmp_path, QUESTIONS)).actions
+    answer = actions["LampHowBright"].answer
+    assert answer is not None  # unquoted yes:/no: keys (YAML booleans) are read as the words
+    assert (answer.when, answer.yes, answer.no) == (
+        {"on": True},
+        "The {device} is at {brightness}%.",
+        "The {device} is off.",
+    )
+    assert actions["LampLevel"].reply == "Level {brightness}."
+    assert actions["LampLevel"].is_question and actions["LampHowBright"].is_question
+
+
+@pytest.mark.parametrize(
+    ("block", "message"),
+    [
+        ('answer: {when: {on: true}, "yes": "y", "no": "n"}', "quote it"),
+        ('answer: {when: {"on": true}, "yes": "y", "no": "n"}\n    reply: "r"', "not both"),
+        ('answer: {when: {}, "yes": "y", "no": "n"}', "answer.when"),
+    ],
+    ids=["unquoted on", "answer and reply", "empty when"],
+)
+def test_a_bad_question_is_an_error_that_says_how_to_fix_it(tmp_path: Path, block: str, message: str) -> None:
+    text = f"intents:\n  Q:\n    data: [{{sentences: [q]}}]\n    tool: get_state\n    {block}\n"
+    with pytest.raises(IntentsFileError, match=r"intents\.Q: ") as raised:
+        load_intents_file(intents_file(tmp_path, text))
+    assert message in str(raised.value)

@@ -11,6 +11,7 @@ from rosaos.models.plan import (
     PlanStep,
     decode_plan,
     encode_task,
+    fill_state,
     has_plan,
     render_result,
     task_summary,
@@ -61,3 +62,19 @@ def test_a_result_renders_on_one_line() -> None:
         == "on: false, brightness: 100, name: lamp"
     )
     assert render_result("ok") == "ok"
+
+
+def test_state_fields_fill_with_their_format() -> None:
+    state = {"track": "So What", "artist": "Miles Davis", "battery": 0.874, "on": True}
+    assert fill_state("Playing {track} by {artist}.", state) == "Playing So What by Miles Davis."
+    assert fill_state("Battery at {battery:.0%}.", state) == "Battery at 87%."
+    assert fill_state("State: {result}", {"on": True}) == "State: on: true"
+
+
+@pytest.mark.parametrize(
+    ("text", "state"),
+    [("{battery:.0%}", {"x": 1}), ("{track}", {"track": None}), ("{x:.1f}", {"x": "far"}), ("{x}", [1])],
+    ids=["missing", "null", "bad format", "not a mapping"],
+)
+def test_a_field_that_cannot_be_filled_fills_nothing(text: str, state: object) -> None:
+    assert fill_state(text, state) is None

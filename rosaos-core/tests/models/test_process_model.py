@@ -86,6 +86,38 @@ async def test_a_question_is_answered_from_the_state(on: bool, reply: str) -> No
     assert output == reply
 
 
+@pytest.mark.parametrize(
+    ("state", "reply"),
+    [
+        ({"on": True, "brightness": 40}, "The lamp is on, at 40%."),
+        ({"on": False, "brightness": 40}, "The lamp is off."),
+        # A key the state lacks: the whole state is read instead of a reply with a hole in it.
+        ({"on": True}, "lamp: on: true"),
+    ],
+)
+async def test_a_driver_question_fills_its_reply_from_the_state(state: dict[str, Any], reply: str) -> None:
+    answer = PlanAnswer(when={"on": True}, yes="The lamp is on, at {brightness}%.", no="The lamp is off.")
+    plan = Plan(
+        steps=[PlanStep(device="lamp", tool="get_state")],
+        reply="-",
+        answer=answer,
+        fills_state=True,
+    )
+    output, _ = await run_process(
+        encode_task("How bright?", plan), {"lamp": ("bulb", build_device_server("lamp", state))}
+    )
+    assert output == reply
+
+
+async def test_a_reply_that_does_not_fill_state_keeps_its_braces() -> None:
+    # A command's reply quotes the user ("Done: say {hi}."): only {result} is filled there.
+    plan = Plan(steps=[PlanStep(device="lamp", tool="get_state")], reply="Done: say {hi}.")
+    output, _ = await run_process(
+        encode_task("Say.", plan), {"lamp": ("bulb", build_device_server("lamp", {"on": True}))}
+    )
+    assert output == "Done: say {hi}."
+
+
 async def test_a_failing_tool_stops_the_plan_and_reports_the_error() -> None:
     state: dict[str, Any] = {"on": False}
     task = task_for(PlanStep(device="lamp", tool="turn_on"), PlanStep(device="lamp", tool="turn_off"))

@@ -20,7 +20,23 @@ arguments, in either of two places (both may be used in one file, not for the sa
         tool: set_brightness
         args: {brightness: "{brightness}"}
 
-An argument value written as ``"{slot}"`` is filled with the matched slot's value. hassil
+An argument value written as ``"{slot}"`` is filled with the matched slot's value.
+
+A question ("is the turtlebot docked?", "what's playing?") calls a read-only tool, usually
+``get_state``, and says what it found, with one of two more keys next to ``tool``::
+
+      IsDocked:
+        tool: get_state
+        answer:                         # yes/no, from the state the tool returned
+          when: {docked: true}
+          "yes": "Yes, the {device} is docked."
+          "no": "No, the {device} is not docked."
+      Battery:
+        tool: get_state
+        reply: "The {device}'s battery is at {battery:.0%}."
+
+``{device}`` is the device's name; any other ``{key}`` (with an optional format spec) is that key
+of the returned state, and ``{result}`` the whole state on one line. hassil
 ignores the extra keys; :func:`load_intents_file` strips them anyway, so :attr:`IntentsFile.hassil`
 is exactly what :meth:`hassil.Intents.from_dict` accepts. The conformance kit and the offline
 local-intent engine both read intents through this one function.
@@ -37,13 +53,13 @@ from typing import Any
 
 import yaml
 from hassil import Intents
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from rosaos.models.ha_mapping import HomeAssistantMapping
 
 ROSAOS_KEY = "rosaos"
 HOMEASSISTANT_KEY = "homeassistant"
-ACTION_KEYS = ("tool", "args")
+ACTION_KEYS = ("tool", "args", "answer", "reply")
 DEFAULT_LANGUAGE = "en"
 _SLOT_REFERENCE = re.compile(r"^\{(\w+)\}$")
 
@@ -52,8 +68,36 @@ class IntentsFileError(ValueError):
     """An ``intents.yaml`` that cannot be used; the message names the file, the intent and the fix."""
 
 
+class IntentAnswer(BaseModel):
+    """A yes/no question's answer, read from the state the intent's tool returned."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    when: dict[str, Any] = Field(min_length=1)
+    """State keys and the values that make the answer "yes"."""
+    yes: str = Field(min_length=1)
+    no: str = Field(min_length=1)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _yaml_booleans(cls, data: Any) -> Any:
+        # YAML 1.1 reads an unquoted ``yes:``/``no:`` key as a boolean.
+        if isinstance(data, dict):
+            when = data.get("when")
+            if isinstance(when, dict) and any(isinstance(key, bool) for key in when):
+                raise ValueError(
+                    "a 'when' key reads as true/false: YAML turns an unquoted on, off, yes or no "
+                    'into a boolean; quote it: when: {"on": true}'
+                )
+            return {
+                {True: "yes", False: "no"}.get(key, key) if isinstance(key, bool) else key: value
+                for key, value in data.items()
+            }
+        return data
+
+
 class IntentAction(BaseModel):
-    """The tool call an intent stands for."""
+    """The tool call an intent stands for, and for a question what to say about its result."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -61,6 +105,21 @@ class IntentAction(BaseModel):
     """Name of a tool on the driver's MCP server."""
     args: dict[str, Any] = Field(default_factory=dict)
     """Tool arguments; a value ``"{slot}"`` is replaced by the matched slot value."""
+    answer: IntentAnswer | None = None
+    """For a yes/no question: the answer, from the returned state."""
+    reply: str | None = Field(default=None, min_length=1)
+    """For a question: the reply, with ``{device}`` and the returned state's ``{key}`` filled in."""
+
+    @model_validator(mode="after")
+    def _one_kind_of_reply(self) -> IntentAction:
+        if self.answer is not None and self.reply is not None:
+            raise ValueError("give 'answer' (a yes/no question) or 'reply', not both")
+        return self
+
+    @property
+    def is_question(self) -> bool:
+        """Whether the intent asks about the device rather than acting on it."""
+        return self.answer is not None or self.reply is not None
 
     def slot_arguments(self) -> dict[str, str]:
         """The arguments filled from slots, as ``{argument: slot name}``."""

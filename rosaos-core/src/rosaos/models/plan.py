@@ -27,6 +27,7 @@ PLAN_FENCE = "rosaos-plan"
 PLAN_INTRO = "Planned device calls (rosaOS offline engine; an LLM may follow them too):"
 _BLOCK = re.compile(r"```" + PLAN_FENCE + r"[ \t]*\n(?P<body>.*?)\n?```", re.DOTALL)
 RESULT_PLACEHOLDER = "{result}"
+_STATE_FIELD = re.compile(r"\{(\w+)(?::([^{}]*))?\}")
 ERROR_PLACEHOLDER = "{error}"
 
 
@@ -70,6 +71,9 @@ class Plan(BaseModel):
     ack: str = ""
     """What the kernel says once the process is launched."""
     answer: PlanAnswer | None = None
+    fills_state: bool = False
+    """Whether ``{key}`` placeholders in the reply (or answer) name keys of the last step's
+    result, to fill in ("Playing {track} by {artist}."): a driver's question template."""
 
     @property
     def devices(self) -> list[str]:
@@ -110,6 +114,27 @@ def render_result(result: Any) -> str:
     if isinstance(result, dict):
         return ", ".join(f"{key}: {_scalar(value)}" for key, value in result.items())
     return _scalar(result)
+
+
+def fill_state(text: str, state: Any) -> str | None:
+    """``text`` with each ``{key}`` or ``{key:spec}`` replaced by that key of ``state``, formatted;
+    ``{result}`` is the whole state on one line. None when a key is missing or will not format."""
+    try:
+        return _STATE_FIELD.sub(lambda match: _state_field(match, state), text)
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
+def _state_field(match: re.Match[str], state: Any) -> str:
+    key, spec = match.group(1), match.group(2) or ""
+    if key == "result" and not spec:
+        return render_result(state)
+    if not isinstance(state, dict):
+        raise TypeError("the result is not a mapping")
+    value = state[key]
+    if value is None:
+        raise ValueError(f"{key} is null")
+    return format(value, spec) if spec else _scalar(value)
 
 
 def _scalar(value: Any) -> str:

@@ -38,7 +38,7 @@ from rosaos.models.conversation import (
     tool_outcomes,
 )
 from rosaos.models.phrases import phrase
-from rosaos.models.plan import Plan, PlanError, decode_plan, render_result
+from rosaos.models.plan import Plan, PlanError, decode_plan, fill_state, render_result
 
 # The worker heads each granted device's prompt section "## <instance> (<driver>)".
 NO_PLAN_REPLY = (
@@ -152,11 +152,17 @@ def final_reply(plan: Plan, result: Any) -> str:
     """The plan's reply after its last step returned ``result``."""
     value = _as_data(result)
     if plan.answer is None:
-        return plan.reply.replace("{result}", render_result(value))
-    if not isinstance(value, dict):
+        reply = plan.reply
+    elif not isinstance(value, dict):
         return plan.failure.replace("{error}", f"the device state could not be read: {render_result(value)}")
-    matches = all(value.get(key) == expected for key, expected in plan.answer.when.items())
-    return plan.answer.yes if matches else plan.answer.no
+    else:
+        matches = all(value.get(key) == expected for key, expected in plan.answer.when.items())
+        reply = plan.answer.yes if matches else plan.answer.no
+    if not plan.fills_state:
+        return reply.replace("{result}", render_result(value))
+    # A key this device's state lacks (a robot without a battery) reads the whole state instead.
+    filled = fill_state(reply, value)
+    return filled if filled is not None else f"{plan.steps[-1].device}: {render_result(value)}"
 
 
 def _as_data(content: Any) -> Any:

@@ -40,6 +40,10 @@ class Reading:
     answers: dict[str, PlanAnswer] = field(default_factory=dict)
     readouts: set[str] = field(default_factory=set)
     """Devices whose reply is their state read aloud ("what is the kitchen light?")."""
+    replies: dict[str, str] = field(default_factory=dict)
+    """Device → the reply a driver's question template gives, state keys still to fill."""
+    fills_state: set[str] = field(default_factory=set)
+    """Devices whose reply or answer has ``{key}`` placeholders for the state the process reads."""
     issue: str | None = None
     """The question or refusal to reply with instead of acting."""
     wildcards: tuple[str, ...] = ()
@@ -149,8 +153,27 @@ def driver_reading(
     args = {
         name: slots[references[name]] if name in references else value for name, value in action.args.items()
     }
-    step = PlanStep(device=targets[0], tool=action.tool, args=args)
-    return Reading(clause, RANK_DRIVER, literal, calls={targets[0]: [step]}, wildcards=wildcard_texts(result))
+    device = targets[0]
+    reading = Reading(
+        clause,
+        RANK_DRIVER,
+        literal,
+        calls={device: [PlanStep(device=device, tool=action.tool, args=args)]},
+        wildcards=wildcard_texts(result),
+    )
+    display = context.devices[device].display_name
+    if action.is_question:
+        reading.fills_state.add(device)
+    if action.answer is not None:
+        answer = action.answer
+        reading.answers[device] = PlanAnswer(
+            when=answer.when,
+            yes=answer.yes.replace("{device}", display),
+            no=answer.no.replace("{device}", display),
+        )
+    elif action.reply is not None:
+        reading.replies[device] = action.reply.replace("{device}", display)
+    return reading
 
 
 def ha_reading(

@@ -87,9 +87,12 @@ def _process(
     steps = [step for _, part_steps in parts for step in part_steps]
     last = parts[-1][0]
     answer = last.answers.get(device)
-    question = answer is not None or device in last.readouts
+    question = answer is not None or device in last.readouts or device in last.replies
     if question:
-        reply = answer.yes if answer is not None else readout_reply(context, device)
+        if answer is not None:
+            reply = answer.yes
+        else:
+            reply = last.replies.get(device) or readout_reply(context, device)
         ack = phrase(language, "ack_question", device=display)
         failure = phrase(language, "failure_question", device=display, error="{error}")
     else:
@@ -97,7 +100,14 @@ def _process(
         # Processes of one "all the lights" share their ack, so the kernel says it once.
         ack = phrase(language, "ack", clause=spoken if shared else detail)
         failure = phrase(language, "failure", clause=detail, error="{error}")
-    plan = Plan(steps=steps, reply=reply, failure=failure, ack=ack, answer=answer)
+    plan = Plan(
+        steps=steps,
+        reply=reply,
+        failure=failure,
+        ack=ack,
+        answer=answer,
+        fills_state=device in last.fills_state,
+    )
     summary = ". ".join(clauses) + ("?" if question else ".") + (f" This process: {device}." if named else "")
     return ProcessPlan(devices=(device,), summary=summary, plan=plan)
 

@@ -248,7 +248,8 @@ class DriverConformance:
     def test_intents_name_existing_tools(
         self, rosaos_driver: DriverInfo, shared_tools: list[mcp_types.Tool]
     ) -> None:
-        """Every intent calls a tool the server has, with arguments that tool takes."""
+        """Every intent calls a tool the server has, with arguments that tool takes; a question
+        (an intent with ``answer`` or ``reply``) calls a read-only tool, so asking moves nothing."""
         intents = _intents_file(rosaos_driver.spec)
         tools = {tool.name: tool for tool in shared_tools}
         problems = []
@@ -263,6 +264,12 @@ class DriverConformance:
                 problems.append(f"{intent}: {action.tool} takes no argument {', '.join(unknown)}")
             if missing := sorted(required - set(action.args)):
                 problems.append(f"{intent}: {action.tool} needs {', '.join(missing)}; add them under args")
+            read_only = tool.annotations is not None and tool.annotations.read_only_hint is True
+            if action.is_question and not read_only:
+                problems.append(
+                    f"{intent}: a question (answer/reply) must call a read-only tool such as get_state; "
+                    f"{action.tool} is not annotated readOnlyHint=true"
+                )
         assert not problems, f"{intents.path}:\n" + "\n".join(problems)
 
     @pytest.mark.asyncio
