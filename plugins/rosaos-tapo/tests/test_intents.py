@@ -161,3 +161,20 @@ def test_ha_sentences_reach_the_bulbs_through_the_engine(
 def test_a_brightness_question_reads_the_state(probe: IntentProbe, sentence: str) -> None:
     match = probe.match(sentence)
     assert match is not None and (match.tool, match.args) == ("get_state", {})
+
+
+@pytest.mark.parametrize(
+    ("sentence", "expected"),
+    [
+        ("Switch the kitchen light to blue", ("kitchen_light", "set_color_name", {"name": "blue"})),
+        (
+            "Set the kitchen light to full brightness",
+            ("kitchen_light", "set_brightness", {"brightness": 100}),
+        ),
+        ("turn the bedroom light all the way up", ("bedroom_light", "set_brightness", {"brightness": 100})),
+    ],
+)
+def test_everyday_variants(
+    probe: IntentProbe, sentence: str, expected: tuple[str, str, dict[str, int | str]]
+) -> None:
+    assert probe.match(sentence) == expected
