@@ -34,6 +34,20 @@ ConfigOption = Annotated[
     ),
 ]
 JsonOption = Annotated[bool, typer.Option("--json", help="Print machine-readable JSON.")]
+AnswerTimeoutOption = Annotated[
+    float,
+    typer.Option("--timeout", metavar="SECONDS", min=0.1, help="Seconds get_state may take to answer."),
+]
+StartTimeoutOption = Annotated[
+    float,
+    typer.Option(
+        "--start-timeout",
+        metavar="SECONDS",
+        min=0.1,
+        help="Seconds a device may take to start: one started here for the check, "
+        "or one that `rosaos up` is still starting.",
+    ),
+]
 
 
 def _version(value: bool) -> None:
@@ -58,6 +72,8 @@ def devices_list(
     check: Annotated[
         bool, typer.Option("--check/--no-check", help="Health-check each instance (get_state).")
     ] = True,
+    timeout: AnswerTimeoutOption = 5.0,
+    start_timeout: StartTimeoutOption = 60.0,
 ) -> None:
     """List the device instances: driver, package, concurrency, backend, URL and health.
 
@@ -65,7 +81,11 @@ def devices_list(
     """
     from rosaos.devices.commands import list_devices
 
-    raise typer.Exit(list_devices(config, json_output=json_output, check=check))
+    raise typer.Exit(
+        list_devices(
+            config, json_output=json_output, check=check, timeout=timeout, start_timeout=start_timeout
+        )
+    )
 
 
 @devices_app.command("check")
@@ -73,12 +93,15 @@ def devices_check(
     name: Annotated[str, typer.Argument(help="Instance name, e.g. kitchen_light.")],
     config: ConfigOption = None,
     json_output: JsonOption = False,
-    timeout: Annotated[float, typer.Option(help="Seconds to wait for the device.")] = 10.0,
+    timeout: AnswerTimeoutOption = 10.0,
+    start_timeout: StartTimeoutOption = 60.0,
 ) -> None:
     """Connect to one instance, call get_state and print it. Non-zero exit with the reason if it fails."""
     from rosaos.devices.commands import check_device
 
-    raise typer.Exit(check_device(name, config, json_output=json_output, timeout=timeout))
+    raise typer.Exit(
+        check_device(name, config, json_output=json_output, timeout=timeout, start_timeout=start_timeout)
+    )
 
 
 @devices_app.command("login")

@@ -117,9 +117,11 @@ def test_list_json_reports_each_instance_and_exits_0_even_if_one_is_unreachable(
         "url": None,
         "health": "healthy (not served)",
         "state": None,
+        "via": "in-process",
     }
     assert rows["kitchen_light"]["state"]["brightness"] == 30
     assert rows["far_lamp"]["health"].startswith("error: nothing is listening at")
+    assert rows["far_lamp"]["via"] == "remote"
 
 
 def test_list_probes_a_served_instance_at_its_url(
@@ -128,7 +130,7 @@ def test_list_probes_a_served_instance_at_its_url(
     monkeypatch.setenv("ROSAOS_DATA_DIR", str(served.data_dir))
     assert list_devices(served.config, json_output=True, check=True) == 0
     [row] = json.loads(capsys.readouterr().out)
-    assert row["url"] == served.url
+    assert (row["url"], row["via"]) == (served.url, "served")
     assert row["health"] == "healthy"
 
 

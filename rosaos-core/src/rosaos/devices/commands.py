@@ -12,8 +12,9 @@ import ipaddress
 import json
 import socket
 import sys
+from collections.abc import Callable, Coroutine
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, TypeVar
 from urllib.parse import urlsplit
 
 from pydantic import BaseModel
@@ -23,19 +24,22 @@ from rich.table import Table
 
 from rosaos.auth import load_or_create_token, token_path
 from rosaos.config import ConfigError, RosaosConfig, load_config
-from rosaos.devices.client import DeviceClient
-from rosaos.devices.host import install_stop_signals, serve_until_stopped
-from rosaos.devices.runtime import RuntimeEntry, record_served_device, served_devices
-from rosaos.devices.serve import ServedDevice, open_device
+from rosaos.devices.health import CheckBudget, CheckResult, HealthCheck, Route, Via, find_routes
+from rosaos.devices.host import START_TIMEOUT, install_stop_signals, serve_until_stopped
+from rosaos.devices.progress import CheckProgress, wants_progress
+from rosaos.devices.runtime import record_served_device, served_devices
+from rosaos.devices.serve import ServedDevice
 from rosaos.devices.world import DeviceInstance, World, build_world
 from rosaos.drivers import DeviceError
 from rosaos.frontends.console import console
 from rosaos.plugins import DriverRegistry, load_drivers
 
 LIST_TIMEOUT = 5.0
-"""Seconds each health check in ``devices list`` may take; they run concurrently."""
+"""Default seconds each instance's ``get_state`` may take in ``devices list`` (``--timeout``)."""
+CHECK_TIMEOUT = 10.0
+"""Default seconds ``get_state`` may take in ``devices check`` (``--timeout``)."""
 
-Via = Literal["served", "remote", "in-process"]
+T = TypeVar("T")
 
 
 class DeviceRow(BaseModel):
@@ -52,6 +56,8 @@ class DeviceRow(BaseModel):
     health: str
     state: dict[str, Any] | None = None
     """The ``get_state`` answer, when the instance was checked."""
+    via: Via | None = None
+    """How it is (or would be) checked, as in ``devices check --json``; None for a placeholder."""
 
 
 def _stderr() -> Console:
@@ -73,29 +79,36 @@ def _load_or_report(config_path: Path | None) -> tuple[RosaosConfig, DriverRegis
         return None
 
 
-def _token_for(instance: DeviceInstance, data_dir: Path) -> str:
-    return instance.token or load_or_create_token(data_dir)
-
-
-async def _check_in_process(instance: DeviceInstance, data_dir: Path, seconds: float) -> dict[str, Any]:
-    """Start the backend here, call get_state through an in-memory client, close the backend."""
-    try:
-        async with asyncio.timeout(seconds), open_device(instance, data_dir) as device:
-            return await DeviceClient.in_process(device.server, seconds, instance.name).get_state()
-    except TimeoutError:
-        raise DeviceError(f"{instance.name} did not start and answer within {seconds:g} s") from None
-    except DeviceError:
-        raise
-    except Exception as error:  # driver code: report it as the device's error, not a traceback
-        raise DeviceError(f"{instance.name}: {type(error).__name__}: {error}") from None
+def _run_checks(
+    checks: Callable[[HealthCheck], Coroutine[Any, Any, T]],
+    names: list[str],
+    data_dir: Path,
+    budget: CheckBudget,
+    json_output: bool,
+) -> T:
+    """Run ``checks`` on a fresh event loop, with a progress line on stderr for a terminal user."""
+    stderr = _stderr()
+    if not names or not wants_progress(json_output, stderr):
+        return asyncio.run(checks(HealthCheck(data_dir, budget)))
+    progress = CheckProgress(names)
+    with progress.shown_on(stderr):
+        return asyncio.run(checks(HealthCheck(data_dir, budget, progress.update)))
 
 
 # --- rosaos devices list ------------------------------------------------------------------------
 
 
-def list_devices(config_path: Path | None, json_output: bool = False, check: bool = True) -> int:
+def list_devices(
+    config_path: Path | None,
+    json_output: bool = False,
+    check: bool = True,
+    timeout: float = LIST_TIMEOUT,
+    start_timeout: float = START_TIMEOUT,
+) -> int:
     """Print the world's instances with driver, package, concurrency, backend, URL and health.
 
+    Instances are checked concurrently. One that nobody serves is started here and gets
+    ``start_timeout`` seconds to start, then ``timeout`` seconds to answer ``get_state``.
     Exits 0 even when some device is unhealthy or unreachable: listing is informational, and the
     health column says what is wrong. Use ``rosaos devices check NAME`` for a pass/fail exit code.
     Exits 2 only when the configuration cannot be used.
@@ -104,11 +117,19 @@ def list_devices(config_path: Path | None, json_output: bool = False, check: boo
     if loaded is None:
         return 2
     config, registry, world = loaded
-    rows = asyncio.run(_rows(world, config.data_dir, check))
+    instances = list(world)
+    checked = [i.name for i in instances if check and i.spec.implemented]
+    budget = CheckBudget(answer=timeout, start=start_timeout)
+
+    async def rows(health: HealthCheck) -> list[DeviceRow]:
+        routes = await asyncio.to_thread(find_routes, instances, config.data_dir)
+        return list(await asyncio.gather(*(_row(i, routes[i.name], health, check) for i in instances)))
+
+    listed = _run_checks(rows, checked, config.data_dir, budget, json_output)
     if json_output:
-        print(json.dumps([row.model_dump() for row in rows], indent=2, default=str))
+        print(json.dumps([row.model_dump() for row in listed], indent=2, default=str))
     else:
-        _print_table(rows, world)
+        _print_table(listed, world)
     for broken in registry.broken:
         _stderr().print(
             f"[yellow]warning:[/] plugin {broken.plugin!r} ({broken.package}) is broken and was "
@@ -117,14 +138,7 @@ def list_devices(config_path: Path | None, json_output: bool = False, check: boo
     return 0
 
 
-async def _rows(world: World, data_dir: Path, check: bool) -> list[DeviceRow]:
-    served = await asyncio.to_thread(served_devices, data_dir)
-    return list(await asyncio.gather(*(_row(i, served.get(i.name), data_dir, check) for i in world)))
-
-
-async def _row(
-    instance: DeviceInstance, served: RuntimeEntry | None, data_dir: Path, check: bool
-) -> DeviceRow:
+async def _row(instance: DeviceInstance, route: Route, health: HealthCheck, check: bool) -> DeviceRow:
     info = instance.driver
     row = DeviceRow(
         instance=instance.name,
@@ -133,29 +147,31 @@ async def _row(
         version=info.version,
         concurrency=info.spec.concurrency,
         backend=instance.backend,
-        url=served.url if served else instance.url,
+        url=route.url,
         health="not checked",
     )
     if not info.spec.implemented:
         row.health = "not implemented"
         return row
-    if served is None and not instance.is_remote:
-        row.health = "not served"
-    elif served is not None and not check:
-        row.health = f"{served.status} (not checked)"
+    row.via = route.via
     if not check:
+        if route.entry is not None:
+            row.health = f"{route.entry.status} (not checked)"
+        elif route.via == "in-process":
+            row.health = "not served"
         return row
-    try:
-        if row.url is not None:
-            token = await asyncio.to_thread(_token_for, instance, data_dir)
-            row.state = await DeviceClient(row.url, token, LIST_TIMEOUT, instance.name).get_state()
-            row.health = "healthy"
-        else:
-            row.state = await _check_in_process(instance, data_dir, LIST_TIMEOUT)
-            row.health = "healthy (not served)"
-    except DeviceError as error:
-        row.health = f"error: {error}"
+    result = await health.check(instance, route)
+    row.url, row.state = result.route.url, result.state
+    if result.ok:
+        row.health = "healthy (not served)" if route.via == "in-process" else "healthy"
+    elif result.still_starting:
+        row.health = f"starting: {result.error}"
+    else:
+        row.health = f"error: {result.error}"
     return row
+
+
+HEALTH_COLOURS = {"healthy": "green", "error": "red", "starting": "yellow"}
 
 
 def _print_table(rows: list[DeviceRow], world: World) -> None:
@@ -164,13 +180,7 @@ def _print_table(rows: list[DeviceRow], world: World) -> None:
     for column in ("Instance", "Driver", "Package", "Concurrency", "Backend", "URL", "Health"):
         table.add_column(column, overflow="fold")
     for row in rows:
-        colour = (
-            "green"
-            if row.health.startswith("healthy")
-            else "red"
-            if row.health.startswith("error")
-            else "dim"
-        )
+        colour = next((c for word, c in HEALTH_COLOURS.items() if row.health.startswith(word)), "dim")
         table.add_row(
             row.instance,
             row.driver,
@@ -187,12 +197,18 @@ def _print_table(rows: list[DeviceRow], world: World) -> None:
 
 
 def check_device(
-    name: str, config_path: Path | None, json_output: bool = False, timeout: float = 10.0
+    name: str,
+    config_path: Path | None,
+    json_output: bool = False,
+    timeout: float = CHECK_TIMEOUT,
+    start_timeout: float = START_TIMEOUT,
 ) -> int:
     """Call one instance's get_state and print it; exit 1 with the reason when that fails.
 
-    Goes to the served URL when ``rosaos up`` or ``rosaos serve-device`` serves it here, to the
-    URL of a remote instance, or else starts it in this process; the output says which.
+    Goes to the served URL when ``rosaos up`` or ``rosaos serve-device`` serves it here (waiting
+    up to ``start_timeout`` seconds while ``rosaos up`` is still starting it), to the URL of a
+    remote instance, or else starts it in this process (``start_timeout`` seconds to start);
+    ``get_state`` then has ``timeout`` seconds. The output says which.
     """
     loaded = _load_or_report(config_path)
     if loaded is None:
@@ -208,23 +224,22 @@ def check_device(
             "it is listed but cannot be served or checked"
         )
         return _check_failed(name, None, None, reason, json_output)
-    served = served_devices(config.data_dir).get(name)
-    via: Via
-    if served is not None and served.url:
-        via, url = "served", served.url
-    elif instance.url is not None:
-        via, url = "remote", instance.url
-    else:
-        via, url = "in-process", None
-    try:
-        state = asyncio.run(_get_state(instance, url, config.data_dir, timeout))
-    except DeviceError as error:
-        return _check_failed(name, via, url, str(error), json_output)
+    route = find_routes([instance], config.data_dir)[name]
+    budget = CheckBudget(answer=timeout, start=start_timeout)
+
+    async def one(health: HealthCheck) -> CheckResult:
+        return await health.check(instance, route)
+
+    result = _run_checks(one, [name], config.data_dir, budget, json_output)
+    via, url, entry = result.route.via, result.route.url, result.route.entry
+    if result.error is not None:
+        return _check_failed(name, via, url, result.error, json_output)
+    state = result.state
     if json_output:
         print(json.dumps({"instance": name, "via": via, "url": url, "ok": True, "state": state}, indent=2))
         return 0
     where = {
-        "served": f"served at {url} (pid {served.pid if served else '?'})",
+        "served": f"served at {url} (pid {entry.pid if entry else '?'})",
         "remote": f"remote instance at {url}",
         "in-process": "in this process: it is not being served (start it with `rosaos up` "
         f"or `rosaos serve-device {name}`)",
@@ -232,15 +247,6 @@ def check_device(
     print(f"{name}: healthy, checked {where}")
     print(json.dumps(state, indent=2, default=str))
     return 0
-
-
-async def _get_state(
-    instance: DeviceInstance, url: str | None, data_dir: Path, seconds: float
-) -> dict[str, Any]:
-    if url is None:
-        return await _check_in_process(instance, data_dir, seconds)
-    token = await asyncio.to_thread(_token_for, instance, data_dir)
-    return await DeviceClient(url, token, seconds, instance.name).get_state()
 
 
 def _check_failed(name: str, via: Via | None, url: str | None, reason: str, json_output: bool) -> int:

@@ -35,6 +35,12 @@ from rosaos.plugins import load_drivers
 
 log = logging.getLogger("rosaos.devices.host")
 
+START_TIMEOUT = 60.0
+"""Default seconds a device may take to start: its backend starting and its server listening.
+
+``rosaos up`` gives each host this long; ``devices list`` and ``devices check`` give an instance
+they start themselves the same (``--start-timeout``)."""
+
 
 class HostJob(BaseModel):
     """What a device host serves: one instance, fully resolved, plus where to listen."""

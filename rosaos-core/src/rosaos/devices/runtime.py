@@ -4,7 +4,8 @@
 ``<data_dir>/run/devices.json`` on every status change and removes it when it stops;
 ``rosaos serve-device`` records its one instance in ``<data_dir>/run/serve-device/<name>.json``.
 ``rosaos devices list`` and ``rosaos devices check`` read them through :func:`served_devices`, which
-ignores files left behind by a process that died.
+ignores files left behind by a process that died, and :func:`devices_not_ready`, which says what
+``rosaos up`` is still starting.
 """
 
 from __future__ import annotations
@@ -100,6 +101,21 @@ def served_devices(data_dir: Path) -> dict[str, RuntimeEntry]:
             if entry.url and entry.pid and pid_alive(entry.pid):
                 served.setdefault(path.stem, entry)
     return served
+
+
+def devices_not_ready(data_dir: Path) -> dict[str, RuntimeEntry]:
+    """Instances a running ``rosaos up`` hosts but does not serve yet (starting, restarting, failed), by name.
+
+    ``rosaos up`` owns them: a command that wants one waits for it rather than starting a second copy.
+    """
+    runtime = read_runtime_file(data_dir)
+    if runtime is None:
+        return {}
+    return {
+        name: entry
+        for name, entry in runtime.devices.items()
+        if entry.status != "stopped" and not (entry.url and entry.pid and pid_alive(entry.pid))
+    }
 
 
 @contextlib.contextmanager

@@ -27,7 +27,7 @@ from pydantic import BaseModel
 
 from rosaos.auth import token_path
 from rosaos.devices.client import DeviceClient
-from rosaos.devices.host import HostJob, HostProcess
+from rosaos.devices.host import START_TIMEOUT, HostJob, HostProcess
 from rosaos.devices.runtime import (
     DeviceStatus,
     RuntimeEntry,
@@ -101,7 +101,7 @@ class DeviceSupervisor:
         unhealthy_after: int = 3,
         backoff_base: float = 0.5,
         backoff_cap: float = 30.0,
-        start_timeout: float = 60.0,
+        start_timeout: float = START_TIMEOUT,
         stop_grace: float = 5.0,
     ) -> None:
         self.world = world
@@ -161,6 +161,9 @@ class DeviceSupervisor:
             self._devices[instance.name] = hosted
             runner = self._watch_remote(hosted) if instance.is_remote else self._keep_serving(hosted)
             self._tasks.append(asyncio.create_task(runner, name=f"device {instance.name}"))
+        # Record "starting" at once: `devices list` and `devices check` then wait for these
+        # instances instead of starting second copies while their hosts boot.
+        await self._save()
         await asyncio.gather(
             *(d.settled.wait() for d in self._devices.values() if d.status != "not implemented")
         )
