@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import asyncio
 import socket
+import subprocess
+import sys
 import time
 from typing import Any
 
@@ -68,3 +70,36 @@ async def test_the_real_backend_sends_its_token_to_rosbridge(simulator: Any, ope
         async with open_real(sim.simulator.port, rosbridge_token="wrong", connect_timeout=0.5):
             pass
     assert state["docked"] is False
+
+
+TWO_AT_ONCE = """
+import asyncio, sys, tempfile
+from pathlib import Path
+from rosaos.drivers import DeviceContext
+from rosaos_ros.plugin import sim_backend
+from rosaos_ros.settings import RosSettings
+
+async def main():
+    def ctx(name, profile):
+        return DeviceContext(instance=name, description=name, settings=RosSettings(profile=profile),
+                             backend="sim", data_dir=Path(tempfile.mkdtemp()))
+    backends = [sim_backend(ctx("turtlebot", "turtlebot4")), sim_backend(ctx("dog", "puppypi"))]
+    try:
+        await asyncio.gather(*(backend.start() for backend in backends))
+        states = await asyncio.gather(*(backend.get_state() for backend in backends))
+        print("ok", sorted(len(state) > 0 for state in states))
+    finally:
+        await asyncio.gather(*(backend.close() for backend in backends), return_exceptions=True)
+
+asyncio.run(main())
+"""
+
+
+@pytest.mark.parametrize("attempt", range(3))
+def test_two_robots_connecting_at_once_in_a_fresh_process_both_connect(attempt: int) -> None:
+    # roslibpy starts its per-process loop on first use; two first uses at once used to collide.
+    result = subprocess.run(
+        [sys.executable, "-c", TWO_AT_ONCE], capture_output=True, text=True, timeout=120, check=False
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert result.stdout.strip().splitlines()[-1] == "ok [True, True]", result.stdout

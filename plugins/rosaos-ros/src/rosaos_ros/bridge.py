@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import threading
 import time
 from collections import deque
 from collections.abc import Awaitable, Callable
@@ -39,6 +40,7 @@ RECONNECT_INITIAL_DELAY = 0.5
 RECONNECT_MAX_DELAY = 10.0
 PING_INTERVAL = 2.0
 PING_TIMEOUT = 3.0
+_CREATE_LOCK = threading.Lock()
 
 
 class ServiceCallFailed(DeviceError):
@@ -134,7 +136,11 @@ class RosbridgeClient:
 
     def _create(self) -> Any:
         headers = {"Authorization": f"Bearer {self.token}"} if self.token else None
-        ros = roslibpy.Ros(self.host, self.port, is_secure=self.secure, headers=headers, transport="asyncio")
+        # roslibpy starts its one background loop per process lazily, and that start is not
+        # thread-safe: two instances connecting at once (turtlebot and dog in one process)
+        # would collide. The lock makes the creations take turns; connecting stays concurrent.
+        with _CREATE_LOCK:
+            ros = roslibpy.Ros(self.host, self.port, is_secure=self.secure, headers=headers, transport="asyncio")
         factory = ros.factory
         factory.initialDelay = RECONNECT_INITIAL_DELAY
         factory.maxDelay = RECONNECT_MAX_DELAY
