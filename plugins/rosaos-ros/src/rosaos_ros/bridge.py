@@ -140,7 +140,9 @@ class RosbridgeClient:
         # thread-safe: two instances connecting at once (turtlebot and dog in one process)
         # would collide. The lock makes the creations take turns; connecting stays concurrent.
         with _CREATE_LOCK:
-            ros = roslibpy.Ros(self.host, self.port, is_secure=self.secure, headers=headers, transport="asyncio")
+            ros = roslibpy.Ros(
+                self.host, self.port, is_secure=self.secure, headers=headers, transport="asyncio"
+            )
         factory = ros.factory
         factory.initialDelay = RECONNECT_INITIAL_DELAY
         factory.maxDelay = RECONNECT_MAX_DELAY
