@@ -66,6 +66,8 @@ description = "Ceiling light in the kitchen"
 sim = {{ on = false }}
 """
 SECTIONS = ("warm", "cold", "throughput", "worker-start")
+FORK_SERVER = {"on": True}
+"""``[kernel] fork_server`` for the kernels under test; ``--no-fork-server`` turns it off."""
 EXPERIMENTS = {"tcp_nodelay": False, "kernel_session": False}
 """Set from ``--tcp-nodelay`` and ``--kernel-session``: changes to rosaOS tried out, not its defaults."""
 SETTLE_TIMEOUT = 60.0
@@ -184,7 +186,9 @@ async def running_kernel(
     with tempfile.TemporaryDirectory(prefix="rosaos-bench-") as tmp:
         home = Path(tmp)
         (home / "rosaos.toml").write_text(
-            f'data_dir = "{home / "data"}"\n[kernel]\npool_size = {pool_size}\n{WORLD}', encoding="utf-8"
+            f'data_dir = "{home / "data"}"\n[kernel]\npool_size = {pool_size}\n'
+            f"fork_server = {str(FORK_SERVER['on']).lower()}\n{WORLD}",
+            encoding="utf-8",
         )
         config = load_config(home / "rosaos.toml")
         python_path = os.pathsep.join(p for p in (str(HERE), os.environ.get("PYTHONPATH")) if p)
@@ -449,6 +453,8 @@ async def latency(
         memory_after = {w.pid: memory(w.pid) for w in worker_stats}
         host_pid = device_host_pid(kernel)
         memory_host = memory(host_pid) if host_pid else {}
+        fork_server = kernel.manager.pool.fork_server
+        memory_fork_server = memory(fork_server.pid) if fork_server and fork_server.pid else {}
         memory_kernel = memory(os.getpid())
     return {
         "label": label,
@@ -460,6 +466,7 @@ async def latency(
             "workers_fresh": list(memory_fresh.values()),
             "workers_after_runs": list(memory_after.values()),
             "device_host": memory_host,
+            "fork_server": memory_fork_server,
             "kernel_process": memory_kernel,
         },
     }
@@ -707,7 +714,8 @@ def report(results: dict[str, Any]) -> None:
         f"[bold]rosaOS kernel benchmark[/bold]  {m['date']}  {m['cores']} cores ({m['cpu'] or 'cpu?'}), "
         f"Python {m['python']}, {m['platform']}\n"
         f"load average {fmt_load(m['load_average_start'])} at start, {fmt_load(m['load_average_end'])} "
-        f"at end; experiments: tcp_nodelay={o['tcp_nodelay']}, kernel_session={o['kernel_session']}"
+        f"at end; experiments: tcp_nodelay={o['tcp_nodelay']}, kernel_session={o['kernel_session']}; "
+        f"fork server {'off' if o['no_fork_server'] else 'on'}"
     )
     if results["latency"]:
         table = Table(title="Latency: POST /chat → Tapo sim state (ms)")
@@ -753,6 +761,10 @@ def report(results: dict[str, Any]) -> None:
         ]
         for name, entries in memory_rows:
             table.add_row(f"{name}: RSS / anon MiB", mib_range(entries))
+    for mode in results["latency"]:
+        if mode["memory"].get("fork_server"):
+            name = f"fork server ({mode['label']}), after the runs: RSS / anon MiB"
+            table.add_row(name, mib_range([mode["memory"]["fork_server"]]))
     for mode in results["latency"]:
         table.add_row(
             f"kernel start, pool size {mode['pool_size']}, s", f"{mode['kernel_start_seconds']:.2f}"
@@ -821,6 +833,7 @@ async def run(options: argparse.Namespace) -> dict[str, Any]:
     with tempfile.TemporaryDirectory(prefix="rosaos-bench-work-") as tmp:
         work = Path(tmp)
         EXPERIMENTS.update(tcp_nodelay=options.tcp_nodelay, kernel_session=options.kernel_session)
+        FORK_SERVER["on"] = not options.no_fork_server
         if options.tcp_nodelay:
             enable_tcp_nodelay(work / "nodelay")
         if "warm" in sections:
@@ -829,8 +842,9 @@ async def run(options: argparse.Namespace) -> dict[str, Any]:
                     await latency("warm pool", 2, options.runs, options.warmup, 1, work)
                 )
         if "cold" in sections:
-            with phase("latency, no pool"):
-                results["latency"].append(await latency("no pool", 0, options.cold_runs, 0, 100_000, work))
+            label = "no pool" if FORK_SERVER["on"] else "no pool, no fork server"
+            with phase(f"latency, {label}"):
+                results["latency"].append(await latency(label, 0, options.cold_runs, 0, 100_000, work))
         if "throughput" in sections:
             with phase("round trips and throughput"):
                 results["round_trips"], results["throughput"] = await throughput(
@@ -882,6 +896,11 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "--kernel-session",
         action="store_true",
         help="experiment: keep the kernel agent's MCP toolset open across events (see the README)",
+    )
+    parser.add_argument(
+        "--no-fork-server",
+        action="store_true",
+        help="kernels with [kernel] fork_server = false: each one-off worker starts a new Python",
     )
     parser.add_argument(
         "--load-generator", nargs=3, metavar=("URL", "COUNT", "CLIENTS"), help=argparse.SUPPRESS

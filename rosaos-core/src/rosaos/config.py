@@ -76,6 +76,9 @@ class KernelConfig(BaseModel):
     """Port for the API and web page; 0 picks a free one (printed at start)."""
     pool_size: int = Field(default=2, ge=0, le=32)
     """Warm worker subprocesses kept ready. A one-off worker is spawned when all are busy."""
+    fork_server: bool = True
+    """Fork one-off workers from a pre-imported fork server (milliseconds instead of seconds);
+    it costs one more process of about a warm worker's memory. Off: one-offs start a new Python."""
     job_timeout: float = Field(default=120.0, gt=0, le=3600)
     """Seconds a process agent may run before it is killed and its leases released."""
     request_limit: int = Field(default=30, ge=1, le=1000)

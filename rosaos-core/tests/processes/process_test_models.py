@@ -9,6 +9,9 @@ from __future__ import annotations
 import asyncio
 import json
 import os
+import signal
+import stat
+import sys
 import time
 from collections.abc import Awaitable
 
@@ -130,3 +133,37 @@ def fails() -> FunctionModel:
         raise RuntimeError("the model exploded\nsecond line that should not appear")
 
     return FunctionModel(respond, model_name="fails")
+
+
+def reports_process() -> FunctionModel:
+    """Answers with what its worker process looks like from inside, as JSON (see ``process_report``)."""
+
+    def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        return ModelResponse(parts=[TextPart(json.dumps(process_report()))])
+
+    return FunctionModel(respond, model_name="reports-process")
+
+
+def process_report() -> dict[str, object]:
+    """How the worker was started: what a job could tell apart between a spawned and a forked one."""
+    import __main__
+
+    masks = {
+        line.split(":")[0]: line.split(":")[1].strip()
+        for line in open("/proc/self/status").read().splitlines()  # noqa: SIM115 - /proc, in memory
+        if line.startswith(("SigBlk", "SigIgn", "SigCgt"))
+    }
+
+    return {
+        "argv": [os.path.basename(arg) for arg in sys.argv],
+        "main": getattr(__main__.__spec__, "name", None),
+        "main_file": os.path.basename(getattr(__main__, "__file__", "")),
+        "own_session": os.getsid(0) == os.getpid(),
+        "own_group": os.getpgid(0) == os.getpid(),
+        "signals": masks,
+        "sigchld": str(signal.getsignal(signal.SIGCHLD)),
+        "stdio": [stat.S_IFMT(os.fstat(fd).st_mode) for fd in (0, 1, 2)],
+        "environment": dict(os.environ),
+        "path": sys.path,
+        "cwd": os.getcwd(),
+    }

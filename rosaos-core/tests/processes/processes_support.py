@@ -10,6 +10,7 @@ import asyncio
 import itertools
 import os
 import tempfile
+import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -178,3 +179,27 @@ class Endings:
         reports = await eventually(lambda: self.reports.get(process_id), what=f"process {process_id} to end")
         assert len(reports) == 1, reports
         return reports[0]
+
+
+def parent_pid(pid: int) -> int:
+    """The parent of a running process, from /proc."""
+    stat = Path(f"/proc/{pid}/stat").read_text()
+    return int(stat.rsplit(")", 1)[1].split()[1])
+
+
+def process_running(pid: int) -> bool:
+    """Whether ``pid`` exists and has not exited (a zombie, exited but not yet reaped, has)."""
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except FileNotFoundError:
+        return False
+    return state not in ("Z", "X")
+
+
+def wait_until_dead(pid: int, within: float = 10.0) -> None:
+    """Block until ``pid`` has exited, without letting the event loop run (so the pool cannot notice)."""
+    deadline = time.monotonic() + within
+    while process_running(pid):
+        if time.monotonic() > deadline:
+            raise AssertionError(f"process {pid} did not exit within {within:g} s")
+        time.sleep(0.01)

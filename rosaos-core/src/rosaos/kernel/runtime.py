@@ -251,7 +251,8 @@ class Kernel:
         self.supervisor = self._hosting or DeviceSupervisor(self.world, self.data_dir, self._token)
         await self.supervisor.start()
         self.states = DeviceStateCache(self.endpoints)
-        pool = WorkerPool(size=self.config.kernel.pool_size, env=self._worker_env)
+        kernel = self.config.kernel
+        pool = WorkerPool(size=kernel.pool_size, env=self._worker_env, fork_server=kernel.fork_server)
         self.manager = ProcessManager(
             devices=self.endpoints,
             model=self._process_model,

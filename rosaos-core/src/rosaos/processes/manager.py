@@ -23,6 +23,7 @@ from pydantic import BaseModel
 
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.models.select import ModelSpec
+from rosaos.processes.forking import preload_modules
 from rosaos.processes.jobs import GrantedDevice, WorkerCallback, WorkerJob
 from rosaos.processes.leases import LeaseRefused, LeaseTable
 from rosaos.processes.pool import PoolError, WorkerPool
@@ -89,6 +90,7 @@ class ProcessManager:
         """The latched emergency stop, or None. While latched every launch is refused. The kernel
         keeps it on disk and passes it in at start, so a restart does not unlatch it."""
         pool.on_ended = self._worker_ended
+        pool.preload.extend(preload_modules(model))
 
     @property
     def pool(self) -> WorkerPool:

@@ -1,7 +1,10 @@
 """The warm worker pool: long-lived worker subprocesses that run process agents, one job each at a time.
 
 Importing pydantic-ai and FastMCP takes seconds, so workers are started ahead of time and reused.
-When every warm worker is busy, a one-off worker is spawned for the job and retired after it.
+When every warm worker is busy, a one-off worker is spawned for the job and retired after it. It
+is forked by the fork server (:mod:`rosaos.processes.forking`), which did those imports once, so
+it starts in milliseconds; when the fork server is off or not available, it is started as a new
+Python process like a warm worker. Either way the pool handles it the same.
 
 Each worker runs in its own process group and is watched by one task that reads its protocol
 lines (see :mod:`rosaos.processes.worker`) and notices when it exits. That watcher is the only
@@ -25,13 +28,14 @@ import logging
 import os
 import signal
 import sys
-from collections.abc import Awaitable, Callable, Mapping
+from collections.abc import Awaitable, Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, Protocol
 
 from pydantic import ValidationError
 
+from rosaos.processes.forking import ForkServer, ForkServerError
 from rosaos.processes.jobs import ProcessStatus, WorkerCallback, WorkerJob
 
 log = logging.getLogger(__name__)
@@ -70,10 +74,28 @@ class WorkerStats:
     rss_bytes: int | None
 
 
+class WorkerProcess(Protocol):
+    """What the pool uses of a worker process: ``asyncio.subprocess.Process``, or a forked worker."""
+
+    @property
+    def pid(self) -> int: ...
+
+    @property
+    def stdin(self) -> asyncio.StreamWriter | None: ...
+
+    @property
+    def stdout(self) -> asyncio.StreamReader | None: ...
+
+    @property
+    def returncode(self) -> int | None: ...
+
+    async def wait(self) -> int: ...
+
+
 class _Worker:
     """One worker subprocess and what the pool knows about it."""
 
-    def __init__(self, proc: asyncio.subprocess.Process, one_off: bool) -> None:
+    def __init__(self, proc: WorkerProcess, one_off: bool) -> None:
         self.proc = proc
         self.one_off = one_off
         self.ready = asyncio.Event()
@@ -95,7 +117,9 @@ class WorkerPool:
 
     ``env`` is added to this process's environment for the workers (e.g. ``PYTHONPATH``).
     A job may run ``kill_grace`` seconds past its timeout (the worker stops it itself at the
-    timeout and reports it) before the pool kills the worker.
+    timeout and reports it) before the pool kills the worker. With ``fork_server``, one-off
+    workers are forked by a fork server that imports ``preload`` modules ahead, besides the
+    worker's own.
     """
 
     def __init__(
@@ -107,6 +131,8 @@ class WorkerPool:
         on_ended: OnEnded | None = None,
         kill_grace: float = 5.0,
         start_timeout: float = 60.0,
+        fork_server: bool = True,
+        preload: Sequence[str] = (),
     ) -> None:
         if size < 0:
             raise ValueError("pool size must be 0 or more")
@@ -117,6 +143,9 @@ class WorkerPool:
         self.kill_grace = kill_grace
         self.start_timeout = start_timeout
         self._env = {**os.environ, **(env or {})}
+        self.preload = list(preload)
+        """Modules the fork server imports ahead (the process manager adds its model's)."""
+        self.fork_server = ForkServer(python, self._env) if fork_server else None
         self._workers: set[_Worker] = set()
         self._spawning: set[asyncio.Task[Any]] = set()
         self._watchers: set[asyncio.Task[Any]] = set()
@@ -124,9 +153,19 @@ class WorkerPool:
         self._start_failures = 0
 
     async def start(self) -> None:
-        """Start the warm workers and wait until each has finished its imports."""
+        """Start the warm workers and the fork server; wait until they have finished their imports.
+
+        A fork server that fails to start is logged, not raised: one-offs then start the slow way.
+        """
         self._stopping = False
-        workers = [await self._spawn(one_off=False) for _ in range(self.size)]
+        if self.fork_server is not None:
+            self.fork_server.preload = self.preload
+            self.fork_server.start()  # it imports alongside the warm workers
+        try:
+            workers = [await self._spawn(one_off=False) for _ in range(self.size)]
+        except PoolError:
+            await self.stop()
+            raise
         hint = f"run 'echo | {self.python} -m rosaos.processes.worker' to see why"
         try:
             async with asyncio.timeout(self.start_timeout):
@@ -138,6 +177,12 @@ class WorkerPool:
         if codes:
             await self.stop()
             raise PoolError(f"worker exited during start-up (exit code {', '.join(codes)}); {hint}")
+        if self.fork_server is not None:
+            with contextlib.suppress(TimeoutError):
+                async with asyncio.timeout(self.start_timeout):
+                    await self.fork_server.wait_ready()
+            if not self.fork_server.ready and self.fork_server.unusable is None:
+                log.warning("the fork server is not ready; one-off workers start the slow way until it is")
 
     async def run(self, job: WorkerJob) -> JobHandle:
         """Give ``job`` to an idle warm worker, or to a new one-off worker if all are busy."""
@@ -178,6 +223,8 @@ class WorkerPool:
         for worker in workers:
             self._kill(worker, "terminated")
         await asyncio.gather(*(worker.exited.wait() for worker in workers))
+        if self.fork_server is not None:
+            await self.fork_server.stop()
 
     def stats(self) -> list[WorkerStats]:
         """Every live worker: pid, state, job and resident memory (read from /proc on Linux)."""
@@ -205,21 +252,11 @@ class WorkerPool:
     # -- workers ------------------------------------------------------------------------------
 
     async def _spawn(self, one_off: bool, job: WorkerJob | None = None) -> _Worker:
-        try:
-            proc = await asyncio.create_subprocess_exec(
-                self.python,
-                "-m",
-                "rosaos.processes.worker",
-                stdin=asyncio.subprocess.PIPE,
-                stdout=asyncio.subprocess.PIPE,
-                env=self._env,
-                # Own process group: a kill takes everything the worker started with it, and a
-                # Ctrl-C in the terminal reaches the kernel, which then stops the pool in order.
-                start_new_session=True,
-                limit=LINE_LIMIT,
-            )
-        except OSError as failure:
-            raise PoolError(f"cannot start a worker with {self.python}: {failure.strerror}") from None
+        proc = await self._fork() if one_off else None
+        if proc is None:
+            if self._stopping:
+                raise PoolError("the worker pool is stopped")
+            proc = await self._exec()
         if self._stopping:  # stop() ran while this worker was being started: it must not outlive it
             with contextlib.suppress(ProcessLookupError):
                 os.killpg(proc.pid, signal.SIGKILL)
@@ -236,6 +273,36 @@ class WorkerPool:
         watcher.add_done_callback(self._watchers.discard)
         log.debug("started %s worker %d", "one-off" if one_off else "warm", proc.pid)
         return worker
+
+    async def _fork(self) -> WorkerProcess | None:
+        """A one-off worker from the fork server; None when it cannot give one (then spawn one)."""
+        if self.fork_server is None or not self.fork_server.ready or self._stopping:
+            return None
+        try:
+            return await self.fork_server.spawn(LINE_LIMIT)
+        except ForkServerError as failure:
+            log.warning("the fork server could not start a worker (%s); spawning one instead", failure)
+        except Exception:
+            log.exception("the fork server could not start a worker; spawning one instead")
+        return None
+
+    async def _exec(self) -> WorkerProcess:
+        """A new ``python -m rosaos.processes.worker`` process."""
+        try:
+            return await asyncio.create_subprocess_exec(
+                self.python,
+                "-m",
+                "rosaos.processes.worker",
+                stdin=asyncio.subprocess.PIPE,
+                stdout=asyncio.subprocess.PIPE,
+                env=self._env,
+                # Own process group: a kill takes everything the worker started with it, and a
+                # Ctrl-C in the terminal reaches the kernel, which then stops the pool in order.
+                start_new_session=True,
+                limit=LINE_LIMIT,
+            )
+        except OSError as failure:
+            raise PoolError(f"cannot start a worker with {self.python}: {failure.strerror}") from None
 
     def _replace(self, delay: float) -> None:
         async def replace() -> None:

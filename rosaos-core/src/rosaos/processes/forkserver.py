@@ -1,0 +1,223 @@
+"""The fork server, ``python -m rosaos.processes.forkserver FD [MODULE ...]``: forks one-off workers.
+
+A one-off worker started as ``python -m rosaos.processes.worker`` spends seconds starting Python
+and importing pydantic-ai and FastMCP. The fork server does that once: it imports the worker's
+modules (and ``MODULE``s, e.g. the process model's), then forks a ready-made worker for each
+request, in milliseconds. The pool's side is :mod:`rosaos.processes.forking`.
+
+Protocol: one JSON object per message on the UNIX ``SOCK_SEQPACKET`` socket ``FD``.
+
+- server to pool: ``{"event": "ready", "pid": P}`` once the imports are done, or
+  ``{"event": "unusable", "error": ...}`` (then it exits) when forking would not be safe.
+- pool to server: ``{"spawn": N}`` with two file descriptors (``SCM_RIGHTS``): the new worker's
+  stdin (a pipe's read end) and stdout (a pipe's write end).
+- server to pool: ``{"event": "spawned", "spawn": N, "pid": C}`` once worker ``C`` runs in its own
+  session, or ``{"event": "failed", "spawn": N, "error": ...}``.
+- server to pool: ``{"event": "exited", "pid": C, "returncode": R}`` when a worker ends (the server
+  is its parent and reaps it); ``R`` follows asyncio's convention: negative is the killing signal.
+
+A forked worker is what ``python -m rosaos.processes.worker`` would be: its own session and
+process group, the pipes as stdin and stdout, stderr shared with the server (the kernel's, as a
+spawned worker has), the same environment, Python's default signal handling, and the worker
+module run as ``__main__``. The server starts no thread and no event loop, which is what makes
+forking it safe. It exits when the pool closes the socket; workers still running then end on
+their own when their stdin closes, as warm workers do when the kernel dies.
+"""
+
+from __future__ import annotations
+
+import atexit
+import contextlib
+import gc
+import importlib
+import json
+import os
+import runpy
+import select
+import signal
+import socket
+import sys
+import threading
+from typing import Any, NoReturn
+
+WORKER = "rosaos.processes.worker"
+PRELOAD = (WORKER, "rosaos.models.routing")
+"""Imported by every fork server: the worker and what it imports for its first job."""
+FIRST_JOB = ("anyio._backends._asyncio", "jsonschema", "genai_prices.data")
+"""What the libraries import lazily during a worker's first job (about 50 ms; found by comparing
+``sys.modules`` before and after one). Best effort, like the extra modules: a name that a newer
+library version no longer has is skipped."""
+MESSAGE_LIMIT = 64 * 1024
+SETUP_DONE = b"+"
+"""What a new worker writes to the server once it has its own session and its pipes."""
+
+
+def main() -> None:
+    """Entry point: import the worker's modules, then serve spawn requests until the socket closes."""
+    sock = socket.socket(fileno=int(sys.argv[1]))
+    for module in (*PRELOAD, *FIRST_JOB, *sys.argv[2:]):
+        # Extra modules are a best guess (a model's module): one that fails is imported, and its
+        # error reported, by the worker that needs it.
+        with contextlib.suppress(Exception):
+            importlib.import_module(module)
+    importlib.import_module(WORKER)  # not optional: raise here if the worker cannot be imported
+    # The worker's imports stay loaded; the module itself is dropped, so that each worker runs it
+    # afresh as __main__, exactly as ``python -m`` does.
+    sys.modules.pop(WORKER)
+    package, _, name = WORKER.rpartition(".")
+    delattr(sys.modules[package], name)
+    threads = [thread.name for thread in threading.enumerate() if thread is not threading.main_thread()]
+    with contextlib.suppress(OSError), sock:
+        if threads:
+            reason = f"an imported module started threads ({', '.join(threads)}), so forking is unsafe"
+            _send(sock, {"event": "unusable", "error": reason})
+            return
+        # Objects that exist now are never collected: forked workers share their memory pages
+        # instead of each copying them when the collector walks them.
+        gc.collect()
+        gc.freeze()
+        _serve(sock)
+
+
+def _serve(sock: socket.socket) -> None:
+    wake_r, wake_w = os.pipe()
+    os.set_blocking(wake_w, False)
+    os.set_blocking(wake_r, False)
+    # SIGCHLD needs a Python handler for the wakeup fd to be written; the loop does the reaping.
+    signal.set_wakeup_fd(wake_w)
+    signal.signal(signal.SIGCHLD, _ignore)
+    _send(sock, {"event": "ready", "pid": os.getpid()})
+    while True:
+        readable, _, _ = select.select([sock.fileno(), wake_r], [], [])
+        if wake_r in readable:
+            with contextlib.suppress(BlockingIOError):
+                while os.read(wake_r, 512):
+                    pass
+            _reap(sock)
+        if sock.fileno() in readable:
+            message, fds, _, _ = socket.recv_fds(sock, MESSAGE_LIMIT, 2)
+            if not message:  # the pool closed its end
+                return
+            _spawn(sock, message, fds, keep_out=(wake_r, wake_w))
+
+
+def _spawn(sock: socket.socket, message: bytes, fds: list[int], keep_out: tuple[int, ...]) -> None:
+    try:
+        spawn = json.loads(message)["spawn"]
+    except (ValueError, KeyError, TypeError):
+        spawn = None
+    if spawn is None or len(fds) != 2:
+        _refuse(sock, spawn, "not a spawn request with two pipes", fds)
+        return
+    stdin_fd, stdout_fd = fds
+    try:
+        setup_r, setup_w = os.pipe()
+    except OSError as failure:
+        _refuse(sock, spawn, f"no pipe: {failure.strerror}", fds)
+        return
+    sys.stdout.flush()
+    sys.stderr.flush()
+    try:
+        pid = os.fork()
+    except OSError as failure:
+        _refuse(sock, spawn, f"fork failed: {failure.strerror}", [*fds, setup_r, setup_w])
+        return
+    if pid == 0:
+        _become_worker(sock, stdin_fd, stdout_fd, setup_w, close=(*keep_out, setup_r))
+    # The pipes must not leak into the next worker: its exit would then not close them.
+    for fd in (setup_w, stdin_fd, stdout_fd):
+        os.close(fd)
+    # Reply once the worker is in its own process group, so the pool's killpg(pid) reaches it.
+    with os.fdopen(setup_r, "rb", buffering=0) as setup:
+        done = setup.read(1) == SETUP_DONE
+    if done:
+        _send(sock, {"event": "spawned", "spawn": spawn, "pid": pid})
+    else:  # it died setting up; it is reaped (and its exit sent) like any other
+        _send(sock, {"event": "failed", "spawn": spawn, "error": f"worker {pid} died while starting"})
+
+
+def _reap(sock: socket.socket) -> None:
+    while True:
+        try:
+            pid, status = os.waitpid(-1, os.WNOHANG)
+        except ChildProcessError:
+            return
+        if pid == 0:
+            return
+        _send(sock, {"event": "exited", "pid": pid, "returncode": os.waitstatus_to_exitcode(status)})
+
+
+def _become_worker(
+    sock: socket.socket, stdin_fd: int, stdout_fd: int, setup_w: int, close: tuple[int, ...]
+) -> NoReturn:
+    """In the forked child: turn into a worker as ``python -m rosaos.processes.worker`` starts one."""
+    code = 1
+    try:
+        os.setsid()
+        signal.set_wakeup_fd(-1)
+        signal.signal(signal.SIGCHLD, signal.SIG_DFL)
+        sock.close()
+        for fd in close:
+            os.close(fd)
+        os.dup2(stdin_fd, 0)
+        os.dup2(stdout_fd, 1)
+        os.close(stdin_fd)
+        os.close(stdout_fd)
+        os.write(setup_w, SETUP_DONE)
+        os.close(setup_w)
+        # random reseeds itself after a fork (os.register_at_fork), as do logging's locks.
+        code = _run_worker()
+    finally:
+        os._exit(code)
+
+
+def _run_worker() -> int:
+    """Run the worker module as ``__main__`` and end the way the interpreter would; return the exit code."""
+    sys.argv = sys.argv[:1]  # run_module sets argv[0] to the worker's file, like ``python -m``
+    code = 0
+    interrupted = False
+    try:
+        runpy.run_module(WORKER, run_name="__main__", alter_sys=True)
+    except SystemExit as exit_:
+        if exit_.code is None:
+            code = 0
+        elif isinstance(exit_.code, int):
+            code = exit_.code
+        else:
+            print(exit_.code, file=sys.stderr)
+            code = 1
+    except KeyboardInterrupt:
+        interrupted = True
+    except BaseException as error:
+        sys.excepthook(type(error), error, error.__traceback__)
+        code = 1
+    # What interpreter shutdown does: wait for threads, run atexit, flush the standard streams.
+    shutdown_threads = getattr(threading, "_shutdown", None)
+    if shutdown_threads is not None:
+        shutdown_threads()
+    atexit._run_exitfuncs()
+    for stream in (sys.stdout, sys.stderr):
+        with contextlib.suppress(Exception):
+            stream.flush()
+    if interrupted:  # Python ends an uncaught Ctrl-C by dying of SIGINT
+        signal.signal(signal.SIGINT, signal.SIG_DFL)
+        os.kill(os.getpid(), signal.SIGINT)
+    return code
+
+
+def _refuse(sock: socket.socket, spawn: Any, error: str, fds: list[int]) -> None:
+    for fd in fds:
+        os.close(fd)
+    _send(sock, {"event": "failed", "spawn": spawn, "error": error})
+
+
+def _send(sock: socket.socket, message: dict[str, Any]) -> None:
+    sock.send(json.dumps(message).encode())
+
+
+def _ignore(signum: int, frame: object) -> None:
+    pass
+
+
+if __name__ == "__main__":
+    main()
