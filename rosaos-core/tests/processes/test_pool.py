@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import asyncio
 from collections.abc import AsyncIterator
+from pathlib import Path
 
 import pytest
 import pytest_asyncio
@@ -167,3 +168,27 @@ async def test_start_fails_clearly_when_workers_cannot_start() -> None:
 async def test_start_fails_clearly_when_python_is_missing() -> None:
     with pytest.raises(PoolError, match="cannot start a worker with /no/such/python"):
         await WorkerPool(size=1, python="/no/such/python").start()
+
+
+@pytest.mark.parametrize("size", [1, 0], ids=["warm worker", "forked one-off"])
+async def test_a_module_in_the_working_directory_does_not_shadow_the_workers_imports(
+    size: int,
+    kernel: KernelStandIn,
+    devices: dict[str, LoopbackDevice],
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    # `python -m` puts the working directory first on sys.path; a stray file there named like a
+    # dependency (h2.py, pydantic_ai.py) must not break the workers started from it.
+    (tmp_path / "pydantic_ai.py").write_text("raise ImportError('shadowed by the working directory')\n")
+    monkeypatch.chdir(tmp_path)
+    endings = Endings()
+    shadowed = WorkerPool(size=size, env=worker_env(), on_ended=endings.record)
+    try:
+        await shadowed.start()
+        job = make_job(kernel, "sets_level", [devices["lamp"]])
+        await shadowed.run(job)
+        callback, _ = await endings.wait(job.process_id)
+        assert (callback.status, callback.output) == ("ok", "lamp level is 42")
+    finally:
+        await shadowed.stop()

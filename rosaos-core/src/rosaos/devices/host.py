@@ -244,6 +244,7 @@ class HostProcess:
         try:
             process = await asyncio.create_subprocess_exec(
                 sys.executable,
+                "-P",  # the working directory must not shadow a module (a stray h2.py)
                 "-m",
                 "rosaos.devices.host",
                 stdin=asyncio.subprocess.PIPE,

@@ -194,6 +194,7 @@ class ForkServer:
         try:
             process = await asyncio.create_subprocess_exec(
                 self.python,
+                "-P",  # the working directory must not shadow a module (a stray h2.py)
                 "-m",
                 "rosaos.processes.forkserver",
                 str(theirs.fileno()),

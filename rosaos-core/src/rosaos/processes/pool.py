@@ -291,6 +291,7 @@ class WorkerPool:
         try:
             return await asyncio.create_subprocess_exec(
                 self.python,
+                "-P",  # the working directory must not shadow a module (a stray h2.py)
                 "-m",
                 "rosaos.processes.worker",
                 stdin=asyncio.subprocess.PIPE,
