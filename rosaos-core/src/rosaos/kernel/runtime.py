@@ -249,8 +249,6 @@ class Kernel:
         self._store = await EventStore.open(self.data_dir / EVENTS_FILE)
         self._updates = await UpdateStream.open(self._store.database)
         self.supervisor = self._hosting or DeviceSupervisor(self.world, self.data_dir, self._token)
-        await self.supervisor.start()
-        self.states = DeviceStateCache(self.endpoints)
         kernel = self.config.kernel
         pool = WorkerPool(size=kernel.pool_size, env=self._worker_env, fork_server=kernel.fork_server)
         self.manager = ProcessManager(
@@ -266,7 +264,15 @@ class Kernel:
             first_process_id=await self._store.next_process_id(),
             emergency_stop=await _stored_emergency_stop(self._store),
         )
-        await self.manager.start()
+        # Devices (a robot simulator takes seconds to boot) and the warm workers (seconds of
+        # imports each) start side by side; neither needs the other until the first event.
+        try:
+            async with asyncio.TaskGroup() as group:
+                group.create_task(self.supervisor.start(), name="start devices")
+                group.create_task(self.manager.start(), name="start worker pool")
+        except BaseExceptionGroup as failed:
+            raise failed.exceptions[0] from None
+        self.states = DeviceStateCache(self.endpoints)
         tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._store.note_process_id)
         agent = build_kernel_agent(self._models.kernel, tools)
         self.loop = KernelLoop(
