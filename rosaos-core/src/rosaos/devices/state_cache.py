@@ -1,7 +1,10 @@
 """Live device state for the kernel's ``GET /devices`` and the web page's device cards.
 
 One poller reads every served device's ``get_state`` about once a second over a kept-open MCP
-session, so any number of open pages cost the devices nothing extra.
+session, so any number of open pages cost the devices nothing extra. It polls only while someone
+looks: each ``GET /devices`` (:meth:`DeviceStateCache.wanted`) keeps it going for ``watch``
+seconds, and an idle ``rosaos up`` with no page open reads nothing. A request after a quiet
+spell waits for one fresh read rather than show a stale state.
 """
 
 from __future__ import annotations
@@ -27,30 +30,58 @@ class DeviceStateCache:
         endpoints: Callable[[], Mapping[str, DeviceEndpoint]],
         interval: float = 1.0,
         timeout: float = 3.0,
+        watch: float = 10.0,
     ) -> None:
         self._endpoints = endpoints
         self.interval = interval
         self.timeout = timeout
+        self.watch = watch
+        """Seconds of polling that one :meth:`wanted` buys."""
         self._states: dict[str, dict[str, Any]] = {}
         self._clients: dict[str, tuple[str, DeviceClient]] = {}
+        self._wanted_until = 0.0
+        self._refreshed_at = float("-inf")
+        self._wake = asyncio.Event()
+        self._lock = asyncio.Lock()
+        self.refreshes = 0
+        """How many times every device was read (for tests and benchmarks)."""
 
     def get(self, name: str) -> dict[str, Any] | None:
         """The last state read from ``name``, or None if it has not answered yet."""
         return self._states.get(name)
 
+    async def wanted(self) -> None:
+        """Someone is looking: poll for the next ``watch`` seconds. Returns once the states are
+        no older than two intervals (at once while polling; after one read after a quiet spell)."""
+        loop = asyncio.get_running_loop()
+        self._wanted_until = loop.time() + self.watch
+        self._wake.set()
+        if loop.time() - self._refreshed_at > 2 * self.interval:
+            await self.refresh()
+
     async def refresh(self) -> None:
         """Read every served device's state once, all at the same time."""
-        endpoints = {n: e for n, e in self._endpoints().items() if e.url is not None}
-        await asyncio.gather(*(self._read(endpoint) for endpoint in endpoints.values()))
-        for gone in set(self._states) - set(endpoints):
-            self._states.pop(gone, None)
+        async with self._lock:
+            endpoints = {n: e for n, e in self._endpoints().items() if e.url is not None}
+            await asyncio.gather(*(self._read(endpoint) for endpoint in endpoints.values()))
+            for gone in set(self._states) - set(endpoints):
+                self._states.pop(gone, None)
+            self._refreshed_at = asyncio.get_running_loop().time()
+            self.refreshes += 1
 
     async def run(self) -> None:
-        """Refresh until cancelled, then close the sessions."""
+        """Refresh while wanted, sleep while not, until cancelled; then close the sessions."""
+        loop = asyncio.get_running_loop()
         try:
+            await self.refresh()  # one read at start, so the first page load is instant
             while True:
-                await self.refresh()
-                await asyncio.sleep(self.interval)
+                self._wake.clear()
+                if loop.time() < self._wanted_until:
+                    await asyncio.sleep(self.interval)
+                else:
+                    await self._wake.wait()
+                if loop.time() - self._refreshed_at >= self.interval / 2:
+                    await self.refresh()
         finally:
             for _, client in self._clients.values():
                 with contextlib.suppress(Exception):

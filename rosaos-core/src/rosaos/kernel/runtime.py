@@ -127,6 +127,7 @@ class Kernel:
         return await self.manager.terminate(process_id)
 
     async def devices(self) -> Sequence[Mapping[str, Any]]:
+        await self.states.wanted()
         views = []
         for endpoint in self.endpoints().values():
             instance = self.world.instances[endpoint.name]
