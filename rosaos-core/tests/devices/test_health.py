@@ -25,7 +25,7 @@ from rich.console import Console
 
 from rosaos.auth import load_or_create_token
 from rosaos.config import load_config
-from rosaos.devices.commands import check_device, list_devices
+from rosaos.devices.commands import check_device, list_devices, serve_device_command
 from rosaos.devices.progress import CheckProgress
 from rosaos.devices.runtime import (
     DeviceStatus,
@@ -283,3 +283,13 @@ def test_on_a_terminal_the_list_shows_progress_while_devices_start(
     assert "Checking 2 devices: 0 done · lamp starting" in output
     assert "fan queued" in output  # one slowsim instance starts at a time
     assert output.count("healthy (not served)") == 2
+
+
+def test_serve_device_refuses_an_instance_that_rosaos_up_is_starting(
+    tmp_path: Path, data_dir: Path, capsys: pytest.CaptureFixture[str], slowsim: Path
+) -> None:
+    config = write_config(tmp_path / "rosaos.toml", data_dir, slow("lamp"))
+    rosaos_up_is_starting(data_dir, "lamp")
+    assert serve_device_command("lamp", config) == 1
+    assert "lamp belongs to the running `rosaos up` (starting)" in capsys.readouterr().err
+    assert slow_sim_driver.STARTED == []

@@ -27,7 +27,7 @@ from rosaos.config import ConfigError, RosaosConfig, load_config
 from rosaos.devices.health import CheckBudget, CheckResult, HealthCheck, Route, Via, find_routes
 from rosaos.devices.host import START_TIMEOUT, install_stop_signals, serve_until_stopped
 from rosaos.devices.progress import CheckProgress, wants_progress
-from rosaos.devices.runtime import record_served_device, served_devices
+from rosaos.devices.runtime import devices_not_ready, record_served_device, served_devices
 from rosaos.devices.serve import ServedDevice
 from rosaos.devices.world import DeviceInstance, World, build_world
 from rosaos.drivers import DeviceError
@@ -288,6 +288,14 @@ def serve_device_command(name: str, config_path: Path | None, host: str = "127.0
         print(
             f"error: {name} is already served at {already.url} (pid {already.pid}); stop that first, "
             "so two copies of one device do not disagree",
+            file=sys.stderr,
+        )
+        return 1
+    owned = devices_not_ready(config.data_dir).get(name)
+    if owned is not None:
+        print(
+            f"error: {name} belongs to the running `rosaos up` ({owned.status}); it starts and "
+            "restarts it itself. Stop rosaos up first to serve it on its own",
             file=sys.stderr,
         )
         return 1
