@@ -38,6 +38,7 @@ def intents_file(probe: IntentProbe) -> IntentsFile:
         ("look at me", ("look_at_face", {})),
         ("reachy say hello there", ("speak", {"text": "hello there"})),
         ("Tell everyone that dinner is ready", ("speak", {"text": "dinner is ready"})),
+        ("Reachy, turn to your left", ("rotate_body", {"degrees": 45})),
         ("wake up", ("wake_up", {})),
         ("wake up reachy", ("wake_up", {})),
         ("go to sleep", ("sleep", {})),

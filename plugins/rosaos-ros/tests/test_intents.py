@@ -52,6 +52,12 @@ def intents_file(probe: IntentProbe) -> IntentsFile:
         ("stop the turtlebot", ("turtlebot", "stop", {})),
         ("dog stop", ("dog", "stop", {})),
         ("take a picture with the turtlebot", ("turtlebot", "capture_image", {})),
+        ("move the turtlebot forward 50 centimeters", ("turtlebot", "move_distance", {"meters": 0.5})),
+        ("drive the turtlebot back 30 cm", ("turtlebot", "move_distance", {"meters": -0.3})),
+        ("make the dog walk backward", ("dog", "move_distance", {"meters": -0.5})),
+        ("bring the turtlebot home", ("turtlebot", "dock", {})),
+        ("turtlebot, go back to the dock", ("turtlebot", "dock", {})),
+        ("spin the turtlebot around", ("turtlebot", "rotate", {"degrees": 360})),
     ],
 )
 def test_sentence_maps_to_tool_call(
