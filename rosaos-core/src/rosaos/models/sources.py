@@ -122,8 +122,10 @@ def strip_article(text: str, language: str) -> str:
 
 
 def intent_sources(world: Iterable[DeviceInstance]) -> list[DeviceIntentSource]:
-    """The engine's view of every instance of a :class:`rosaos.devices.world.World`."""
-    return [DeviceIntentSource.from_instance(instance) for instance in world]
+    """The engine's view of every instance of a :class:`rosaos.devices.world.World` that can be
+    served: a placeholder driver's instance is never served, so the engine neither targets it
+    nor offers it in "Devices I can control"."""
+    return [DeviceIntentSource.from_instance(instance) for instance in world if instance.spec.implemented]
 
 
 def sources_from_config(
