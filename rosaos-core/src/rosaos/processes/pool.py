@@ -6,13 +6,11 @@ is forked by the fork server (:mod:`rosaos.processes.forking`), which did those 
 it starts in milliseconds; when the fork server is off or not available, it is started as a new
 Python process like a warm worker. Either way the pool handles it the same.
 
-Each worker runs in its own process group and is watched by one task that reads its protocol
-lines (see :mod:`rosaos.processes.worker`) and notices when it exits. That watcher is the only
-place a job's end is reported, so each job is reported exactly once, to ``on_ended``:
-
-- ``done`` line: the worker's own callback, and whether the worker delivered it to the kernel.
-- the process exits mid-job: ``crashed`` (with its exit code or signal), unless the pool killed
-  it on purpose: ``timeout`` (the job overran ``timeout + kill_grace``) or ``terminated``.
+This module holds the pool's public API and its scheduling: which worker gets a job, when a job
+overruns, how workers are started and replaced. Each worker runs in its own process group and is
+watched by one task, in :mod:`rosaos.processes.watcher`: the only place a job's end is reported
+(``done``, ``crashed``, ``timeout`` or ``terminated``), so each job is reported exactly once, to
+``on_ended``.
 
 Killing means SIGKILL to the whole process group, then waiting for the exit, so no worker (or
 anything it started) outlives a terminate, a timeout or :meth:`WorkerPool.stop`. A warm worker
@@ -23,29 +21,22 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import logging
 import os
 import signal
 import sys
-from collections.abc import Awaitable, Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal, Protocol
-
-from pydantic import ValidationError
+from typing import Any, Literal
 
 from rosaos.processes.forking import ForkServer, ForkServerError
-from rosaos.processes.jobs import ProcessStatus, WorkerCallback, WorkerJob
+from rosaos.processes.jobs import WorkerCallback, WorkerJob
+from rosaos.processes.watcher import OnEnded, Watcher, Worker, WorkerProcess, describe_exit
 
 log = logging.getLogger(__name__)
 
-OnEnded = Callable[[WorkerCallback, bool], Awaitable[None]]
-"""Called once per job with its callback and whether the worker already delivered it by HTTP."""
-
 LINE_LIMIT = 16 * 1024 * 1024
-RETIRE_GRACE = 5.0
-"""Seconds a worker that closed its stdout (retired, or broken) gets to exit before it is killed."""
 MAX_RESTART_DELAY = 30.0
 """Longest wait before replacing a worker, when workers keep dying during start-up."""
 
@@ -72,44 +63,6 @@ class WorkerStats:
     one_off: bool
     process_id: int | None
     rss_bytes: int | None
-
-
-class WorkerProcess(Protocol):
-    """What the pool uses of a worker process: ``asyncio.subprocess.Process``, or a forked worker."""
-
-    @property
-    def pid(self) -> int: ...
-
-    @property
-    def stdin(self) -> asyncio.StreamWriter | None: ...
-
-    @property
-    def stdout(self) -> asyncio.StreamReader | None: ...
-
-    @property
-    def returncode(self) -> int | None: ...
-
-    async def wait(self) -> int: ...
-
-
-class _Worker:
-    """One worker subprocess and what the pool knows about it."""
-
-    def __init__(self, proc: WorkerProcess, one_off: bool) -> None:
-        self.proc = proc
-        self.one_off = one_off
-        self.ready = asyncio.Event()
-        self.ready_seen = False
-        """True once the worker said ``ready`` (``ready`` is also set when it dies, to wake waiters)."""
-        self.exited = asyncio.Event()
-        """Set once the exit has been handled: the job reported, a replacement requested."""
-        self.job: WorkerJob | None = None
-        self.kill_reason: ProcessStatus | None = None
-        self.deadline: asyncio.TimerHandle | None = None
-
-    @property
-    def pid(self) -> int:
-        return self.proc.pid
 
 
 class WorkerPool:
@@ -146,9 +99,11 @@ class WorkerPool:
         self.preload = list(preload)
         """Modules the fork server imports ahead (the process manager adds its model's)."""
         self.fork_server = ForkServer(python, self._env) if fork_server else None
-        self._workers: set[_Worker] = set()
+        self._workers: set[Worker] = set()
         self._spawning: set[asyncio.Task[Any]] = set()
-        self._watchers: set[asyncio.Task[Any]] = set()
+        self._watcher = Watcher(
+            self._report, ready=self._worker_ready, gone=self._workers.discard, exited=self._worker_exited
+        )
         self._stopping = False
         self._start_failures = 0
 
@@ -209,7 +164,7 @@ class WorkerPool:
         worker = self._worker_for(process_id)
         if worker is None:
             return False
-        self._kill(worker, "terminated")
+        worker.kill("terminated")
         await worker.exited.wait()
         return True
 
@@ -221,7 +176,7 @@ class WorkerPool:
         await asyncio.gather(*self._spawning, return_exceptions=True)
         workers = list(self._workers)
         for worker in workers:
-            self._kill(worker, "terminated")
+            worker.kill("terminated")
         await asyncio.gather(*(worker.exited.wait() for worker in workers))
         if self.fork_server is not None:
             await self.fork_server.stop()
@@ -251,7 +206,7 @@ class WorkerPool:
 
     # -- workers ------------------------------------------------------------------------------
 
-    async def _spawn(self, one_off: bool, job: WorkerJob | None = None) -> _Worker:
+    async def _spawn(self, one_off: bool, job: WorkerJob | None = None) -> Worker:
         proc = await self._fork() if one_off else None
         if proc is None:
             if self._stopping:
@@ -262,15 +217,12 @@ class WorkerPool:
                 os.killpg(proc.pid, signal.SIGKILL)
             await proc.wait()
             raise PoolError("the worker pool is stopped")
-        worker = _Worker(proc, one_off)
+        worker = Worker(proc, one_off)
         # No await between registering and assigning: no other run() can take this worker.
         self._workers.add(worker)
         if job is not None:
             self._assign(worker, job)
-        watcher = asyncio.create_task(self._watch(worker), name=f"rosaos-worker-{proc.pid}")
-        # Referenced so the watcher is not garbage-collected while it runs.
-        self._watchers.add(watcher)
-        watcher.add_done_callback(self._watchers.discard)
+        self._watcher.watch(worker)
         log.debug("started %s worker %d", "one-off" if one_off else "warm", proc.pid)
         return worker
 
@@ -317,27 +269,19 @@ class WorkerPool:
         self._spawning.add(task)
         task.add_done_callback(self._spawning.discard)
 
-    def _assign(self, worker: _Worker, job: WorkerJob) -> None:
+    def _assign(self, worker: Worker, job: WorkerJob) -> None:
         worker.job = job
         deadline = job.timeout + self.kill_grace
-        worker.deadline = asyncio.get_running_loop().call_later(deadline, self._kill, worker, "timeout")
+        worker.deadline = asyncio.get_running_loop().call_later(deadline, worker.kill, "timeout")
 
-    async def _send(self, worker: _Worker, job: WorkerJob) -> None:
+    async def _send(self, worker: Worker, job: WorkerJob) -> None:
         assert worker.proc.stdin is not None
         # A worker that died already is reported by its watcher; the write error adds nothing.
         with contextlib.suppress(ConnectionError, RuntimeError):
             worker.proc.stdin.write(job.model_dump_json().encode() + b"\n")
             await worker.proc.stdin.drain()
 
-    def _kill(self, worker: _Worker, reason: ProcessStatus) -> None:
-        if worker.exited.is_set():
-            return
-        if worker.kill_reason is None:
-            worker.kill_reason = reason
-        with contextlib.suppress(ProcessLookupError, PermissionError):
-            os.killpg(worker.pid, signal.SIGKILL)
-
-    def _is_idle(self, worker: _Worker) -> bool:
+    def _is_idle(self, worker: Worker) -> bool:
         return (
             worker.job is None
             and not worker.one_off
@@ -345,48 +289,24 @@ class WorkerPool:
             and worker.proc.returncode is None
         )
 
-    def _worker_for(self, process_id: int) -> _Worker | None:
+    def _worker_for(self, process_id: int) -> Worker | None:
         for worker in self._workers:
             if worker.job is not None and worker.job.process_id == process_id:
                 return worker
         return None
 
-    # -- watching -----------------------------------------------------------------------------
+    # -- what the watcher tells the pool ------------------------------------------------------
 
-    async def _watch(self, worker: _Worker) -> None:
-        """Read the worker's protocol lines until it exits, then report its job and replace it."""
-        assert worker.proc.stdout is not None
-        try:
-            while line := await worker.proc.stdout.readline():
-                await self._on_line(worker, line)
-        except (ValueError, asyncio.LimitOverrunError) as failure:
-            log.error("worker %d broke the protocol (%s); killing it", worker.pid, failure)
-            self._kill(worker, "crashed")
-        finally:
-            await self._on_exit(worker)
+    def _worker_ready(self, worker: Worker) -> None:
+        """A worker finished its imports: start-up works again, so the back-off starts over."""
+        self._start_failures = 0
 
-    async def _on_exit(self, worker: _Worker) -> None:
-        try:
-            returncode = await asyncio.wait_for(worker.proc.wait(), timeout=RETIRE_GRACE)
-        except TimeoutError:  # stdout closed but the process lives on: it is of no use any more
-            self._kill(worker, "crashed")
-            returncode = await worker.proc.wait()
-        # SIGKILL the group also when the leader exited alone: nothing it started may linger.
-        with contextlib.suppress(ProcessLookupError, PermissionError):
-            os.killpg(worker.pid, signal.SIGKILL)
-        self._workers.discard(worker)
-        worker.ready.set()  # wake start() if the worker died while importing
-        job, worker.job = worker.job, None
-        try:
-            if job is not None:
-                self._cancel_deadline(worker)
-                await self._report_killed(worker, job, returncode)
-        finally:
-            if not worker.one_off and not self._stopping:
-                self._replace(self._replacement_delay(worker, returncode))
-            worker.exited.set()
+    def _worker_exited(self, worker: Worker, returncode: int) -> None:
+        """The worker's exit is handled and its job reported: replace it if it was a warm one."""
+        if not worker.one_off and not self._stopping:
+            self._replace(self._replacement_delay(worker, returncode))
 
-    def _replacement_delay(self, worker: _Worker, returncode: int) -> float:
+    def _replacement_delay(self, worker: Worker, returncode: int) -> float:
         """No delay, unless workers keep dying during start-up: then back off instead of looping."""
         if worker.ready_seen or worker.kill_reason is not None:
             return 0.0
@@ -396,69 +316,14 @@ class WorkerPool:
             "worker %d exited during start-up (%s); next try in %g s. Run "
             "'echo | %s -m rosaos.processes.worker' to see why",
             worker.pid,
-            _describe_exit(returncode),
+            describe_exit(returncode),
             delay,
             self.python,
         )
         return delay
 
-    async def _on_line(self, worker: _Worker, line: bytes) -> None:
-        try:
-            event = json.loads(line)
-        except json.JSONDecodeError:
-            log.warning("worker %d wrote a non-protocol line: %r", worker.pid, line[:200])
-            return
-        kind = event.get("event")
-        if kind == "ready":
-            worker.ready_seen = True
-            worker.ready.set()
-            self._start_failures = 0
-        elif kind == "done":
-            await self._on_done(worker, event)
-        elif kind == "rejected" and worker.job is not None:
-            job, worker.job = worker.job, None
-            self._cancel_deadline(worker)
-            await self._emit(
-                _ended(job, "error", f"the worker rejected the job: {event.get('error')}"), False
-            )
-
-    async def _on_done(self, worker: _Worker, event: dict[str, Any]) -> None:
-        job = worker.job
-        if job is None or event.get("process_id") != job.process_id:
-            log.warning("worker %d reported an unexpected job end: %s", worker.pid, event)
-            return
-        worker.job = None
-        self._cancel_deadline(worker)
-        try:
-            callback = WorkerCallback.model_validate(event.get("callback"))
-        except ValidationError as invalid:  # a worker from another rosaOS version, say
-            callback = _ended(job, "error", f"the worker sent an invalid callback: {invalid}")
-        if worker.one_off:
-            self._retire(worker)
-        await self._emit(callback, bool(event.get("delivered")))
-
-    def _retire(self, worker: _Worker) -> None:
-        """Let a one-off worker exit on its own (stdin closed); kill it if it lingers."""
-        assert worker.proc.stdin is not None
-        worker.proc.stdin.close()
-        asyncio.get_running_loop().call_later(RETIRE_GRACE, self._kill, worker, "terminated")
-
-    async def _report_killed(self, worker: _Worker, job: WorkerJob, returncode: int) -> None:
-        if worker.kill_reason == "timeout":
-            status: ProcessStatus = "timeout"
-            error = f"the process ran past its timeout of {job.timeout:g} s and its worker was killed"
-        elif worker.kill_reason == "terminated":
-            status, error = "terminated", "the process was terminated on request"
-        else:
-            status = "crashed"
-            error = (
-                f"the worker process (pid {worker.pid}) died while running the task "
-                f"({_describe_exit(returncode)}); the task may be half done, so check the "
-                "devices' state before retrying"
-            )
-        await self._emit(_ended(job, status, error), False)
-
-    async def _emit(self, callback: WorkerCallback, delivered: bool) -> None:
+    async def _report(self, callback: WorkerCallback, delivered: bool) -> None:
+        """Pass a job's end on to ``on_ended`` (the watcher calls this once per job)."""
         if self.on_ended is None:
             log.info("process %d ended: %s", callback.worker_id, callback.status)
             return
@@ -466,24 +331,6 @@ class WorkerPool:
             await self.on_ended(callback, delivered)
         except Exception:
             log.exception("on_ended failed for process %d", callback.worker_id)
-
-    def _cancel_deadline(self, worker: _Worker) -> None:
-        if worker.deadline is not None:
-            worker.deadline.cancel()
-            worker.deadline = None
-
-
-def _ended(job: WorkerJob, status: ProcessStatus, error: str) -> WorkerCallback:
-    return WorkerCallback(worker_id=job.process_id, status=status, error=error, task=job.task)
-
-
-def _describe_exit(returncode: int) -> str:
-    if returncode < 0:
-        try:
-            return f"killed by {signal.Signals(-returncode).name}"
-        except ValueError:
-            return f"killed by signal {-returncode}"
-    return f"exit code {returncode}"
 
 
 def _rss_bytes(pid: int) -> int | None:

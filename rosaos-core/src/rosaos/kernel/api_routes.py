@@ -1,0 +1,274 @@
+"""The kernel's HTTP routes: events in, updates out, processes, devices, the emergency stop, the web page.
+
+Two routers, included by :func:`rosaos.kernel.api.create_app` in this order: ``public`` (open to
+anyone who can reach the port: ``/health``, ``/login`` and the web page) and ``protected`` (the
+rest; ``BearerAuthMiddleware`` enforces the token, the router only documents it in OpenAPI).
+Events (``POST /chat``, ``POST /stt``, ``POST /event``) are answered ``202 {"id", "duplicate"}``
+only after the commit.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import time
+from collections.abc import AsyncIterator
+from pathlib import Path
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Depends, Header, HTTPException, Query, Request
+from fastapi.responses import FileResponse, Response
+from fastapi.security import HTTPBearer
+from sse_starlette import EventSourceResponse, ServerSentEvent
+
+import rosaos
+from rosaos.kernel.api_types import (
+    Accepted,
+    DeviceView,
+    EmergencyStopRequest,
+    Health,
+    KernelRuntime,
+    LoginLink,
+    LoginRequest,
+    LoginToken,
+    ProcessView,
+    SayRequest,
+    UpdatesPage,
+)
+from rosaos.kernel.events import (
+    Event,
+    NewEvent,
+    UserSaidEvent,
+    UserText,
+    UserTypedEvent,
+    WorkerCallbackEvent,
+)
+from rosaos.kernel.login import login_url
+from rosaos.kernel.updates import UpdateStream
+
+log = logging.getLogger(__name__)
+
+WEB_DIR = Path(__file__).resolve().parent.parent / "frontends" / "web"
+SSE_PING_SECONDS = 15
+SSE_SEND_TIMEOUT = 30.0
+"""A client that takes longer than this to accept one message is dropped (it reconnects and resumes)."""
+SSE_RETRY_MS = 2000
+
+
+def _runtime(request: Request) -> KernelRuntime:
+    runtime: KernelRuntime = request.app.state.runtime
+    return runtime
+
+
+Runtime = Annotated[KernelRuntime, Depends(_runtime)]
+IdempotencyHeader = Annotated[str | None, Header(alias="Idempotency-Key", max_length=200)]
+
+# Documents the token in OpenAPI (the /docs "Authorize" button); BearerAuthMiddleware enforces it.
+_bearer_docs = HTTPBearer(auto_error=False, description="The token from <data_dir>/token.")
+public = APIRouter()
+protected = APIRouter(dependencies=[Depends(_bearer_docs)])
+
+
+@public.get("/health")
+async def health(request: Request, runtime: Runtime) -> Health:
+    """Liveness, version and model, for monitors and the web page before login. No token needed."""
+    return Health(
+        version=rosaos.__version__,
+        model=runtime.model_description,
+        model_notice=runtime.model_notice,
+        uptime_seconds=round(time.monotonic() - request.app.state.started, 3),
+        pending_events=await runtime.events.pending_count(),
+    )
+
+
+@public.post("/login")
+async def login(body: LoginRequest, runtime: Runtime, response: Response) -> LoginToken:
+    """Trade a one-time login code (from ``#login=`` in the printed link) for the bearer token."""
+    response.headers["Cache-Control"] = "no-store"
+    if not runtime.login_codes.redeem(body.code):
+        raise HTTPException(
+            401,
+            "this login link is unknown, expired or already used: "
+            "open the newest link printed by `rosaos up`, or mint one with POST /login-codes",
+        )
+    return LoginToken(token=runtime.token)
+
+
+@protected.post("/login-codes", status_code=201)
+async def mint_login_code(request: Request, runtime: Runtime) -> LoginLink:
+    """A new one-time login link for the web page (the CLI prints it)."""
+    code = runtime.login_codes.mint()
+    base = str(request.base_url)
+    return LoginLink(code=code, url=login_url(base, code), expires_in=runtime.login_codes.lifetime)
+
+
+@protected.post("/chat", status_code=202)
+async def chat(body: SayRequest, runtime: Runtime, idempotency_key: IdempotencyHeader = None) -> Accepted:
+    """The user typed something: enqueue a ``user_typed`` event."""
+    event = UserTypedEvent(
+        kind="user_typed",
+        source=body.source or "chat",
+        payload=UserText(text=body.text),
+        idempotency_key=_key(body.idempotency_key, idempotency_key),
+    )
+    return await _accept(runtime, event)
+
+
+@protected.post("/stt", status_code=202)
+async def speech(body: SayRequest, runtime: Runtime, idempotency_key: IdempotencyHeader = None) -> Accepted:
+    """The voice front end heard the user: enqueue a ``user_said`` event."""
+    event = UserSaidEvent(
+        kind="user_said",
+        source=body.source or "stt",
+        payload=UserText(text=body.text),
+        idempotency_key=_key(body.idempotency_key, idempotency_key),
+    )
+    return await _accept(runtime, event)
+
+
+@protected.post("/event", status_code=202)
+async def post_event(
+    event: NewEvent, runtime: Runtime, idempotency_key: IdempotencyHeader = None
+) -> Accepted:
+    """Enqueue any event, told apart by ``kind``; workers post their ``worker_callback`` here."""
+    key = _key(event.idempotency_key, idempotency_key)
+    return await _accept(runtime, event.model_copy(update={"idempotency_key": key}))
+
+
+@protected.get("/events/{event_id}")
+async def get_event(event_id: int, runtime: Runtime) -> Event:
+    """One event, and whether the kernel has handled it."""
+    event = await runtime.events.get(event_id)
+    if event is None:
+        raise HTTPException(404, f"no event {event_id}: ids come from the 202 answer of POST /event")
+    return event
+
+
+@protected.get(
+    "/updates",
+    responses={200: {"content": {"text/event-stream": {"schema": {"type": "string"}}}}},
+)
+async def get_updates(
+    request: Request,
+    runtime: Runtime,
+    after: Annotated[int | None, Query(ge=0, description="Only updates with a larger id.")] = None,
+    limit: Annotated[int, Query(ge=1, le=1000, description="At most this many (per page or backlog).")] = 100,
+    last_event_id: Annotated[str | None, Header(alias="Last-Event-ID")] = None,
+) -> Any:
+    """The updates stream: server-sent events with ``Accept: text/event-stream``, else one JSON page.
+
+    Both start after ``Last-Event-ID`` (SSE reconnects), else after ``?after=``, else with the
+    last ``limit`` updates. The SSE stream then follows new updates until the client leaves.
+    """
+    if last_event_id is not None:
+        try:
+            after = int(last_event_id)
+        except ValueError:
+            raise HTTPException(400, "Last-Event-ID must be an update id (an integer)") from None
+    updates = runtime.updates
+    newest = await updates.last_id()
+    if after is not None and after > newest:
+        after = None  # a cursor from an older store (the data directory was reset): start afresh
+    if after is None:
+        recent = await updates.recent(limit)
+        after = recent[0].id - 1 if recent else newest
+    if "text/event-stream" not in request.headers.get("accept", ""):
+        page = await updates.after(after, limit)
+        return UpdatesPage(updates=page, last_id=page[-1].id if page else after)
+    return EventSourceResponse(_stream(updates, after), ping=SSE_PING_SECONDS, send_timeout=SSE_SEND_TIMEOUT)
+
+
+async def _stream(updates: UpdateStream, after: int) -> AsyncIterator[ServerSentEvent]:
+    yield ServerSentEvent(comment="rosaOS updates", retry=SSE_RETRY_MS)
+    async for update in updates.follow(after):
+        yield ServerSentEvent(data=update.model_dump_json(), id=str(update.id))
+
+
+@protected.get("/processes")
+async def list_processes(
+    runtime: Runtime,
+    include_ended: Annotated[
+        bool, Query(alias="all", description="Include processes that have ended.")
+    ] = False,
+) -> list[ProcessView]:
+    """The process agents and the devices they hold."""
+    return [ProcessView.model_validate(process) for process in await runtime.processes(include_ended)]
+
+
+@protected.get("/estop")
+async def emergency_stop_state(runtime: Runtime) -> dict[str, Any]:
+    """Whether the emergency stop is latched, why, and since when (kept across kernel restarts)."""
+    return runtime.emergency_stop_state()
+
+
+@protected.post("/estop")
+async def emergency_stop(runtime: Runtime, body: EmergencyStopRequest | None = None) -> dict[str, Any]:
+    """Emergency stop: terminate every process, put every device in its safe state, and refuse
+    new processes until a person resets it (``POST /estop/reset``)."""
+    return await runtime.emergency_stop((body or EmergencyStopRequest()).reason)
+
+
+@protected.post("/estop/reset")
+async def reset_emergency_stop(runtime: Runtime) -> dict[str, Any]:
+    """Unlatch the emergency stop, on disk too: the next start is unlatched."""
+    return await runtime.reset_emergency_stop()
+
+
+@protected.post("/processes/{process_id}/terminate")
+async def terminate_process(process_id: int, runtime: Runtime) -> ProcessView:
+    """Kill a running process and release its devices. An ended process is returned as it is."""
+    try:
+        process = await runtime.terminate(process_id)
+    except KeyError:
+        raise HTTPException(404, f"no process {process_id}: GET /processes lists the running ones") from None
+    return ProcessView.model_validate(process)
+
+
+@protected.get("/devices")
+async def list_devices(runtime: Runtime) -> list[DeviceView]:
+    """Every device instance, its status and its live state."""
+    return [DeviceView.model_validate(device) for device in await runtime.devices()]
+
+
+@public.get("/", include_in_schema=False)
+async def web_page() -> FileResponse:
+    """The web page. Public, but useless without a login code."""
+    return FileResponse(WEB_DIR / "index.html", headers=PAGE_HEADERS)
+
+
+PAGE_HEADERS = {
+    "Cache-Control": "no-cache",
+    "Content-Security-Policy": (
+        "default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' data:; "
+        "connect-src 'self'; base-uri 'none'; form-action 'self'; frame-ancestors 'none'"
+    ),
+    "Referrer-Policy": "no-referrer",
+    "X-Content-Type-Options": "nosniff",
+}
+
+
+def _key(in_body: str | None, in_header: str | None) -> str | None:
+    if in_body and in_header and in_body != in_header:
+        raise HTTPException(422, "the Idempotency-Key header and the body's idempotency_key differ; send one")
+    return in_body or in_header or None
+
+
+async def _accept(runtime: KernelRuntime, event: NewEvent) -> Accepted:
+    appended = await runtime.events.append(event)
+    # The event is committed: whatever fails below must not turn the answer into an error, or the
+    # client would retry something that is already queued.
+    if not appended.duplicate:
+        try:
+            await runtime.updates.publish_event(appended.id, event)
+        except Exception:
+            log.exception("could not publish the update for event %s", appended.id)
+    if isinstance(event, WorkerCallbackEvent):
+        try:
+            await runtime.worker_callback_recorded(appended.id, event.payload)
+        except Exception as error:
+            log.exception("worker_callback_recorded failed for event %s", appended.id)
+            with contextlib.suppress(Exception):
+                await runtime.updates.publish(
+                    "error", f"could not release the leases of process {event.payload.worker_id}: {error}"
+                )
+    return Accepted(id=appended.id, duplicate=appended.duplicate)

@@ -1,0 +1,159 @@
+"""What the kernel's HTTP API speaks: what it needs from the kernel, and its bodies and answers.
+
+:class:`KernelRuntime` is the API's side of the running kernel (``rosaos up`` implements it); the
+pydantic models are the request bodies and answers of the routes in :mod:`rosaos.kernel.api_routes`,
+and their names are the schema names in the OpenAPI document.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from datetime import datetime
+from typing import Any, Literal, Protocol
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from rosaos.kernel.events import EventStore, IdempotencyKey, Source
+from rosaos.kernel.login import LoginCodes
+from rosaos.kernel.updates import Update, UpdateStream
+from rosaos.processes.jobs import WorkerCallback
+
+
+class KernelRuntime(Protocol):
+    """What the HTTP API needs from the running kernel. ``rosaos up`` implements it."""
+
+    @property
+    def events(self) -> EventStore:
+        """The durable event queue."""
+
+    @property
+    def updates(self) -> UpdateStream:
+        """The updates stream (same SQLite file)."""
+
+    @property
+    def login_codes(self) -> LoginCodes:
+        """Login codes; ``rosaos up`` mints the first one and prints its link."""
+
+    @property
+    def token(self) -> str:
+        """The bearer token every protected route requires."""
+
+    @property
+    def model_description(self) -> str:
+        """``offline default``, or the model's name (``openai:gpt-5.2``); nothing secret."""
+
+    @property
+    def model_notice(self) -> str | None:
+        """Shown as a banner when no model is configured: how to set one. None otherwise."""
+
+    async def processes(self, include_ended: bool = False) -> Sequence[Any]:
+        """The processes to show: ``ProcessInfo`` models, or objects/dicts with the same fields."""
+
+    async def terminate(self, process_id: int) -> Any:
+        """Terminate a process and return its ``ProcessInfo``; raise ``KeyError`` for an unknown id."""
+
+    async def devices(self) -> Sequence[Mapping[str, Any]]:
+        """Every device with its live state: see :class:`DeviceView` for the keys."""
+
+    async def emergency_stop(self, reason: str) -> dict[str, Any]:
+        """Terminate every process, call every device's ``safe_stop``, latch until reset."""
+
+    async def reset_emergency_stop(self) -> dict[str, Any]:
+        """Unlatch the emergency stop."""
+
+    def emergency_stop_state(self) -> dict[str, Any]:
+        """``{"latched": bool, "reason": str | None, "time": ISO 8601 str | None}``; survives a restart."""
+
+    async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
+        """Called once a ``worker_callback`` is committed (also for a duplicate), so leases are
+        released at once. Must be idempotent, e.g. ``ProcessManager.record_callback``."""
+
+
+# --- bodies and answers ----------------------------------------------------------------------------
+
+
+class SayRequest(BaseModel):
+    """``POST /chat`` and ``POST /stt``: one thing the user typed or said."""
+
+    model_config = ConfigDict(extra="forbid", str_strip_whitespace=True)
+
+    text: str = Field(min_length=1, max_length=4000, description="Stripped; must not be blank.")
+    idempotency_key: IdempotencyKey | None = None
+    source: Source | None = Field(default=None, description="Defaults to 'chat' or 'stt'.")
+
+
+class Accepted(BaseModel):
+    """The event is committed: it will be handled even if the kernel restarts."""
+
+    id: int
+    duplicate: bool = Field(description="True when the idempotency key was seen: id is the first event's.")
+
+
+class ProcessView(BaseModel):
+    """One process agent and the devices it holds (its leases)."""
+
+    model_config = ConfigDict(from_attributes=True, extra="allow")
+
+    id: int
+    task: str
+    devices: list[str]
+    state: str
+    started_at: datetime | None = None
+    ended_at: datetime | None = None
+    worker_pid: int | None = None
+
+
+class DeviceView(BaseModel):
+    """One device instance with its live state as its ``get_state`` tool returns it."""
+
+    model_config = ConfigDict(from_attributes=True, extra="allow")
+
+    name: str
+    driver: str
+    concurrency: str
+    backend: str | None = None
+    status: str
+    url: str | None = None
+    state: dict[str, Any] | None = None
+    description: str = ""
+
+
+class Health(BaseModel):
+    """Open to anyone who can reach the port, so nothing secret."""
+
+    status: Literal["ok"] = "ok"
+    version: str
+    model: str
+    model_notice: str | None
+    uptime_seconds: float
+    pending_events: int
+
+
+class UpdatesPage(BaseModel):
+    """``GET /updates`` without ``Accept: text/event-stream``: poll with ``after=last_id``."""
+
+    updates: list[Update]
+    last_id: int = Field(description="Pass as ?after= next time; unchanged when there is nothing new.")
+
+
+class LoginRequest(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    code: str = Field(min_length=1, max_length=200)
+
+
+class LoginToken(BaseModel):
+    token: str
+    token_type: Literal["bearer"] = "bearer"
+
+
+class LoginLink(BaseModel):
+    code: str
+    url: str = Field(description="Open it in a browser: http://host:port/#login=<code>.")
+    expires_in: float = Field(description="Seconds until the code stops working. It works once.")
+
+
+class EmergencyStopRequest(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    reason: str = Field(default="requested by a person", min_length=1, max_length=500)

@@ -1,0 +1,222 @@
+"""The worker watcher: what the pool knows about each worker process, and the task that watches it.
+
+Each worker runs in its own process group and is watched by one task that reads its protocol
+lines (see :mod:`rosaos.processes.worker`) and notices when it exits. That watcher is the only
+place a job's end is reported, so each job is reported exactly once, to the pool's ``on_ended``:
+
+- ``done`` line: the worker's own callback, and whether the worker delivered it to the kernel.
+- the process exits mid-job: ``crashed`` (with its exit code or signal), unless the pool killed
+  it on purpose: ``timeout`` (the job overran ``timeout + kill_grace``) or ``terminated``.
+
+Whichever comes first takes the job off the worker (``worker.job`` back to None), so the other
+finds nothing left to report. Killing (:meth:`Worker.kill`) means SIGKILL to the whole process
+group; the watcher then waits for the exit, so nothing the worker started outlives it.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+import os
+import signal
+from collections.abc import Awaitable, Callable
+from typing import Any, Protocol
+
+from pydantic import ValidationError
+
+from rosaos.processes.jobs import ProcessStatus, WorkerCallback, WorkerJob
+
+log = logging.getLogger(__name__)
+
+OnEnded = Callable[[WorkerCallback, bool], Awaitable[None]]
+"""Called once per job with its callback and whether the worker already delivered it by HTTP."""
+
+RETIRE_GRACE = 5.0
+"""Seconds a worker that closed its stdout (retired, or broken) gets to exit before it is killed."""
+
+
+class WorkerProcess(Protocol):
+    """What the pool uses of a worker process: ``asyncio.subprocess.Process``, or a forked worker."""
+
+    @property
+    def pid(self) -> int: ...
+
+    @property
+    def stdin(self) -> asyncio.StreamWriter | None: ...
+
+    @property
+    def stdout(self) -> asyncio.StreamReader | None: ...
+
+    @property
+    def returncode(self) -> int | None: ...
+
+    async def wait(self) -> int: ...
+
+
+class Worker:
+    """One worker subprocess and what the pool knows about it."""
+
+    def __init__(self, proc: WorkerProcess, one_off: bool) -> None:
+        self.proc = proc
+        self.one_off = one_off
+        self.ready = asyncio.Event()
+        self.ready_seen = False
+        """True once the worker said ``ready`` (``ready`` is also set when it dies, to wake waiters)."""
+        self.exited = asyncio.Event()
+        """Set once the exit has been handled: the job reported, a replacement requested."""
+        self.job: WorkerJob | None = None
+        self.kill_reason: ProcessStatus | None = None
+        self.deadline: asyncio.TimerHandle | None = None
+
+    @property
+    def pid(self) -> int:
+        return self.proc.pid
+
+    def kill(self, reason: ProcessStatus) -> None:
+        """SIGKILL the worker's process group; its job is then reported as ``reason``."""
+        if self.exited.is_set():
+            return
+        if self.kill_reason is None:
+            self.kill_reason = reason
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(self.pid, signal.SIGKILL)
+
+    def cancel_deadline(self) -> None:
+        """Drop the timer that would kill the worker for running past its job's timeout."""
+        if self.deadline is not None:
+            self.deadline.cancel()
+            self.deadline = None
+
+    def retire(self) -> None:
+        """Let a one-off worker exit on its own (stdin closed); kill it if it lingers."""
+        assert self.proc.stdin is not None
+        self.proc.stdin.close()
+        asyncio.get_running_loop().call_later(RETIRE_GRACE, self.kill, "terminated")
+
+
+class Watcher:
+    """Watches a pool's workers, one task each until the worker exits, and reports their jobs' ends.
+
+    ``report`` delivers a job's end (the pool passes it on to its ``on_ended``). The pool is
+    also told what it must act on: ``ready`` when a worker finished its imports, ``gone`` once
+    an exited worker is reaped (before its job is reported), and ``exited`` after that report.
+    """
+
+    def __init__(
+        self,
+        report: OnEnded,
+        *,
+        ready: Callable[[Worker], None],
+        gone: Callable[[Worker], None],
+        exited: Callable[[Worker, int], None],
+    ) -> None:
+        self._report = report
+        self._ready = ready
+        self._gone = gone
+        self._exited = exited
+        self._tasks: set[asyncio.Task[Any]] = set()
+
+    def watch(self, worker: Worker) -> None:
+        """Start the task that watches ``worker`` until it exits."""
+        task = asyncio.create_task(self._watch(worker), name=f"rosaos-worker-{worker.pid}")
+        # Referenced so the watcher is not garbage-collected while it runs.
+        self._tasks.add(task)
+        task.add_done_callback(self._tasks.discard)
+
+    async def _watch(self, worker: Worker) -> None:
+        """Read the worker's protocol lines until it exits, then report its job (the pool replaces it)."""
+        assert worker.proc.stdout is not None
+        try:
+            while line := await worker.proc.stdout.readline():
+                await self._on_line(worker, line)
+        except (ValueError, asyncio.LimitOverrunError) as failure:
+            log.error("worker %d broke the protocol (%s); killing it", worker.pid, failure)
+            worker.kill("crashed")
+        finally:
+            await self._on_exit(worker)
+
+    async def _on_exit(self, worker: Worker) -> None:
+        try:
+            returncode = await asyncio.wait_for(worker.proc.wait(), timeout=RETIRE_GRACE)
+        except TimeoutError:  # stdout closed but the process lives on: it is of no use any more
+            worker.kill("crashed")
+            returncode = await worker.proc.wait()
+        # SIGKILL the group also when the leader exited alone: nothing it started may linger.
+        with contextlib.suppress(ProcessLookupError, PermissionError):
+            os.killpg(worker.pid, signal.SIGKILL)
+        self._gone(worker)
+        worker.ready.set()  # wake start() if the worker died while importing
+        job, worker.job = worker.job, None
+        try:
+            if job is not None:
+                worker.cancel_deadline()
+                await self._report_killed(worker, job, returncode)
+        finally:
+            self._exited(worker, returncode)
+            worker.exited.set()
+
+    async def _on_line(self, worker: Worker, line: bytes) -> None:
+        try:
+            event = json.loads(line)
+        except json.JSONDecodeError:
+            log.warning("worker %d wrote a non-protocol line: %r", worker.pid, line[:200])
+            return
+        kind = event.get("event")
+        if kind == "ready":
+            worker.ready_seen = True
+            worker.ready.set()
+            self._ready(worker)
+        elif kind == "done":
+            await self._on_done(worker, event)
+        elif kind == "rejected" and worker.job is not None:
+            job, worker.job = worker.job, None
+            worker.cancel_deadline()
+            await self._report(
+                _ended(job, "error", f"the worker rejected the job: {event.get('error')}"), False
+            )
+
+    async def _on_done(self, worker: Worker, event: dict[str, Any]) -> None:
+        job = worker.job
+        if job is None or event.get("process_id") != job.process_id:
+            log.warning("worker %d reported an unexpected job end: %s", worker.pid, event)
+            return
+        worker.job = None
+        worker.cancel_deadline()
+        try:
+            callback = WorkerCallback.model_validate(event.get("callback"))
+        except ValidationError as invalid:  # a worker from another rosaOS version, say
+            callback = _ended(job, "error", f"the worker sent an invalid callback: {invalid}")
+        if worker.one_off:
+            worker.retire()
+        await self._report(callback, bool(event.get("delivered")))
+
+    async def _report_killed(self, worker: Worker, job: WorkerJob, returncode: int) -> None:
+        if worker.kill_reason == "timeout":
+            status: ProcessStatus = "timeout"
+            error = f"the process ran past its timeout of {job.timeout:g} s and its worker was killed"
+        elif worker.kill_reason == "terminated":
+            status, error = "terminated", "the process was terminated on request"
+        else:
+            status = "crashed"
+            error = (
+                f"the worker process (pid {worker.pid}) died while running the task "
+                f"({describe_exit(returncode)}); the task may be half done, so check the "
+                "devices' state before retrying"
+            )
+        await self._report(_ended(job, status, error), False)
+
+
+def describe_exit(returncode: int) -> str:
+    """``exit code 1``, or ``killed by SIGKILL`` for a negative ``returncode``."""
+    if returncode < 0:
+        try:
+            return f"killed by {signal.Signals(-returncode).name}"
+        except ValueError:
+            return f"killed by signal {-returncode}"
+    return f"exit code {returncode}"
+
+
+def _ended(job: WorkerJob, status: ProcessStatus, error: str) -> WorkerCallback:
+    return WorkerCallback(worker_id=job.process_id, status=status, error=error, task=job.task)
