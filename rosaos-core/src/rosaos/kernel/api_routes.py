@@ -105,25 +105,24 @@ async def mint_login_code(request: Request, runtime: Runtime) -> LoginLink:
 @protected.post("/chat", status_code=202)
 async def chat(body: SayRequest, runtime: Runtime, idempotency_key: IdempotencyHeader = None) -> Accepted:
     """The user typed something: enqueue a ``user_typed`` event."""
-    event = UserTypedEvent(
-        kind="user_typed",
-        source=body.source or "chat",
-        payload=UserText(text=body.text),
-        idempotency_key=_key(body.idempotency_key, idempotency_key),
-    )
-    return await _accept(runtime, event)
+    fields = _user_text(body, "chat", idempotency_key)
+    return await _accept(runtime, UserTypedEvent(kind="user_typed", **fields))
 
 
 @protected.post("/stt", status_code=202)
 async def speech(body: SayRequest, runtime: Runtime, idempotency_key: IdempotencyHeader = None) -> Accepted:
     """The voice front end heard the user: enqueue a ``user_said`` event."""
-    event = UserSaidEvent(
-        kind="user_said",
-        source=body.source or "stt",
-        payload=UserText(text=body.text),
-        idempotency_key=_key(body.idempotency_key, idempotency_key),
-    )
-    return await _accept(runtime, event)
+    fields = _user_text(body, "stt", idempotency_key)
+    return await _accept(runtime, UserSaidEvent(kind="user_said", **fields))
+
+
+def _user_text(body: SayRequest, default_source: str, header_key: str | None) -> dict[str, Any]:
+    """The fields ``/chat`` and ``/stt`` events share: source, the text, the idempotency key."""
+    return {
+        "source": body.source or default_source,
+        "payload": UserText(text=body.text),
+        "idempotency_key": _key(body.idempotency_key, header_key),
+    }
 
 
 @protected.post("/event", status_code=202)
