@@ -124,9 +124,29 @@ def test_an_emergency_stop_latched_before_a_sigkill_holds_after_restart_until_re
     first, url, _ = start_kernel(config)
     headers = {"Authorization": f"Bearer {(config.parent / 'data' / 'token').read_text().strip()}"}
     try:
+        # Latched the way a person would, with the CLI.
+        latch = subprocess.run(
+            [
+                str(ROSAOS),
+                "estop",
+                "--config",
+                str(config),
+                "--url",
+                url,
+                "--reason",
+                "robot near the stairs",
+            ],
+            capture_output=True,
+            text=True,
+            timeout=60,
+            check=False,
+        )
+        assert latch.returncode == 0, latch.stdout + latch.stderr
+        assert "EMERGENCY STOP latched: robot near the stairs" in latch.stdout
+        assert "  kitchen_light: safe: safe stop done" in latch.stdout  # the name once, not twice
         with httpx.Client(base_url=url, headers=headers, timeout=30) as api:
-            report = api.post("/estop", json={"reason": "robot near the stairs"}).json()
-            assert (report["latched"], report["saved"]) == (True, True)
+            report = api.get("/estop").json()
+            assert report["latched"] is True
     finally:
         first.send_signal(signal.SIGKILL)
         first.wait()

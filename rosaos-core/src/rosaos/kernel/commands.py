@@ -200,7 +200,9 @@ def estop_command(
         print(f"EMERGENCY STOP latched: {report['reason']}")
         print(f"  terminated processes: {', '.join(map(str, report['terminated'])) or 'none'}")
         for device in report["devices"]:
-            print(f"  {device['name']}: {'safe' if device['ok'] else 'FAILED'}: {device['detail']}")
+            # The safe_stop tool names its device ("kitchen_light: safe stop done"); the line has already.
+            detail = str(device["detail"]).removeprefix(f"{device['name']}: ")
+            print(f"  {device['name']}: {'safe' if device['ok'] else 'FAILED'}: {detail}")
         if not report.get("saved", True):
             print(
                 "  WARNING: the latch could not be saved (see the kernel log): a kernel restart would clear it"
