@@ -306,17 +306,7 @@ class IntentMatcher:
             return None
         spoken = self.devices[other].spoken_names(self.language)[0]
         again = re.sub(rf"(?<!\w){re.escape(said)}(?!\w)", spoken, command, count=1, flags=re.IGNORECASE)
-        focus = self._focus
-        if focus is not None and other not in focus:
-            return None
-        self._focus = frozenset({other})
-        try:
-            found = self._best(again)
-        finally:
-            self._focus = focus
-        if found is None or not found.actionable or set(found.calls) != {other}:
-            return None
-        return found
+        return self._exactly_for(other, [again])
 
     def _elided(self, clause: str, device: str) -> Reading | None:
         """``clause`` read as a command to ``device`` that does not name it, or None.
@@ -325,8 +315,6 @@ class IntentMatcher:
         turtlebot forward", "drive forward turtlebot", ... The reading must be exact and about
         ``device`` alone.
         """
-        if self._focus is not None and device not in self._focus:
-            return None
         words = clause.split()
         name = self.devices[device].spoken_names(self.language)[0]
         refer = pronouns(self.language)
@@ -335,13 +323,21 @@ class IntentMatcher:
         else:
             last = min(MAX_ELIDED_POSITION, len(words))
             candidates = [" ".join([*words[:at], name, *words[at:]]) for at in range(1, last + 1)]
+        found = self._exactly_for(device, candidates)
+        return replace(found, clause=clause) if found is not None else None
+
+    def _exactly_for(self, device: str, sentences: list[str]) -> Reading | None:
+        """The first of ``sentences`` that reads as an exact command to ``device`` alone, or None
+        (also when the user's answer to "which one?" ruled ``device`` out)."""
         focus = self._focus
+        if focus is not None and device not in focus:
+            return None
         self._focus = frozenset({device})
         try:
-            for candidate in candidates:
-                found = self._best(candidate)
+            for sentence in sentences:
+                found = self._best(sentence)
                 if found is not None and found.actionable and set(found.calls) == {device}:
-                    return replace(found, clause=clause)
+                    return found
         finally:
             self._focus = focus
         return None
