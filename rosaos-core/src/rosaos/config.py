@@ -109,6 +109,11 @@ class ModelConfig(BaseModel):
     model_name: str | None = None
     prefer_local: bool = True
     language: str = "en"
+    vision: bool | None = None
+    """Whether the process model takes images (camera tools then send the picture too).
+    Unset: pydantic-ai's profile of the model says (``supports_image_input``)."""
+    image_max_px: int = Field(default=768, ge=64, le=4096)
+    """Longest side, in pixels, of a picture sent to a model (a JPEG of at most ~400 kB)."""
 
 
 class VoiceConfig(BaseModel):

@@ -27,6 +27,7 @@ from typing import IO, Any
 
 import httpx
 from fastmcp import Client
+from fastmcp.client.transports import StreamableHttpTransport
 from pydantic import ValidationError
 from pydantic_ai import Agent, UsageLimitExceeded, capture_run_messages
 from pydantic_ai.mcp import MCPToolset
@@ -44,6 +45,7 @@ from rosaos.processes.jobs import (
     callback_idempotency_key,
 )
 from rosaos.processes.prompts import process_system_prompt, tool_prefix
+from rosaos.processes.vision import image_budget_for, image_headers
 
 log = logging.getLogger("rosaos.processes.worker")
 
@@ -122,10 +124,14 @@ class DeviceSessions:
 
     def __init__(self) -> None:
         self._open: dict[tuple[str, str], MCPToolset[Any]] = {}
+        self._images: dict[tuple[str, str], int | None] = {}
 
-    async def toolset(self, device: GrantedDevice) -> MCPToolset[Any]:
+    async def toolset(self, device: GrantedDevice, images: int | None = None) -> MCPToolset[Any]:
         key = (device.url, device.token)
         kept = self._open.get(key)
+        if kept is not None and self._images.get(key) != images:  # the images header is per session
+            await self._close(key)
+            kept = None
         if kept is not None:
             try:
                 async with asyncio.timeout(CONNECT_TIMEOUT):
@@ -133,8 +139,8 @@ class DeviceSessions:
                 return kept
             except Exception:
                 await self._close(key)
-        toolset = await _connect(device)
-        self._open[key] = toolset
+        toolset = await _connect(device, images)
+        self._open[key], self._images[key] = toolset, images
         return toolset
 
     async def forget(self, devices: Sequence[GrantedDevice]) -> None:
@@ -147,6 +153,7 @@ class DeviceSessions:
             await self._close(key)
 
     async def _close(self, key: tuple[str, str]) -> None:
+        self._images.pop(key, None)
         toolset = self._open.pop(key, None)
         if toolset is not None:
             with contextlib.suppress(Exception):
@@ -162,7 +169,7 @@ async def _run_agent(job: WorkerJob) -> str:
     try:
         toolsets: list[AbstractToolset[Any]] = []
         for device in job.devices:
-            toolset = await SESSIONS.toolset(device)
+            toolset = await SESSIONS.toolset(device, image_budget_for(job.model, model))
             toolsets.append(toolset.prefixed(tool_prefix(device.name)) if prefixed else toolset)
         agent = Agent(
             model,
@@ -177,11 +184,10 @@ async def _run_agent(job: WorkerJob) -> str:
     return str(result.output)
 
 
-async def _connect(device: GrantedDevice) -> MCPToolset[Any]:
+async def _connect(device: GrantedDevice, images: int | None = None) -> MCPToolset[Any]:
     """Open the device's MCP session up front, so a dead device is reported by name, not as a stack."""
-    client: Client[Any] = Client(
-        device.url, auth=device.token, name=f"rosaos-{device.name}", init_timeout=CONNECT_TIMEOUT
-    )
+    transport = StreamableHttpTransport(device.url, headers=image_headers(images), auth=device.token)
+    client: Client[Any] = Client(transport, name=f"rosaos-{device.name}", init_timeout=CONNECT_TIMEOUT)
     # 'failed': a device error (bulb offline, value refused) goes back to the model as a failed
     # tool result it can read and report, instead of ending the whole run.
     toolset: MCPToolset[Any] = MCPToolset(client, id=device.name, tool_error_behavior="failed")
