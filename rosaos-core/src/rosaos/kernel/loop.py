@@ -21,6 +21,7 @@ from pydantic_ai.usage import UsageLimits
 from rosaos.kernel.agent import trim_history
 from rosaos.kernel.events import Event, EventStore
 from rosaos.kernel.updates import UpdateKind, UpdateStream
+from rosaos.receipts import receipts_text
 
 log = logging.getLogger(__name__)
 
@@ -43,9 +44,12 @@ def render_event(event: Event) -> str:
             head = f"[Worker callback] worker={payload.worker_id} status={payload.status}"
             if payload.task:
                 head += f" task={payload.task!r}"
-            if payload.error:
-                return f"{head}\nerror: {payload.error}"
-            return f"{head}\noutput: {payload.output or '(no output)'}"
+            body = (
+                f"error: {payload.error}" if payload.error else f"output: {payload.output or '(no output)'}"
+            )
+            if payload.receipts:  # what was really done, whatever the output claims
+                body += "\n" + receipts_text(payload.receipts)
+            return f"{head}\n{body}"
         case "device_notice":
             return f"[Device notice] device={payload.device} {payload.message}"
         case "error":

@@ -32,6 +32,7 @@ from rosaos.devices.state_cache import DeviceStateCache
 from rosaos.devices.supervisor import DeviceSupervisor, DirectoryEntry, SafeStopOutcome
 from rosaos.devices.world import World
 from rosaos.drivers import DeviceError
+from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
 from rosaos.kernel.api import create_app
 from rosaos.kernel.client import kernel_file, running_kernel_url
@@ -109,6 +110,10 @@ class Kernel:
         return self._updates
 
     @property
+    def activity(self) -> ActivityLog:
+        return self._activity
+
+    @property
     def token(self) -> str:
         return self._token
 
@@ -148,6 +153,7 @@ class Kernel:
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         self.manager.record_callback(callback)
+        await self._activity.record(event_id, callback.worker_id, callback.receipts)
         if callback.worker_id in self._ended_published:
             return
         self._ended_published.add(callback.worker_id)
@@ -249,6 +255,7 @@ class Kernel:
     async def _start_parts(self, sock: socket.socket) -> None:
         self._store = await EventStore.open(self.data_dir / EVENTS_FILE)
         self._updates = await UpdateStream.open(self._store.database)
+        self._activity = await ActivityLog.open(self._store.database)
         self.supervisor = self._hosting or DeviceSupervisor(self.world, self.data_dir, self._token)
         kernel = self.config.kernel
         pool = WorkerPool(size=kernel.pool_size, env=self._worker_env, fork_server=kernel.fork_server)

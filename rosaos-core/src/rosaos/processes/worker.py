@@ -45,7 +45,9 @@ from rosaos.processes.jobs import (
     callback_idempotency_key,
 )
 from rosaos.processes.prompts import process_system_prompt, tool_prefix
+from rosaos.processes.recording import RecordingToolset
 from rosaos.processes.vision import image_budget_for, image_headers
+from rosaos.receipts import Receipt
 
 log = logging.getLogger("rosaos.processes.worker")
 
@@ -81,10 +83,11 @@ async def run_job(job: WorkerJob) -> WorkerCallback:
     status: ProcessStatus = "ok"
     output: str | None = None
     error: str | None = None
+    receipts: list[Receipt] = []  # every tool call, for the activity log (processes/recording.py)
     with capture_run_messages() as messages:
         try:
             async with asyncio.timeout(job.timeout) as deadline:
-                output = await _run_agent(job)
+                output = await _run_agent(job, receipts)
         except TimeoutError:
             if not deadline.expired():
                 log.exception("process %d failed", job.process_id)
@@ -110,6 +113,7 @@ async def run_job(job: WorkerJob) -> WorkerCallback:
         task=job.task,
         model_requests=requests,
         tool_calls=tool_calls,
+        receipts=receipts,
     )
 
 
@@ -163,13 +167,16 @@ class DeviceSessions:
 SESSIONS = DeviceSessions()
 
 
-async def _run_agent(job: WorkerJob) -> str:
+async def _run_agent(job: WorkerJob, receipts: list[Receipt] | None = None) -> str:
     model = process_model(job)
     prefixed = len(job.devices) > 1
     try:
         toolsets: list[AbstractToolset[Any]] = []
         for device in job.devices:
-            toolset = await SESSIONS.toolset(device, image_budget_for(job.model, model))
+            session = await SESSIONS.toolset(device, image_budget_for(job.model, model))
+            toolset = RecordingToolset(
+                session, device=device.name, receipts=receipts if receipts is not None else []
+            )
             toolsets.append(toolset.prefixed(tool_prefix(device.name)) if prefixed else toolset)
         agent = Agent(
             model,
