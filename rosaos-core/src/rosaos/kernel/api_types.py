@@ -14,6 +14,7 @@ from typing import Any, Literal, Protocol
 from pydantic import BaseModel, ConfigDict, Field
 
 from rosaos.kernel.activity import ActivityLog
+from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.events import EventStore, IdempotencyKey, Source
 from rosaos.kernel.login import LoginCodes
 from rosaos.kernel.updates import Update, UpdateStream
@@ -30,6 +31,10 @@ class KernelRuntime(Protocol):
     @property
     def updates(self) -> UpdateStream:
         """The updates stream (same SQLite file)."""
+
+    @property
+    def confirmations(self) -> ConfirmationDesk:
+        """The pending confirmation questions."""
 
     @property
     def activity(self) -> ActivityLog:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 from pydantic_ai import Agent
@@ -79,6 +79,8 @@ class KernelLoop:
         self.request_limit = request_limit
         self.history: list[ModelMessage] = []
         self.handled = 0
+        self.before: Callable[[Event], Awaitable[list[Output] | None]] | None = None
+        """Sees each event before the model; outputs instead of a model run (confirmation answers)."""
 
     async def run_forever(self) -> None:
         """Handle events until cancelled."""
@@ -109,6 +111,8 @@ class KernelLoop:
         """Run the kernel agent on one event; return the updates that say what it did."""
         if event.attempts > MAX_DELIVERIES:
             return [_error(f"event {event.id} was skipped: handling it failed {event.attempts - 1} times")]
+        if self.before is not None and (outputs := await self.before(event)) is not None:
+            return outputs
         prompt = render_event(event)
         for attempt in range(1, MODEL_RETRIES + 1):
             try:

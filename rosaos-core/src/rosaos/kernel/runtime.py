@@ -36,6 +36,8 @@ from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
 from rosaos.kernel.api import create_app
 from rosaos.kernel.client import kernel_file, running_kernel_url
+from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people
+from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
 from rosaos.kernel.events import Event, EventStore, StoreClosedError, WorkerCallbackEvent
 from rosaos.kernel.login import LoginCodes, login_url
 from rosaos.kernel.loop import KernelLoop
@@ -229,8 +231,14 @@ class Kernel:
                 url=entry.url,
                 token=entry.token or self._token,
                 status=entry.status,
+                confirm=self._confirm_rule(name),
             )
         return endpoints
+
+    def _confirm_rule(self, name: str) -> ConfirmRule:
+        instance, configured = self.world.instances[name], self.config.devices.get(name)
+        own = configured.confirm if configured is not None else None
+        return confirm_rule(own, self.config.confirm, instance.backend, instance.spec.confirm_on_real)
 
     # --- lifecycle ---------------------------------------------------------------------------------
 
@@ -255,6 +263,9 @@ class Kernel:
     async def _start_parts(self, sock: socket.socket) -> None:
         self._store = await EventStore.open(self.data_dir / EVENTS_FILE)
         self._updates = await UpdateStream.open(self._store.database)
+        self.confirmations = ConfirmationDesk(
+            self.config.kernel.confirm_timeout, lambda item: ask_people(self._updates, self.endpoints(), item)
+        )
         self._activity = await ActivityLog.open(self._store.database)
         self.supervisor = self._hosting or DeviceSupervisor(self.world, self.data_dir, self._token)
         kernel = self.config.kernel
@@ -291,6 +302,7 @@ class Kernel:
             model=self._model_for_event,
             history_budget=self.config.kernel.history_messages,
         )
+        self.loop.before = lambda event: answer_from_chat(self.confirmations, event)
         app = create_app(self)
         config = uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=3)
         self._server = uvicorn.Server(config)

@@ -29,6 +29,8 @@ class GrantedDevice(BaseModel):
     token: str
     description: str
     prompt: str
+    confirm: list[str] | Literal["destructive"] | None = None
+    """Tools that need a person's yes first (names, or every destructive one)."""
 
 
 class WorkerJob(BaseModel):

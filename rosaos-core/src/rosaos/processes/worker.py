@@ -37,6 +37,7 @@ from pydantic_ai.toolsets import AbstractToolset
 from pydantic_ai.usage import UsageLimits
 
 from rosaos.models.select import ModelError, build_model
+from rosaos.processes.confirming import ConfirmationDeclined, ConfirmingToolset, KernelAsker
 from rosaos.processes.jobs import (
     GrantedDevice,
     ProcessStatus,
@@ -95,6 +96,8 @@ async def run_job(job: WorkerJob) -> WorkerCallback:
             else:
                 status = "timeout"
                 error = f"the process ran past its timeout of {job.timeout:g} s and was stopped"
+        except ConfirmationDeclined as declined:  # a person said no: the process ends, nothing done
+            status, error = "terminated", str(declined)
         except UsageLimitExceeded:
             status = "error"
             error = (
@@ -172,11 +175,12 @@ async def _run_agent(job: WorkerJob, receipts: list[Receipt] | None = None) -> s
     prefixed = len(job.devices) > 1
     try:
         toolsets: list[AbstractToolset[Any]] = []
+        asker = KernelAsker(job.callback_url.removesuffix("/event"), job.callback_token, job.process_id)
         for device in job.devices:
             session = await SESSIONS.toolset(device, image_budget_for(job.model, model))
-            toolset = RecordingToolset(
-                session, device=device.name, receipts=receipts if receipts is not None else []
-            )
+            guarded = ConfirmingToolset(session, device=device.name, rule=device.confirm, asker=asker)
+            recorded = receipts if receipts is not None else []
+            toolset = RecordingToolset(guarded, device=device.name, receipts=recorded)
             toolsets.append(toolset.prefixed(tool_prefix(device.name)) if prefixed else toolset)
         agent = Agent(
             model,
