@@ -144,3 +144,18 @@ async def test_rosaos_log_json_reads_the_served_api(
     assert code == 0 and [(e["process_id"], e["tool"], e["arguments"]) for e in entries] == [
         (3, "drive", {"linear": 0.1})
     ]
+
+
+async def test_rosaos_log_reads_the_store_when_no_kernel_runs(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    store = await EventStore.open(tmp_path / "kernel.sqlite3")
+    log = await ActivityLog.open(store.database)
+    await log.record(9, 4, [receipt("rotate", time.time(), arguments={"degrees": 90})])
+    await store.close()
+    monkeypatch.setenv("ROSAOS_DATA_DIR", str(tmp_path))
+    import asyncio
+
+    code = await asyncio.to_thread(log_command, None, None, None, 4, None, 10, True)
+    entries = json.loads(capsys.readouterr().out)
+    assert code == 0 and [(e["process_id"], e["tool"]) for e in entries] == [(4, "rotate")]

@@ -1,4 +1,8 @@
-"""``rosaos log``: the activity log of a running kernel, as a table or as JSON."""
+"""``rosaos log``: the activity log, as a table or as JSON.
+
+From the running kernel of the data directory (``GET /activity``), else straight from the data
+directory's event store, so the log of a stopped kernel or of ``rosaos bench`` runs stays readable.
+"""
 
 from __future__ import annotations
 
@@ -15,9 +19,13 @@ from rich.table import Table
 
 from rosaos.config import ConfigError, load_config
 from rosaos.frontends.console import console as terminal
-from rosaos.kernel.client import KernelClient, KernelUnavailable
+from rosaos.kernel.activity import ActivityLog
+from rosaos.kernel.client import KernelClient, KernelUnavailable, running_kernel_url
+from rosaos.kernel.events import Database
 
 EXIT_CONFIG = 2
+EVENTS_FILE = "kernel.sqlite3"
+"""The event store's file in the data directory (as the kernel runtime names it)."""
 _DURATION = re.compile(r"^(?P<amount>\d+(?:\.\d+)?)\s*(?P<unit>s|m|h|d)$")
 _UNIT_SECONDS = {"s": 1, "m": 60, "h": 3600, "d": 86400}
 
@@ -38,6 +46,23 @@ def parse_since(text: str, now: float | None = None) -> float:
             f"--since {text!r}: give a duration ago (30s, 10m, 2h, 1d) or an ISO time (2026-05-01T14:00)"
         ) from None
     return moment.timestamp()
+
+
+async def read_stored(path: Path, params: dict[str, Any]) -> list[dict[str, Any]]:
+    """The log straight from a data directory's event store, when no kernel is running there
+    (after ``rosaos bench``, or with the kernel stopped)."""
+    if not await asyncio.to_thread(path.is_file):
+        raise FileNotFoundError(f"no kernel is running and there is no event store at {path}; start `rosaos up`")
+    database = await Database.open(path)
+    try:
+        log = await ActivityLog.open(database)
+        entries = await log.query(
+            device=params.get("device"), process_id=params.get("process"), since=params.get("since"),
+            limit=int(params["limit"]),
+        )
+    finally:
+        await database.close()
+    return [entry.model_dump(mode="json") for entry in entries]
 
 
 def log_command(
@@ -63,13 +88,16 @@ def log_command(
         params["process"] = process
 
     async def run() -> list[dict[str, Any]]:
-        async with KernelClient.from_config(load_config(config_path), url=url) as client:
+        config = load_config(config_path)
+        if url is None and running_kernel_url(config.data_dir) is None:
+            return await read_stored(config.data_dir / EVENTS_FILE, params)
+        async with KernelClient.from_config(config, url=url) as client:
             page: dict[str, Any] = await client.request("GET", "/activity", params=params)
             return list(page["entries"])
 
     try:
         entries = asyncio.run(run())
-    except (KernelUnavailable, ConfigError) as error:
+    except (KernelUnavailable, ConfigError, FileNotFoundError) as error:
         print(f"rosaos log: {error}", file=sys.stderr)
         return EXIT_CONFIG
     if json_output:
