@@ -211,18 +211,7 @@ class DeviceSupervisor:
     async def safe_stop_all(self, per_device_timeout: float = 5.0) -> list[SafeStopOutcome]:
         """Call ``safe_stop`` on every reachable instance at once; failures are reported, not raised."""
         entries = [e for e in self.directory().values() if e.url]
-
-        async def one(entry: DirectoryEntry) -> SafeStopOutcome:
-            assert entry.url is not None
-            try:
-                detail = await DeviceClient(entry.url, entry.token, per_device_timeout, entry.name).call(
-                    "safe_stop"
-                )
-            except DeviceError as error:
-                return SafeStopOutcome(entry.name, False, str(error))
-            return SafeStopOutcome(entry.name, True, str(detail))
-
-        outcomes = list(await asyncio.gather(*(one(e) for e in entries)))
+        outcomes = list(await asyncio.gather(*(safe_stop_entry(e, per_device_timeout) for e in entries)))
         # A device that is not served has nothing running to stop: reported, not a failure.
         outcomes += [
             SafeStopOutcome(e.name, True, f"not served ({e.status}): nothing to stop")
@@ -363,3 +352,14 @@ class DeviceSupervisor:
                 },
             )
             await asyncio.to_thread(write_atomic, self.runtime_file, runtime.model_dump_json(indent=2))
+
+
+async def safe_stop_entry(entry: DirectoryEntry, timeout: float = 5.0) -> SafeStopOutcome:
+    """Call one served instance's ``safe_stop`` tool; a failure is reported, not raised."""
+    if entry.url is None:
+        return SafeStopOutcome(entry.name, True, f"not served ({entry.status}): nothing to stop")
+    try:
+        detail = await DeviceClient(entry.url, entry.token, timeout, entry.name).call("safe_stop")
+    except DeviceError as error:
+        return SafeStopOutcome(entry.name, False, str(error))
+    return SafeStopOutcome(entry.name, True, str(detail))

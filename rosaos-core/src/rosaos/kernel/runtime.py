@@ -38,6 +38,7 @@ from rosaos.kernel.client import kernel_file, running_kernel_url
 from rosaos.kernel.events import Event, EventStore, StoreClosedError, WorkerCallbackEvent
 from rosaos.kernel.login import LoginCodes, login_url
 from rosaos.kernel.loop import KernelLoop
+from rosaos.kernel.orphans import LiveProcesses, recover_orphans
 from rosaos.kernel.tools import build_kernel_tools
 from rosaos.kernel.updates import UpdateStream
 from rosaos.models.defaults import KernelModels, kernel_models
@@ -148,6 +149,7 @@ class Kernel:
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         self.manager.record_callback(callback)
+        await self._live.ended(callback.worker_id)
         if callback.worker_id in self._ended_published:
             return
         self._ended_published.add(callback.worker_id)
@@ -249,6 +251,7 @@ class Kernel:
     async def _start_parts(self, sock: socket.socket) -> None:
         self._store = await EventStore.open(self.data_dir / EVENTS_FILE)
         self._updates = await UpdateStream.open(self._store.database)
+        self._live = LiveProcesses(self._store)
         self.supervisor = self._hosting or DeviceSupervisor(self.world, self.data_dir, self._token)
         kernel = self.config.kernel
         pool = WorkerPool(size=kernel.pool_size, env=self._worker_env, fork_server=kernel.fork_server)
@@ -273,8 +276,10 @@ class Kernel:
                 group.create_task(self.manager.start(), name="start worker pool")
         except BaseExceptionGroup as failed:
             raise failed.exceptions[0] from None
+        # Before the loop can grant anything: devices a dead kernel's processes held get safe_stop.
+        await recover_orphans(self._live, self._store, self.supervisor.directory(), self._callback_committed)
         self.states = DeviceStateCache(self.endpoints)
-        tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._store.note_process_id)
+        tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._launched)
         agent = build_kernel_agent(self._models.kernel, tools)
         self.loop = KernelLoop(
             self._store,
@@ -346,6 +351,16 @@ class Kernel:
         if not appended.duplicate:
             await self._updates.publish_event(appended.id, event)
         await self.worker_callback_recorded(appended.id, callback)
+
+    async def _callback_committed(self, event_id: int, event: WorkerCallbackEvent) -> None:
+        """A callback the kernel wrote itself (for an orphan): on the updates stream, then recorded."""
+        await self._updates.publish_event(event_id, event)
+        await self.worker_callback_recorded(event_id, event.payload)
+
+    async def _launched(self, info: ProcessInfo) -> None:
+        """Keep ids unique across restarts, and remember the process until its end is recorded."""
+        await self._store.note_process_id(info.id)
+        await self._live.launched(info)
 
 
 def _base_url(sock: socket.socket) -> str:
