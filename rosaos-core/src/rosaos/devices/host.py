@@ -20,7 +20,7 @@ import logging
 import os
 import signal
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any, BinaryIO, TextIO
 
@@ -130,6 +130,7 @@ async def serve_until_stopped(
     on_ready: Callable[[ServedDevice], None],
     stop: asyncio.Event,
     preferred_port: int | None = None,
+    allowed_hosts: Sequence[str] = (),
 ) -> None:
     """Serve ``instance`` over HTTP, call ``on_ready`` once it accepts connections, run until ``stop``.
 
@@ -141,12 +142,14 @@ async def serve_until_stopped(
         if preferred_port:
             try:
                 served = await stack.enter_async_context(
-                    serve_http(device.server, token, host, preferred_port)
+                    serve_http(device.server, token, host, preferred_port, allowed_hosts)
                 )
             except DeviceError:
                 log.info("port %s is taken; %s gets a free port instead", preferred_port, instance.name)
         if served is None:
-            served = await stack.enter_async_context(serve_http(device.server, token, host, port))
+            served = await stack.enter_async_context(
+                serve_http(device.server, token, host, port, allowed_hosts)
+            )
         on_ready(served)
         stopper = asyncio.create_task(stop.wait())
         try:

@@ -23,7 +23,7 @@ import uvicorn
 from pydantic import ValidationError
 from pydantic_ai.models import Model
 
-from rosaos.auth import load_or_create_token
+from rosaos.auth import bound_hosts, load_or_create_token
 from rosaos.config import RosaosConfig
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.devices.runtime import write_atomic
@@ -289,7 +289,7 @@ class Kernel:
             model=self._model_for_event,
             history_budget=self.config.kernel.history_messages,
         )
-        app = create_app(self)
+        app = create_app(self, allowed_hosts=[*kernel.allow_hosts, *bound_hosts(sock.getsockname()[0])])
         config = uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=3)
         self._server = uvicorn.Server(config)
         self._tasks.append(asyncio.create_task(self._server.serve(sockets=[sock]), name="kernel api"))
