@@ -23,14 +23,30 @@ def token_path(data_dir: Path) -> Path:
     return data_dir / TOKEN_FILENAME
 
 
+def private_dir(path: Path) -> Path:
+    """Create ``path`` owner-only (0700), and narrow it to that if it is ours and wider.
+
+    The data directory holds the token, the event store (the chat history) and the logs: other
+    users of the machine must not read them.
+    """
+    path.mkdir(mode=0o700, parents=True, exist_ok=True)
+    info = path.stat()
+    if info.st_uid == os.getuid() and info.st_mode & 0o077:
+        path.chmod(0o700)
+    return path
+
+
 def load_or_create_token(data_dir: Path) -> str:
-    """Return the machine's token, creating it (0600, owner only) on first use."""
+    """Return the machine's token, creating it (0600, owner only) on first use.
+
+    Also keeps the data directory owner-only (:func:`private_dir`): every command passes here.
+    """
+    private_dir(data_dir)
     path = token_path(data_dir)
     if path.exists():
         token = path.read_text(encoding="utf-8").strip()
         if token:
             return token
-    data_dir.mkdir(parents=True, exist_ok=True)
     token = secrets.token_urlsafe(32)
     # O_EXCL makes two first runs agree on one token instead of overwriting each other.
     try:

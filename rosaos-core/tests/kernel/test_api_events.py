@@ -47,6 +47,20 @@ async def test_a_repeated_idempotency_key_answers_the_first_id_and_enqueues_noth
     assert await store.pending_count() == 1
 
 
+async def test_a_key_reused_with_a_different_body_is_a_conflict(
+    client: httpx.AsyncClient, store: EventStore
+) -> None:
+    first = await client.post(
+        "/chat", json={"text": "turn on the light", "idempotency_key": "web-2"}, headers=AUTH
+    )
+    reused = await client.post(
+        "/chat", json={"text": "turn off the light", "idempotency_key": "web-2"}, headers=AUTH
+    )
+    assert reused.status_code == 409
+    assert f"already used for event {first.json()['id']} with a different body" in reused.json()["detail"]
+    assert await store.pending_count() == 1
+
+
 async def test_the_idempotency_key_header_works_like_the_body_field(
     client: httpx.AsyncClient, store: EventStore
 ) -> None:

@@ -254,6 +254,12 @@ def _key(in_body: str | None, in_header: str | None) -> str | None:
 
 async def _accept(runtime: KernelRuntime, event: NewEvent) -> Accepted:
     appended = await runtime.events.append(event)
+    if appended.conflict:
+        raise HTTPException(
+            409,
+            f"idempotency key {event.idempotency_key!r} was already used for event {appended.id} with a "
+            "different body; use a new key for a new request",
+        )
     # The event is committed: whatever fails below must not turn the answer into an error, or the
     # client would retry something that is already queued.
     if not appended.duplicate:

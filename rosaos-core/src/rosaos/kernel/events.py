@@ -147,6 +147,9 @@ class Appended(NamedTuple):
     id: int
     duplicate: bool
     """True when the idempotency key was seen before: ``id`` is the first event's, nothing was enqueued."""
+    conflict: bool = False
+    """A duplicate whose kind or payload differs from the first event's: the key was reused for
+    something else (the API answers 409, as the IETF Idempotency-Key draft does)."""
 
 
 class StoreClosedError(RuntimeError):
@@ -307,10 +310,12 @@ class EventStore:
             # index stays as the guarantee.
             if key is not None:
                 first = connection.execute(
-                    "SELECT id FROM events WHERE idempotency_key = ?", (key,)
+                    "SELECT id, kind, payload FROM events WHERE idempotency_key = ?", (key,)
                 ).fetchall()
                 if first:
-                    return Appended(first[0][0], duplicate=True)
+                    first_id, first_kind, first_payload = first[0]
+                    differs = first_kind != event.kind or first_payload != payload
+                    return Appended(first_id, duplicate=True, conflict=differs)
             inserted = connection.execute(
                 "INSERT INTO events (time, kind, source, payload, idempotency_key) VALUES (?, ?, ?, ?, ?) "
                 "RETURNING id",

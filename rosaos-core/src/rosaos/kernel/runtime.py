@@ -186,6 +186,8 @@ class Kernel:
         The latch is cleared on disk first: if that fails, the stop stays latched and this raises.
         """
         latch = self.manager.emergency_stop
+        if latch is None:  # nothing to reset: say nothing on the updates stream
+            return self.emergency_stop_state()
         await self._store.set_value(EMERGENCY_STOP_KEY, None)
         if self.manager.emergency_stop is latch:  # not if a new stop came while the disk was busy
             self.manager.reset_emergency_stop()
@@ -234,8 +236,7 @@ class Kernel:
         """Start devices, the event store, the pool, the loop and the API; return the API's base URL."""
         host = host or self.config.kernel.host
         port = self.config.kernel.port if port is None else port
-        self.data_dir.mkdir(parents=True, exist_ok=True)
-        self._token = load_or_create_token(self.data_dir)
+        self._token = load_or_create_token(self.data_dir)  # creates the data directory, owner-only
         sock = await _bind_or_explain(host, port, self._token)
         self.url = _base_url(sock)
         try:
