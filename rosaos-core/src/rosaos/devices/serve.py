@@ -54,6 +54,8 @@ async def open_device(instance: DeviceInstance, data_dir: Path) -> AsyncIterator
     try:
         await backend.start()
         server = spec.server(ctx, backend)
+        # Tool arguments are typed at the boundary: `true` is not a brightness, "50" is not 50.
+        server.strict_input_validation = True
         _add_safe_stop(server, instance, backend)
         yield OpenDevice(instance, backend, server)
     finally:
