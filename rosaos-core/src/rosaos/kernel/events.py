@@ -30,7 +30,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Annotated, Any, Literal, NamedTuple, TypeVar
 
-from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, field_validator
 
 from rosaos.processes.jobs import WorkerCallback
 
@@ -59,6 +59,25 @@ class DeviceNotice(BaseModel):
     device: str = Field(min_length=1, max_length=100)
     message: str = Field(min_length=1, max_length=4000)
     data: dict[str, Any] = Field(default_factory=dict)
+    """Any JSON, nested at most :data:`MAX_DATA_DEPTH` levels (deeper breaks JSON encoders)."""
+
+    @field_validator("data")
+    @classmethod
+    def _not_too_deep(cls, data: dict[str, Any]) -> dict[str, Any]:
+        if _depth(data) > MAX_DATA_DEPTH:
+            raise ValueError(f"nested more than {MAX_DATA_DEPTH} levels deep; flatten it")
+        return data
+
+
+MAX_DATA_DEPTH = 32
+
+
+def _depth(value: Any, level: int = 1) -> int:
+    """How deep ``value`` nests; stops counting past the limit, so a hostile body costs little."""
+    if level > MAX_DATA_DEPTH:
+        return level
+    children = value.values() if isinstance(value, dict) else value if isinstance(value, list) else ()
+    return max((_depth(child, level + 1) for child in children), default=level)
 
 
 class ErrorReport(BaseModel):
