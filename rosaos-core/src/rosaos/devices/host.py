@@ -22,12 +22,13 @@ import signal
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, BinaryIO, TextIO
+from typing import Any, TextIO
 
 from pydantic import BaseModel, ConfigDict, Field, SecretBytes, SecretStr, ValidationError
 from pydantic_core import to_jsonable_python
 
 from rosaos.config import format_validation_error
+from rosaos.devices.host_logging import configure_host_logging, open_rotated_log
 from rosaos.devices.serve import ServedDevice, open_device, serve_http
 from rosaos.devices.world import DeviceInstance
 from rosaos.drivers import BackendName, DeviceError
@@ -243,7 +244,7 @@ class HostProcess:
         cls, job: HostJob, log_file: Path, start_timeout: float, stop_grace: float
     ) -> HostProcess:
         """Start a host for ``job`` and wait for its ready line; DeviceError says why it did not come up."""
-        log_handle = await asyncio.to_thread(_open_log, log_file)
+        log_handle = await asyncio.to_thread(open_rotated_log, log_file)
         try:
             process = await asyncio.create_subprocess_exec(
                 sys.executable,
@@ -325,11 +326,6 @@ class HostProcess:
         await self.process.wait()
 
 
-def _open_log(path: Path) -> BinaryIO:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    return path.open("ab")
-
-
 def _tail(path: Path, lines: int = 3) -> str:
     """The last lines of a host's log: usually the reason it died."""
     try:
@@ -347,7 +343,7 @@ def _signal_group(pid: int, sig: signal.Signals) -> None:
 def main(argv: list[str] | None = None) -> int:
     """Entry point: read the job (argv[1] or one stdin line), serve it, return the exit code."""
     argv = sys.argv if argv is None else argv
-    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(levelname)s %(message)s")
+    configure_host_logging()
     # Keep the real stdout for the handshake line only; anything a driver prints goes to stderr,
     # so a chatty driver can neither corrupt the handshake nor fill a pipe nobody reads.
     reply = Handshake(os.fdopen(os.dup(sys.stdout.fileno()), "w", encoding="utf-8"))

@@ -16,6 +16,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
@@ -55,6 +56,10 @@ class DirectoryEntry(BaseModel):
     remote: bool
     error: str | None = None
     restarts: int = 0
+
+
+StatusListener = Callable[[str, DeviceStatus, DeviceStatus, str | None], None]
+"""``(instance, old status, new status, error)``."""
 
 
 @dataclass
@@ -118,6 +123,8 @@ class DeviceSupervisor:
         self.stop_grace = stop_grace
         self._devices: dict[str, _Hosted] = {}
         self._tasks: list[asyncio.Task[None]] = []
+        self.on_status_change: StatusListener | None = None
+        """Called as ``(instance, old, new, error)`` whenever an instance's status changes."""
         self._save_lock = asyncio.Lock()
         self._token_file = token_path(data_dir)
         self._owns_runtime_file = False
@@ -325,12 +332,15 @@ class DeviceSupervisor:
     def _set(
         self, hosted: _Hosted, status: DeviceStatus, *, error: str | None = None, **changes: Any
     ) -> None:
-        if status != hosted.status:
+        old = hosted.status
+        if status != old:
             hosted.since = now()
         hosted.status = status
         hosted.error = error
         for key, value in changes.items():
             setattr(hosted, key, value)
+        if status != old and self.on_status_change is not None:
+            self.on_status_change(hosted.instance.name, old, status, error)
 
     async def _save(self) -> None:
         async with self._save_lock:

@@ -35,6 +35,7 @@ from rosaos.drivers import DeviceError
 from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
 from rosaos.kernel.api import create_app
 from rosaos.kernel.client import kernel_file, running_kernel_url
+from rosaos.kernel.device_status import DeviceStatusUpdates
 from rosaos.kernel.events import Event, EventStore, StoreClosedError, WorkerCallbackEvent
 from rosaos.kernel.login import LoginCodes, login_url
 from rosaos.kernel.loop import KernelLoop
@@ -254,6 +255,8 @@ class Kernel:
         self._updates = await UpdateStream.open(self._store.database)
         self._live = LiveProcesses(self._store)
         self.supervisor = self._hosting or DeviceSupervisor(self.world, self.data_dir, self._token)
+        if isinstance(self.supervisor, DeviceSupervisor):
+            self.supervisor.on_status_change = DeviceStatusUpdates(self._updates).changed
         kernel = self.config.kernel
         pool = WorkerPool(size=kernel.pool_size, env=self._worker_env, fork_server=kernel.fork_server)
         self.manager = ProcessManager(
