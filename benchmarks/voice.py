@@ -30,6 +30,7 @@ import datetime
 import json
 import os
 import platform
+import resource
 import shutil
 import statistics
 import subprocess
@@ -40,6 +41,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import yaml
 from rich.console import Console
 from rich.table import Table
 
@@ -47,7 +49,7 @@ from rosaos.config import load_config
 from rosaos.devices.client import DeviceClient
 from rosaos.frontends.voice.pipeline import Heard, KernelHandoff, VoicePipeline
 from rosaos.frontends.voice.sources import SAMPLE_RATE, WavSource, read_wav
-from rosaos.frontends.voice.stt import MoonshineSTT, wav_bytes
+from rosaos.frontends.voice.stt import MoonshineSTT, wav_bytes, word_error_rate
 from rosaos.frontends.voice.vad import Segmenter, SileroClassifier
 from rosaos.frontends.voice.wake import WakeGate
 from rosaos.kernel.client import KernelClient, running_kernel_url
@@ -177,8 +179,10 @@ def summary(runs: list[dict[str, Any]]) -> dict[str, dict[str, float]]:
     out = {}
     for stage in (*STAGES, "post_accepted"):
         values = [float(run[stage]) for run in runs]
+        ordered = sorted(values)
         out[stage] = {
             "p50": round(statistics.median(values), 3),
+            "p95": round(ordered[min(len(ordered) - 1, round(0.95 * (len(ordered) - 1)))], 3),
             "min": round(min(values), 3),
             "max": round(max(values), 3),
         }
@@ -195,16 +199,50 @@ def report(results: dict[str, Any]) -> None:
         f"STT real-time factor {results['stt_real_time_factor']:.2f}; transcript {results['transcript']!r}"
     )
     table = Table(title=f"End of utterance → Tapo sim state changed (ms), {len(results['runs'])} runs")
-    for column in ("stage", "p50", "min", "max"):
+    for column in ("stage", "p50", "p95", "min", "max"):
         table.add_column(column, justify="left" if column == "stage" else "right")
     for stage in (*STAGES[:3], "post_accepted", STAGES[3]):
         row = results["summary"][stage]
         label = {"post_accepted": "  of which POST /stt → 202 Accepted"}.get(stage, stage.replace("_", " "))
-        table.add_row(label, *(f"{row[k] * 1000:.0f}" for k in ("p50", "min", "max")))
+        table.add_row(label, *(f"{row[k] * 1000:.0f}" for k in ("p50", "p95", "min", "max")))
     console.print(table)
+    accuracy = results["accuracy"]
+    console.print(
+        f"Word error rate on {accuracy['sentences']} public task sentences spoken by espeak-ng: "
+        f"{accuracy['word_error_rate']:.3f}; peak RSS of the voice process {results['peak_rss_mib']:.0f} MiB"
+    )
+
+
+PUBLIC_TASKS = Path(__file__).resolve().parents[2] / "shared" / "bench" / "tasks"
+
+
+def accuracy(stt: MoonshineSTT, work: Path) -> dict[str, Any]:
+    """Word error rate of the engine on espeak-ng speech of every one-sentence public task."""
+    sentences = [
+        task["say"]
+        for path in sorted(PUBLIC_TASKS.glob("*.yaml"))
+        for task in yaml.safe_load(path.read_text())["tasks"]
+        if isinstance(task.get("say"), str)
+    ]
+    edits = words = 0.0
+    misheard = []
+    for number, sentence in enumerate(sentences):
+        wav = work / f"sentence-{number}.wav"
+        subprocess.run(["espeak-ng", "-w", str(wav), sentence], check=True)
+        heard = stt.transcribe_sync(read_wav(wav))
+        errors = word_error_rate(sentence, heard) * len(sentence.split())
+        edits, words = edits + errors, words + len(sentence.split())
+        if errors:
+            misheard.append({"said": sentence, "heard": heard})
+    return {
+        "sentences": len(sentences),
+        "word_error_rate": round(edits / max(1.0, words), 3),
+        "misheard": misheard,
+    }
 
 
 async def main_async(options: argparse.Namespace) -> dict[str, Any]:
+    tmp_accuracy = tempfile.TemporaryDirectory(prefix="rosaos-voice-wer-")
     if shutil.which("espeak-ng") is None:
         raise SystemExit("espeak-ng is needed: apt-get install espeak-ng")
     with tempfile.TemporaryDirectory(prefix="rosaos-voice-bench-") as tmp:
@@ -232,6 +270,8 @@ async def main_async(options: argparse.Namespace) -> dict[str, Any]:
         "stt_load_seconds": round(load_seconds, 3),
         "stt_real_time_factor": round(statistics.median(float(r["stt"]) for r in runs) / speech, 3),
         "transcript": runs[-1]["transcript"],
+        "accuracy": accuracy(stt, Path(tmp_accuracy.name)),
+        "peak_rss_mib": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),
         "runs": runs,
         "summary": summary(runs),
     }

@@ -77,3 +77,21 @@ def test_a_named_action_cannot_shadow_a_driver_tool(tmp_path: Path) -> None:
     )
     with pytest.raises(ProfileError, match="'stop' cannot be a tool name"):
         load_profile(path=path)
+
+
+def test_what_a_named_action_leaves_must_be_a_state_key(tmp_path: Path) -> None:
+    path = tmp_path / "leaves.yaml"
+    path.write_text(
+        "title: x\ndescription: y\ncmd_vel: {topic: /cmd_vel, type: geometry_msgs/msg/Twist}\n"
+        "limits: {linear: 0.2, angular: 1.0}\nspeeds: {linear: 0.1, angular: 0.5}\n"
+        "actions: {undock: {action: /undock, type: a/action/B, description: z, leaves: {docked: false}}}\n",
+        encoding="utf-8",
+    )
+    with pytest.raises(ProfileError, match="leaves names docked, which is not a state key"):
+        load_profile(path=path)
+
+
+def test_the_turtlebot4_dock_actions_say_what_they_leave() -> None:
+    actions = load_profile("turtlebot4").actions
+    assert actions["undock"].leaves == {"docked": False}
+    assert actions["dock"].leaves == {"docked": True}

@@ -252,3 +252,11 @@ async def test_set_color_name_description_lists_every_colour(open_bulb: Any) -> 
     description = " ".join((tools["set_color_name"].description or "").split())
     missing = [name for name in NAMED_COLORS if name not in description]
     assert not missing, f"set_color_name's docstring does not mention {missing}"
+
+
+@pytest.mark.parametrize("brightness", [True, "50", 50.5])
+async def test_a_brightness_of_the_wrong_type_is_refused_not_coerced(open_bulb: Any, brightness: Any) -> None:
+    async with open_bulb(on=True, brightness=40) as bulb:
+        error = await bulb.error("set_brightness", brightness=brightness)
+        assert "brightness" in error
+        assert (await bulb.state())["brightness"] == 40

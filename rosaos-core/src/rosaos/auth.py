@@ -7,6 +7,7 @@ clients (the CLI, workers, device hosts) read it from there; a remote instance i
 from __future__ import annotations
 
 import hmac
+import ipaddress
 import json
 import os
 import secrets
@@ -22,14 +23,30 @@ def token_path(data_dir: Path) -> Path:
     return data_dir / TOKEN_FILENAME
 
 
+def private_dir(path: Path) -> Path:
+    """Create ``path`` owner-only (0700), and narrow it to that if it is ours and wider.
+
+    The data directory holds the token, the event store (the chat history) and the logs: other
+    users of the machine must not read them.
+    """
+    path.mkdir(mode=0o700, parents=True, exist_ok=True)
+    info = path.stat()
+    if info.st_uid == os.getuid() and info.st_mode & 0o077:
+        path.chmod(0o700)
+    return path
+
+
 def load_or_create_token(data_dir: Path) -> str:
-    """Return the machine's token, creating it (0600, owner only) on first use."""
+    """Return the machine's token, creating it (0600, owner only) on first use.
+
+    Also keeps the data directory owner-only (:func:`private_dir`): every command passes here.
+    """
+    private_dir(data_dir)
     path = token_path(data_dir)
     if path.exists():
         token = path.read_text(encoding="utf-8").strip()
         if token:
             return token
-    data_dir.mkdir(parents=True, exist_ok=True)
     token = secrets.token_urlsafe(32)
     # O_EXCL makes two first runs agree on one token instead of overwriting each other.
     try:
@@ -117,3 +134,70 @@ async def _json_error(
     headers = [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode())]
     await send({"type": "http.response.start", "status": status, "headers": headers + (extra_headers or [])})
     await send({"type": "http.response.body", "body": body})
+
+
+LOOPBACK_NAMES = frozenset({"localhost", "127.0.0.1", "::1"})
+
+
+def host_name(host_header: str) -> str:
+    """The name in a ``Host`` header, without its port: ``[::1]:8765`` → ``::1``."""
+    host = host_header.strip().lower()
+    if host.startswith("["):
+        return host[1 : host.find("]")] if "]" in host else host
+    return host.rsplit(":", 1)[0] if host.count(":") == 1 else host
+
+
+def is_loopback_name(name: str) -> bool:
+    """``localhost``, ``::1`` or any 127.x.y.z."""
+    if name in LOOPBACK_NAMES:
+        return True
+    try:
+        return ipaddress.ip_address(name).is_loopback
+    except ValueError:
+        return False
+
+
+def bound_hosts(bind_host: str) -> list[str]:
+    """The names a server bound to ``bind_host`` answers to besides loopback (a specific address)."""
+    if bind_host in ("", "0.0.0.0", "::") or is_loopback_name(bind_host):
+        return []
+    return [bind_host]
+
+
+class HostOriginGuard:
+    """ASGI middleware against DNS rebinding and foreign pages, on every rosaOS HTTP surface.
+
+    As the MCP transport guidance asks: the ``Host`` header must name loopback or one of
+    ``allowed_hosts`` (a rebinding attack sends the attacker's name), else 421; a browser's
+    ``Origin``, when present, must be this same host (``scheme://Host``) or one of
+    ``allowed_origins``, else 403. Requests without ``Origin`` (curl, the CLI, workers) pass.
+    """
+
+    def __init__(
+        self, app: ASGIApp, allowed_hosts: Iterable[str] = (), allowed_origins: Iterable[str] = ()
+    ) -> None:
+        self.app = app
+        self._hosts = frozenset(host_name(host) for host in allowed_hosts)
+        self._origins = frozenset(allowed_origins)
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":  # lifespan; websockets are refused by BearerAuthMiddleware
+            await self.app(scope, receive, send)
+            return
+        headers = {k.decode("latin-1").lower(): v.decode("latin-1") for k, v in scope.get("headers", [])}
+        host = headers.get("host", "")
+        name = host_name(host)
+        if host and not is_loopback_name(name) and name not in self._hosts:
+            await _json_error(
+                send,
+                421,
+                f"host {host!r} is not served here (only loopback and allowed hosts are, against DNS "
+                "rebinding); to reach it by that name, allow it: `rosaos serve-device --allow-host NAME` "
+                "or [kernel] allow_hosts in rosaos.toml",
+            )
+            return
+        origin = headers.get("origin")
+        if origin and origin != f"{scope.get('scheme', 'http')}://{host}" and origin not in self._origins:
+            await _json_error(send, 403, f"origin {origin} is not allowed: open the rosaOS page itself")
+            return
+        await self.app(scope, receive, send)

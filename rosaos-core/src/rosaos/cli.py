@@ -135,11 +135,17 @@ def serve_device(
     config: ConfigOption = None,
     host: Annotated[str, typer.Option(help="Address to bind. Loopback unless you mean it.")] = "127.0.0.1",
     port: Annotated[int, typer.Option(help="TCP port (0 picks a free one).", min=0, max=65535)] = 0,
+    allow_host: Annotated[
+        list[str] | None,
+        typer.Option(
+            help="A Host name other machines reach this by (repeatable); loopback and --host always work.",
+        ),
+    ] = None,
 ) -> None:
     """Serve one instance's MCP server over streamable HTTP, behind the bearer token."""
     from rosaos.devices.commands import serve_device_command
 
-    raise typer.Exit(serve_device_command(name, config, host=host, port=port))
+    raise typer.Exit(serve_device_command(name, config, host=host, port=port, allow_hosts=allow_host or []))
 
 
 @app.command("new-driver")

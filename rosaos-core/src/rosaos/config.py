@@ -78,6 +78,9 @@ class KernelConfig(BaseModel):
     host: str = "127.0.0.1"
     port: int = Field(default=DEFAULT_KERNEL_PORT, ge=0, le=65535)
     """Port for the API and web page; 0 picks a free one (printed at start)."""
+    allow_hosts: list[str] = Field(default_factory=list)
+    """``Host`` names the API answers to besides loopback (and the address it binds): against DNS
+    rebinding, any other name gets 421. E.g. ``["rosaos-desk.local"]`` to open it by that name."""
     pool_size: int = Field(default=2, ge=0, le=32)
     """Warm worker subprocesses kept ready. A one-off worker is spawned when all are busy."""
     fork_server: bool = True

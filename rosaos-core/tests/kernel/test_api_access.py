@@ -101,3 +101,30 @@ async def test_login_codes_are_minted_with_the_token_as_links(client: httpx.Asyn
     assert link["url"] == f"{ORIGIN}/#login={link['code']}"
     assert link["expires_in"] == 600
     assert (await client.post("/login", json={"code": link["code"]})).status_code == 200
+
+
+async def test_a_rebound_host_name_is_refused_even_with_its_own_origin(client: httpx.AsyncClient) -> None:
+    # DNS rebinding: evil.example resolves to 127.0.0.1, so the page is "same origin" with itself.
+    rebound = {**AUTH, "Host": "evil.example:8765", "Origin": "http://evil.example:8765"}
+    response = await client.post("/chat", headers=rebound, json={"text": "turn on the kitchen light"})
+    assert response.status_code == 421
+    assert "host 'evil.example:8765' is not served here" in response.json()["detail"]
+
+
+@pytest.mark.parametrize("host", ["localhost:8765", "[::1]:8765", "127.0.0.2:8765", "127.0.0.1"])
+async def test_loopback_host_names_pass(client: httpx.AsyncClient, host: str) -> None:
+    response = await client.get("/processes", headers={**AUTH, "Host": host})
+    assert response.status_code == 200
+
+
+async def test_a_host_allowed_in_config_passes(runtime: TestRuntime) -> None:
+    from rosaos.kernel.api import create_app
+
+    app = create_app(runtime, allowed_hosts=["desk.local"])
+    async with httpx.AsyncClient(
+        transport=httpx.ASGITransport(app=app), base_url="http://desk.local:8765"
+    ) as http:
+        allowed = await http.get("/processes", headers={**AUTH, "Origin": "http://desk.local:8765"})
+        other = await http.get("/processes", headers={**AUTH, "Host": "lab.local:8765"})
+    assert allowed.status_code == 200
+    assert other.status_code == 421

@@ -47,6 +47,20 @@ async def test_a_repeated_idempotency_key_answers_the_first_id_and_enqueues_noth
     assert await store.pending_count() == 1
 
 
+async def test_a_key_reused_with_a_different_body_is_a_conflict(
+    client: httpx.AsyncClient, store: EventStore
+) -> None:
+    first = await client.post(
+        "/chat", json={"text": "turn on the light", "idempotency_key": "web-2"}, headers=AUTH
+    )
+    reused = await client.post(
+        "/chat", json={"text": "turn off the light", "idempotency_key": "web-2"}, headers=AUTH
+    )
+    assert reused.status_code == 409
+    assert f"already used for event {first.json()['id']} with a different body" in reused.json()["detail"]
+    assert await store.pending_count() == 1
+
+
 async def test_the_idempotency_key_header_works_like_the_body_field(
     client: httpx.AsyncClient, store: EventStore
 ) -> None:
@@ -60,7 +74,7 @@ async def test_a_header_and_body_key_that_differ_are_refused(client: httpx.Async
     response = await client.post(
         "/chat", json={"text": "hi", "idempotency_key": "a"}, headers={**AUTH, "Idempotency-Key": "b"}
     )
-    assert response.status_code == 422
+    assert response.status_code == 409
     assert "differ" in response.json()["detail"]
 
 
@@ -177,3 +191,28 @@ async def test_a_failing_callback_hook_still_answers_202_and_reports_the_error(
     page = (await client.get("/updates", params={"after": 0}, headers=AUTH)).json()
     assert page["updates"][-1]["kind"] == "error"
     assert "lease table unavailable" in page["updates"][-1]["text"]
+
+
+async def test_an_event_id_beyond_sqlite_integers_is_invalid_not_a_server_error(
+    client: httpx.AsyncClient,
+) -> None:
+    response = await client.get("/events/9223372036854775808", headers=AUTH)
+    assert response.status_code == 422
+    assert "event_id" in response.json()["detail"]
+
+
+async def test_notice_data_nested_too_deep_is_refused_not_a_server_error(
+    client: httpx.AsyncClient, store: EventStore
+) -> None:
+    data: dict[str, object] = {}
+    for _ in range(300):
+        data = {"x": data}
+    body = {
+        "kind": "device_notice",
+        "source": "lamp",
+        "payload": {"device": "lamp", "message": "hi", "data": data},
+    }
+    response = await client.post("/event", json=body, headers=AUTH)
+    assert response.status_code == 422
+    assert "nested more than 32 levels deep" in response.json()["detail"]
+    assert await store.pending_count() == 0

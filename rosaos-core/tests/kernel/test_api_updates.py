@@ -8,6 +8,7 @@ from collections.abc import AsyncIterator
 from typing import Any
 
 import httpx
+import pytest
 from kernel_support import AUTH, eventually
 
 from rosaos.kernel.updates import UpdateStream
@@ -86,8 +87,14 @@ async def test_a_disconnected_sse_client_stops_following(served: str, updates: U
 
 async def test_a_bad_last_event_id_is_refused(client: httpx.AsyncClient) -> None:
     response = await client.get("/updates", headers={**SSE, "Last-Event-ID": "yesterday"})
-    assert response.status_code == 400
+    assert response.status_code == 422
     assert "Last-Event-ID" in response.json()["detail"]
+
+
+@pytest.mark.parametrize("none", ["null", ""])
+async def test_a_null_or_empty_last_event_id_means_none_seen(client: httpx.AsyncClient, none: str) -> None:
+    response = await client.get("/updates", headers={"Last-Event-ID": none, **AUTH})
+    assert response.status_code == 200
 
 
 async def test_polling_pages_through_updates_after_an_id(

@@ -76,7 +76,8 @@ async def test_every_committed_event_is_there_exactly_once_after_sigkill(tmp_pat
         )
         retried = await store.append(retry)
         assert retried.duplicate is was_committed
-        assert await store.append(retry) == (retried.id, True)
+        again = await store.append(retry)
+        assert (again.id, again.duplicate, again.conflict) == (retried.id, True, False)
 
         # After the restart the kernel gets every unhandled event, in id order, each once.
         delivered = []

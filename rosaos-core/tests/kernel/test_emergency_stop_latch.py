@@ -117,3 +117,12 @@ async def test_a_stored_latch_this_version_cannot_read_stays_latched(tmp_path: P
         assert state["latched"] is True
         assert "could not be read" in state["reason"]
         assert "an older rosaOS" in state["reason"]
+
+
+async def test_a_reset_with_nothing_latched_says_nothing_on_the_updates_stream(tmp_path: Path) -> None:
+    async with kernel_api(tmp_path) as api:
+        before = (await api.get("/updates", params={"after": 0, "limit": 1000})).json()["updates"]
+        reset = (await api.post("/estop/reset")).json()
+        after = (await api.get("/updates", params={"after": 0, "limit": 1000})).json()["updates"]
+    assert reset == {"latched": False, "reason": None, "time": None}
+    assert after == before

@@ -135,7 +135,8 @@ async def test_idempotency_keys_are_remembered_across_restarts(tmp_path: Path) -
     first = await store.append(typed("hello", key="k1"))
     await store.close()
     reopened = await EventStore.open(path)
-    assert await reopened.append(typed("hello", key="k1")) == (first.id, True)
+    again = await reopened.append(typed("hello", key="k1"))
+    assert (again.id, again.duplicate, again.conflict) == (first.id, True, False)
     await reopened.close()
 
 

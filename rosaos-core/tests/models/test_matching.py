@@ -313,3 +313,25 @@ def test_the_task_reads_as_a_sentence_and_carries_the_plan(matcher: IntentMatche
 def test_a_world_without_intents_matches_nothing() -> None:
     bare = IntentMatcher([DeviceIntentSource(name="robot", driver="ros")], "en")
     assert bare.match("Turn on the lamp").kind == "no_match"
+
+
+@pytest.mark.parametrize(
+    ("sentence", "value"),
+    [
+        ("set the kitchen light to -5 percent", "-5"),
+        ("set the kitchen light to minus 5 percent", "minus 5"),
+        ("set the living room lamp to 150 percent", "150"),
+    ],
+)
+def test_a_number_no_template_takes_is_refused_naming_it(
+    matcher: IntentMatcher, sentence: str, value: str
+) -> None:
+    result = matcher.match(sentence)
+    assert (result.kind, result.processes) == ("no_match", ())
+    assert result.reply.startswith(f"I can't do that: {value} is not a value the ")
+    assert "Nothing was changed." in result.reply
+
+
+def test_an_unknown_device_with_a_good_number_is_still_unknown(matcher: IntentMatcher) -> None:
+    result = matcher.match("set the garage light to 50 percent")
+    assert "garage light" in result.reply and "is not a value" not in result.reply

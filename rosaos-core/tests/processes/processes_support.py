@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Annotated, Any
 
 from fastmcp import FastMCP
+from fastmcp.exceptions import ToolError
 from pydantic import Field
 
 from rosaos.devices.endpoints import DeviceEndpoint
@@ -119,6 +120,8 @@ def build_test_device(name: str, state: dict[str, Any]) -> FastMCP:
     @server.tool(annotations={"readOnlyHint": False, "destructiveHint": False, "idempotentHint": True})
     def set_level(level: Annotated[int, Field(ge=0, le=100, description="Level in percent.")]) -> str:
         """Set the device level, 0-100."""
+        if state.get("jammed"):
+            raise ToolError(f"{name} is jammed; free it and try again")
         state["level"] = level
         return f"{name} level is {level}"
 

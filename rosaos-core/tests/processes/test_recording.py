@@ -46,7 +46,9 @@ async def test_every_call_gets_a_receipt_with_secrets_redacted(kernel: KernelSta
         job = make_job(kernel, "calls_each_scripted_tool", [door])
         model = ModelSpec(model="python:receipts_test_models:calls_each_scripted_tool")
         callback = await run_job(job.model_copy(update={"model": model}))
-    assert callback.status == "ok", callback.error
+    # The refused move was never made good: the process fails (processes/tool_calls.py), and its
+    # receipts still say what each call did.
+    assert callback.status == "error" and "velocity limit" in (callback.error or "")
     set_pin, move, nudge = callback.receipts
     assert (set_pin.device, set_pin.tool, set_pin.ok) == ("door", "set_pin", True)
     assert set_pin.arguments == {"pin": REDACTED, "label": "front door"}

@@ -58,6 +58,22 @@ async def test_prefixed_tools_reach_the_right_devices(
     assert callback.tool_calls == 2
 
 
+async def test_a_failed_device_call_is_an_error_even_when_the_model_reports_it_politely(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    lamp = devices["lamp"]
+    lamp.state.update(level=0, jammed=True)
+    try:
+        callback = await run_job(make_job(kernel, "sets_level", [lamp]))
+    finally:
+        lamp.state.pop("jammed")
+    # The scripted model answers with the tool's (failed) result as if all were well.
+    assert "jammed" in (callback.output or "")
+    assert callback.status == "error"
+    assert callback.error == "lamp: set_level failed: lamp is jammed; free it and try again"
+    assert lamp.state["level"] == 0
+
+
 async def test_unreachable_device_is_an_error_naming_it(kernel: KernelStandIn, unreachable_url: str) -> None:
     dead = LoopbackDevice("dead_lamp", unreachable_url.replace("/event", "/mcp"), {})
     callback = await run_job(make_job(kernel, "sets_level", [dead]))

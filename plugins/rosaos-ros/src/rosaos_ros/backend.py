@@ -35,6 +35,8 @@ from rosaos_ros.sim import SimulatorError, SimulatorThread
 from rosaos_ros.state import RobotStateCache
 
 RAW_TWIST_LIFETIME = 0.5
+STATE_SETTLE_WAIT = 5.0
+"""Seconds a named action waits for the state topics to show what it left (``docked`` false)."""
 """Seconds a single raw velocity message (``publish`` on the velocity topic) may last."""
 VELOCITY_HINT = (
     "To move the robot use drive, move_distance or rotate: they keep the velocity limits and the deadman."
@@ -313,7 +315,10 @@ class RosBackend(DeviceBackend):
         goal = await self.send_goal(
             action.action, dict(action.goal), action.type, action.timeout, True, on_feedback
         )
-        await self.state.refresh()
+        if goal.get("status") == "succeeded" and action.leaves:
+            await self.state.wait_for_fields(action.leaves, STATE_SETTLE_WAIT)
+        else:
+            await self.state.refresh()
         return {"goal": goal, "state": await self.get_state()}
 
     def _named_action_type(self, action: str) -> str:

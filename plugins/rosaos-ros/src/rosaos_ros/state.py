@@ -120,22 +120,9 @@ class RobotStateCache:
         """
         wanted = self._sources() if sources is None else self._sources() & sources
 
-        def complete() -> bool:
-            return all(self._seen.get(source, -math.inf) > since for source in wanted)
-
-        async def wait() -> None:
-            while not complete():
-                waiter = asyncio.get_running_loop().create_future()
-                self._waiters.append(waiter)
-                await waiter
-
-        if complete():
-            return
-        try:
-            await self.bridge.guarded(wait(), FIRST_MESSAGE_WAIT, "state topics")
-        except DeviceError:
-            if not self.bridge.connected:
-                raise
+        await self._wait_until(
+            lambda: all(self._seen.get(source, -math.inf) > since for source in wanted), FIRST_MESSAGE_WAIT
+        )
 
     def latest_odometry(self, max_age: float = ODOMETRY_STALE) -> Odometry:
         """The latest odometry; :class:`DeviceError` if there is none or it is stale."""
@@ -163,6 +150,36 @@ class RobotStateCache:
         is now and not as it was a moment before the action ended.
         """
         await self.wait_for_messages(since=time.monotonic())
+
+    async def wait_for_fields(self, expected: dict[str, Any], timeout: float) -> None:
+        """Wait (up to ``timeout`` s) until every state key in ``expected`` shows its value.
+
+        A named action's status topic may still carry the old value for a message or two after
+        the action ended, and on a busy machine longer than :meth:`refresh` waits. Past the
+        timeout the state is read as it is: get_state then tells the truth, and a motion refused
+        while ``docked`` says so.
+        """
+
+        await self._wait_until(
+            lambda: all(self.fields.get(key) == value for key, value in expected.items()), timeout
+        )
+
+    async def _wait_until(self, done: Callable[[], bool], timeout: float) -> None:
+        """Wait for state messages until ``done()``; a timeout is not an error, a lost connection is."""
+
+        async def wait() -> None:
+            while not done():
+                waiter = asyncio.get_running_loop().create_future()
+                self._waiters.append(waiter)
+                await waiter
+
+        if done():
+            return
+        try:
+            await self.bridge.guarded(wait(), timeout, "state topics")
+        except DeviceError:
+            if not self.bridge.connected:
+                raise
 
     async def settle(self) -> None:
         """Wait for odometry sent after the robot was told to stop, so the state shows it at rest."""

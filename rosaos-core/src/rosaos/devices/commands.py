@@ -12,7 +12,7 @@ import ipaddress
 import json
 import socket
 import sys
-from collections.abc import Callable, Coroutine
+from collections.abc import Callable, Coroutine, Sequence
 from pathlib import Path
 from typing import Any, TypeVar
 from urllib.parse import urlsplit
@@ -22,7 +22,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from rosaos.auth import load_or_create_token, token_path
+from rosaos.auth import bound_hosts, load_or_create_token, token_path
 from rosaos.config import ConfigError, RosaosConfig, load_config
 from rosaos.devices.health import CheckBudget, CheckResult, HealthCheck, Route, Via, find_routes
 from rosaos.devices.host import START_TIMEOUT, install_stop_signals, serve_until_stopped
@@ -259,7 +259,13 @@ def _check_failed(name: str, via: Via | None, url: str | None, reason: str, json
 # --- rosaos serve-device ------------------------------------------------------------------------
 
 
-def serve_device_command(name: str, config_path: Path | None, host: str = "127.0.0.1", port: int = 0) -> int:
+def serve_device_command(
+    name: str,
+    config_path: Path | None,
+    host: str = "127.0.0.1",
+    port: int = 0,
+    allow_hosts: Sequence[str] = (),
+) -> int:
     """Serve one instance in the foreground over streamable HTTP, behind the token, until Ctrl-C."""
     loaded = _load_or_report(config_path)
     if loaded is None:
@@ -306,14 +312,16 @@ def serve_device_command(name: str, config_path: Path | None, host: str = "127.0
         )
     token = load_or_create_token(config.data_dir)
     try:
-        asyncio.run(_serve(instance, config.data_dir, token, host, port or instance.port or 0))
+        asyncio.run(_serve(instance, config.data_dir, token, host, port or instance.port or 0, allow_hosts))
     except DeviceError as error:
         print(f"error: {error}", file=sys.stderr)
         return 1
     return 0
 
 
-async def _serve(instance: DeviceInstance, data_dir: Path, token: str, host: str, port: int) -> None:
+async def _serve(
+    instance: DeviceInstance, data_dir: Path, token: str, host: str, port: int, allow_hosts: Sequence[str]
+) -> None:
     stop = asyncio.Event()
     install_stop_signals(stop)
     with contextlib.ExitStack() as records:
@@ -329,9 +337,13 @@ async def _serve(instance: DeviceInstance, data_dir: Path, token: str, host: str
                     f'other machines: url = "http://{socket.gethostname()}:{port}/mcp" and this token '
                     f"as token = ... in [devices.{instance.name}] of their rosaos.toml"
                 )
+                names = ", ".join(["loopback", *allow_hosts, *bound_hosts(host)])
+                print(f"answers to Host: {names}; add the name other machines use with --allow-host NAME")
             print("Press Ctrl-C to stop.", flush=True)
 
-        await serve_until_stopped(instance, data_dir, token, host, port, ready, stop)
+        await serve_until_stopped(
+            instance, data_dir, token, host, port, ready, stop, allowed_hosts=allow_hosts
+        )
     print(f"{instance.name}: stopped", flush=True)
 
 

@@ -20,14 +20,15 @@ import logging
 import os
 import signal
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any, BinaryIO, TextIO
+from typing import Any, TextIO
 
 from pydantic import BaseModel, ConfigDict, Field, SecretBytes, SecretStr, ValidationError
 from pydantic_core import to_jsonable_python
 
 from rosaos.config import format_validation_error
+from rosaos.devices.host_logging import configure_host_logging, open_rotated_log
 from rosaos.devices.serve import ServedDevice, open_device, serve_http
 from rosaos.devices.world import DeviceInstance
 from rosaos.drivers import BackendName, DeviceError
@@ -130,6 +131,7 @@ async def serve_until_stopped(
     on_ready: Callable[[ServedDevice], None],
     stop: asyncio.Event,
     preferred_port: int | None = None,
+    allowed_hosts: Sequence[str] = (),
 ) -> None:
     """Serve ``instance`` over HTTP, call ``on_ready`` once it accepts connections, run until ``stop``.
 
@@ -141,12 +143,14 @@ async def serve_until_stopped(
         if preferred_port:
             try:
                 served = await stack.enter_async_context(
-                    serve_http(device.server, token, host, preferred_port)
+                    serve_http(device.server, token, host, preferred_port, allowed_hosts)
                 )
             except DeviceError:
                 log.info("port %s is taken; %s gets a free port instead", preferred_port, instance.name)
         if served is None:
-            served = await stack.enter_async_context(serve_http(device.server, token, host, port))
+            served = await stack.enter_async_context(
+                serve_http(device.server, token, host, port, allowed_hosts)
+            )
         on_ready(served)
         stopper = asyncio.create_task(stop.wait())
         try:
@@ -240,7 +244,7 @@ class HostProcess:
         cls, job: HostJob, log_file: Path, start_timeout: float, stop_grace: float
     ) -> HostProcess:
         """Start a host for ``job`` and wait for its ready line; DeviceError says why it did not come up."""
-        log_handle = await asyncio.to_thread(_open_log, log_file)
+        log_handle = await asyncio.to_thread(open_rotated_log, log_file)
         try:
             process = await asyncio.create_subprocess_exec(
                 sys.executable,
@@ -322,11 +326,6 @@ class HostProcess:
         await self.process.wait()
 
 
-def _open_log(path: Path) -> BinaryIO:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    return path.open("ab")
-
-
 def _tail(path: Path, lines: int = 3) -> str:
     """The last lines of a host's log: usually the reason it died."""
     try:
@@ -344,7 +343,7 @@ def _signal_group(pid: int, sig: signal.Signals) -> None:
 def main(argv: list[str] | None = None) -> int:
     """Entry point: read the job (argv[1] or one stdin line), serve it, return the exit code."""
     argv = sys.argv if argv is None else argv
-    logging.basicConfig(level=logging.INFO, format="%(asctime)s %(name)s %(levelname)s %(message)s")
+    configure_host_logging()
     # Keep the real stdout for the handshake line only; anything a driver prints goes to stderr,
     # so a chatty driver can neither corrupt the handshake nor fill a pipe nobody reads.
     reply = Handshake(os.fdopen(os.dup(sys.stdout.fileno()), "w", encoding="utf-8"))

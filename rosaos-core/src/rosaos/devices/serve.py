@@ -11,7 +11,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import socket
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Iterable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -20,7 +20,7 @@ import uvicorn
 from fastmcp import FastMCP
 from starlette.types import ASGIApp
 
-from rosaos.auth import BearerAuthMiddleware
+from rosaos.auth import BearerAuthMiddleware, HostOriginGuard, bound_hosts
 from rosaos.devices.world import DeviceInstance
 from rosaos.drivers import DeviceBackend, DeviceError
 
@@ -54,6 +54,8 @@ async def open_device(instance: DeviceInstance, data_dir: Path) -> AsyncIterator
     try:
         await backend.start()
         server = spec.server(ctx, backend)
+        # Tool arguments are typed at the boundary: `true` is not a brightness, "50" is not 50.
+        server.strict_input_validation = True
         _add_safe_stop(server, instance, backend)
         yield OpenDevice(instance, backend, server)
     finally:
@@ -76,10 +78,14 @@ def _add_safe_stop(server: FastMCP, instance: DeviceInstance, backend: DeviceBac
     )
 
 
-def device_http_app(server: FastMCP, token: str) -> ASGIApp:
-    """The ASGI app for a device: MCP at ``/mcp``; ``/health`` open; everything else needs the token."""
+def device_http_app(server: FastMCP, token: str, allowed_hosts: Iterable[str] = ()) -> ASGIApp:
+    """The ASGI app for a device: MCP at ``/mcp``; ``/health`` open; everything else needs the token.
+
+    Only loopback and ``allowed_hosts`` may appear in ``Host``, and a browser only from the same
+    origin (:class:`~rosaos.auth.HostOriginGuard`)."""
     mcp_app = server.http_app(path=MCP_PATH)
-    return BearerAuthMiddleware(_with_health(mcp_app), token=token, open_paths=[HEALTH_PATH])
+    guarded = BearerAuthMiddleware(_with_health(mcp_app), token=token, open_paths=[HEALTH_PATH])
+    return HostOriginGuard(guarded, allowed_hosts=allowed_hosts)
 
 
 def _with_health(app: Any) -> ASGIApp:
@@ -137,13 +143,14 @@ class ServedDevice:
 
 @contextlib.asynccontextmanager
 async def serve_http(
-    server: FastMCP, token: str, host: str = "127.0.0.1", port: int = 0
+    server: FastMCP, token: str, host: str = "127.0.0.1", port: int = 0, allowed_hosts: Iterable[str] = ()
 ) -> AsyncIterator[ServedDevice]:
-    """Serve ``server`` over streamable HTTP until the block exits. Yields once it accepts connections."""
+    """Serve ``server`` over streamable HTTP until the block exits. Yields once it accepts connections.
+
+    ``allowed_hosts``: ``Host`` names besides loopback and ``host`` itself (``--allow-host``)."""
     sock = bind_socket(host, port)
-    config = uvicorn.Config(
-        device_http_app(server, token), log_level="warning", lifespan="on", timeout_graceful_shutdown=2
-    )
+    app = device_http_app(server, token, [*allowed_hosts, *bound_hosts(host)])
+    config = uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=2)
     uv_server = uvicorn.Server(config)
     task = asyncio.create_task(uv_server.serve(sockets=[sock]))
     served = ServedDevice(url_for(sock), uv_server, task)

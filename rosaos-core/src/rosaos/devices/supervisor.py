@@ -16,6 +16,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import os
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
@@ -55,6 +56,10 @@ class DirectoryEntry(BaseModel):
     remote: bool
     error: str | None = None
     restarts: int = 0
+
+
+StatusListener = Callable[[str, DeviceStatus, DeviceStatus, str | None], None]
+"""``(instance, old status, new status, error)``."""
 
 
 @dataclass
@@ -118,6 +123,8 @@ class DeviceSupervisor:
         self.stop_grace = stop_grace
         self._devices: dict[str, _Hosted] = {}
         self._tasks: list[asyncio.Task[None]] = []
+        self.on_status_change: StatusListener | None = None
+        """Called as ``(instance, old, new, error)`` whenever an instance's status changes."""
         self._save_lock = asyncio.Lock()
         self._token_file = token_path(data_dir)
         self._owns_runtime_file = False
@@ -211,18 +218,7 @@ class DeviceSupervisor:
     async def safe_stop_all(self, per_device_timeout: float = 5.0) -> list[SafeStopOutcome]:
         """Call ``safe_stop`` on every reachable instance at once; failures are reported, not raised."""
         entries = [e for e in self.directory().values() if e.url]
-
-        async def one(entry: DirectoryEntry) -> SafeStopOutcome:
-            assert entry.url is not None
-            try:
-                detail = await DeviceClient(entry.url, entry.token, per_device_timeout, entry.name).call(
-                    "safe_stop"
-                )
-            except DeviceError as error:
-                return SafeStopOutcome(entry.name, False, str(error))
-            return SafeStopOutcome(entry.name, True, str(detail))
-
-        outcomes = list(await asyncio.gather(*(one(e) for e in entries)))
+        outcomes = list(await asyncio.gather(*(safe_stop_entry(e, per_device_timeout) for e in entries)))
         # A device that is not served has nothing running to stop: reported, not a failure.
         outcomes += [
             SafeStopOutcome(e.name, True, f"not served ({e.status}): nothing to stop")
@@ -336,12 +332,15 @@ class DeviceSupervisor:
     def _set(
         self, hosted: _Hosted, status: DeviceStatus, *, error: str | None = None, **changes: Any
     ) -> None:
-        if status != hosted.status:
+        old = hosted.status
+        if status != old:
             hosted.since = now()
         hosted.status = status
         hosted.error = error
         for key, value in changes.items():
             setattr(hosted, key, value)
+        if status != old and self.on_status_change is not None:
+            self.on_status_change(hosted.instance.name, old, status, error)
 
     async def _save(self) -> None:
         async with self._save_lock:
@@ -363,3 +362,14 @@ class DeviceSupervisor:
                 },
             )
             await asyncio.to_thread(write_atomic, self.runtime_file, runtime.model_dump_json(indent=2))
+
+
+async def safe_stop_entry(entry: DirectoryEntry, timeout: float = 5.0) -> SafeStopOutcome:
+    """Call one served instance's ``safe_stop`` tool; a failure is reported, not raised."""
+    if entry.url is None:
+        return SafeStopOutcome(entry.name, True, f"not served ({entry.status}): nothing to stop")
+    try:
+        detail = await DeviceClient(entry.url, entry.token, timeout, entry.name).call("safe_stop")
+    except DeviceError as error:
+        return SafeStopOutcome(entry.name, False, str(error))
+    return SafeStopOutcome(entry.name, True, str(detail))

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import re
 import sys
 import time
 import uuid
@@ -36,15 +37,28 @@ _STYLE = {
 }
 
 
+# ESC/CSI sequences (colours, cursor moves, OSC titles and links) and other C0/C1 controls but
+# newline and tab: text from devices and models must not drive the user's terminal.
+_TERMINAL_CONTROLS = re.compile(
+    r"\x1b\][^\x07\x1b]*(?:\x07|\x1b\\)?|\x1b\[[0-?]*[ -/]*[@-~]|\x1b.?|[\x00-\x08\x0b-\x1f\x7f-\x9f]"
+)
+
+
+def printable(text: str) -> str:
+    """``text`` with terminal escape sequences and control characters removed."""
+    return _TERMINAL_CONTROLS.sub("", text)
+
+
 def format_update(update: dict[str, Any]) -> str | None:
-    """The line a chat shows for an update, or None for updates a chat hides."""
+    """The line a chat shows for an update, or None for updates a chat hides. Never raw escapes."""
     kind = update["kind"]
+    text = printable(str(update["text"]))
     if kind == "kernel_reply":
-        return f"rosaos: {update['text']}"
+        return f"rosaos: {text}"
     if kind in ("process_launched", "process_ended", "notice", "error"):
-        return f"  · {update['text']}"
+        return f"  · {text}"
     if kind == "event" and update.get("data", {}).get("kind") == "worker_callback":
-        return f"  · {update['text']}"
+        return f"  · {text}"
     return None
 
 
@@ -161,7 +175,7 @@ async def one_shot(client: KernelClient, text: str, wait: bool, timeout: float, 
     if json_output:
         print(json.dumps(conversation.summary(), indent=2, default=str))
     elif code == EXIT_TIMEOUT:
-        print(f"rosaos chat: {conversation.errors[-1]}", file=sys.stderr)
+        print(f"rosaos chat: {printable(conversation.errors[-1])}", file=sys.stderr)
     return code
 
 

@@ -52,12 +52,16 @@ async def read_stored(path: Path, params: dict[str, Any]) -> list[dict[str, Any]
     """The log straight from a data directory's event store, when no kernel is running there
     (after ``rosaos bench``, or with the kernel stopped)."""
     if not await asyncio.to_thread(path.is_file):
-        raise FileNotFoundError(f"no kernel is running and there is no event store at {path}; start `rosaos up`")
+        raise FileNotFoundError(
+            f"no kernel is running and there is no event store at {path}; start `rosaos up`"
+        )
     database = await Database.open(path)
     try:
         log = await ActivityLog.open(database)
         entries = await log.query(
-            device=params.get("device"), process_id=params.get("process"), since=params.get("since"),
+            device=params.get("device"),
+            process_id=params.get("process"),
+            since=params.get("since"),
             limit=int(params["limit"]),
         )
     finally:

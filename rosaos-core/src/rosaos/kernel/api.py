@@ -20,11 +20,10 @@ from fastapi.responses import JSONResponse
 from fastapi.staticfiles import StaticFiles
 
 import rosaos
-from rosaos.auth import BearerAuthMiddleware
+from rosaos.auth import BearerAuthMiddleware, HostOriginGuard
 from rosaos.kernel import confirmation_routes  # noqa: F401  (adds its routes to protected)
 from rosaos.kernel.api_routes import WEB_DIR, protected, public
 from rosaos.kernel.api_types import KernelRuntime
-from rosaos.kernel.login import SameOriginMiddleware
 
 MAX_BODY_BYTES = 1_000_000
 """Larger request bodies get 413; a worker's output is the biggest thing anyone posts."""
@@ -54,8 +53,11 @@ async def _internal_error(request: Request, error: Exception) -> JSONResponse:
     )
 
 
-def create_app(runtime: KernelRuntime, *, allowed_origins: Iterable[str] = ()) -> FastAPI:
-    """The kernel's FastAPI app. ``allowed_origins`` adds browser origins besides the server's own."""
+def create_app(
+    runtime: KernelRuntime, *, allowed_origins: Iterable[str] = (), allowed_hosts: Iterable[str] = ()
+) -> FastAPI:
+    """The kernel's FastAPI app. ``allowed_origins`` adds browser origins besides the server's own;
+    ``allowed_hosts`` adds ``Host`` names besides loopback."""
     app = FastAPI(
         title="rosaOS kernel",
         version=rosaos.__version__,
@@ -71,7 +73,7 @@ def create_app(runtime: KernelRuntime, *, allowed_origins: Iterable[str] = ()) -
     app.add_exception_handler(Exception, _internal_error)
     assets = [f"/static/{path.name}" for path in WEB_DIR.iterdir() if path.is_file()]
     open_paths = ["/", "/health", "/login", "/docs", "/openapi.json", *assets]
-    # Added last = runs first: foreign origins are refused before the token is even looked at.
+    # Added last = runs first: foreign hosts and origins are refused before the token is looked at.
     app.add_middleware(BearerAuthMiddleware, token=runtime.token, open_paths=open_paths)
-    app.add_middleware(SameOriginMiddleware, allowed_origins=allowed_origins)
+    app.add_middleware(HostOriginGuard, allowed_hosts=allowed_hosts, allowed_origins=allowed_origins)
     return app

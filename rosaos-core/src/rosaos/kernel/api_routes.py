@@ -17,6 +17,7 @@ from pathlib import Path
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Depends, Header, HTTPException, Query, Request
+from fastapi import Path as FastPath
 from fastapi.responses import FileResponse, Response
 from fastapi.security import HTTPBearer
 from sse_starlette import EventSourceResponse, ServerSentEvent
@@ -26,6 +27,8 @@ from rosaos.kernel.activity import DEFAULT_LIMIT as DEFAULT_ACTIVITY
 from rosaos.kernel.activity import MAX_LIMIT as MAX_ACTIVITY
 from rosaos.kernel.activity import ActivityPage
 from rosaos.kernel.api_types import (
+    COMMON_ERRORS,
+    PROTECTED_ERRORS,
     Accepted,
     DeviceView,
     EmergencyStopRequest,
@@ -64,12 +67,14 @@ def _runtime(request: Request) -> KernelRuntime:
 
 
 Runtime = Annotated[KernelRuntime, Depends(_runtime)]
+SQLITE_MAX_ID = 2**63 - 1
+"""Ids are SQLite integers: a larger one cannot exist (and would overflow the query)."""
 IdempotencyHeader = Annotated[str | None, Header(alias="Idempotency-Key", max_length=200)]
 
 # Documents the token in OpenAPI (the /docs "Authorize" button); BearerAuthMiddleware enforces it.
 _bearer_docs = HTTPBearer(auto_error=False, description="The token from <data_dir>/token.")
-public = APIRouter()
-protected = APIRouter(dependencies=[Depends(_bearer_docs)])
+public = APIRouter(responses=COMMON_ERRORS)
+protected = APIRouter(dependencies=[Depends(_bearer_docs)], responses=PROTECTED_ERRORS)
 
 
 @public.get("/health")
@@ -84,7 +89,10 @@ async def health(request: Request, runtime: Runtime) -> Health:
     )
 
 
-@public.post("/login")
+@public.post(
+    "/login",
+    responses={401: PROTECTED_ERRORS[401] | {"description": "An unknown, expired or used login code"}},
+)
 async def login(body: LoginRequest, runtime: Runtime, response: Response) -> LoginToken:
     """Trade a one-time login code (from ``#login=`` in the printed link) for the bearer token."""
     response.headers["Cache-Control"] = "no-store"
@@ -138,7 +146,7 @@ async def post_event(
 
 
 @protected.get("/events/{event_id}")
-async def get_event(event_id: int, runtime: Runtime) -> Event:
+async def get_event(event_id: Annotated[int, FastPath(ge=1, le=SQLITE_MAX_ID)], runtime: Runtime) -> Event:
     """One event, and whether the kernel has handled it."""
     event = await runtime.events.get(event_id)
     if event is None:
@@ -153,20 +161,27 @@ async def get_event(event_id: int, runtime: Runtime) -> Event:
 async def get_updates(
     request: Request,
     runtime: Runtime,
-    after: Annotated[int | None, Query(ge=0, description="Only updates with a larger id.")] = None,
+    after: Annotated[
+        int | None, Query(ge=0, le=SQLITE_MAX_ID, description="Only updates with a larger id.")
+    ] = None,
     limit: Annotated[int, Query(ge=1, le=1000, description="At most this many (per page or backlog).")] = 100,
-    last_event_id: Annotated[str | None, Header(alias="Last-Event-ID")] = None,
+    last_event_id: Annotated[
+        str | None,
+        Header(
+            alias="Last-Event-ID",
+            pattern=r"^(\d{1,18}|null)?$",
+            description="The last update id seen (SSE reconnects); empty or null for none.",
+        ),
+    ] = None,
 ) -> Any:
     """The updates stream: server-sent events with ``Accept: text/event-stream``, else one JSON page.
 
     Both start after ``Last-Event-ID`` (SSE reconnects), else after ``?after=``, else with the
     last ``limit`` updates. The SSE stream then follows new updates until the client leaves.
     """
-    if last_event_id is not None:
-        try:
-            after = int(last_event_id)
-        except ValueError:
-            raise HTTPException(400, "Last-Event-ID must be an update id (an integer)") from None
+    if last_event_id is not None and last_event_id.strip().lower() not in ("", "null"):
+        # A client that never saw an update may send an empty or "null" id: that is no id.
+        after = int(last_event_id)  # the pattern allows only digits here
     updates = runtime.updates
     newest = await updates.last_id()
     if after is not None and after > newest:
@@ -190,7 +205,9 @@ async def _stream(updates: UpdateStream, after: int) -> AsyncIterator[ServerSent
 async def list_activity(
     runtime: Runtime,
     device: Annotated[str | None, Query(max_length=100, description="Only this device's calls.")] = None,
-    process: Annotated[int | None, Query(ge=1, description="Only this process's calls.")] = None,
+    process: Annotated[
+        int | None, Query(ge=1, le=2**63 - 1, description="Only this process's calls.")  # SQLite's range
+    ] = None,
     since: Annotated[
         float | None, Query(ge=0, description="Only calls started at or after this time (epoch seconds).")
     ] = None,
@@ -234,7 +251,9 @@ async def reset_emergency_stop(runtime: Runtime) -> dict[str, Any]:
 
 
 @protected.post("/processes/{process_id}/terminate")
-async def terminate_process(process_id: int, runtime: Runtime) -> ProcessView:
+async def terminate_process(
+    process_id: Annotated[int, FastPath(ge=1, le=SQLITE_MAX_ID)], runtime: Runtime
+) -> ProcessView:
     """Kill a running process and release its devices. An ended process is returned as it is."""
     try:
         process = await runtime.terminate(process_id)
@@ -268,12 +287,18 @@ PAGE_HEADERS = {
 
 def _key(in_body: str | None, in_header: str | None) -> str | None:
     if in_body and in_header and in_body != in_header:
-        raise HTTPException(422, "the Idempotency-Key header and the body's idempotency_key differ; send one")
+        raise HTTPException(409, "the Idempotency-Key header and the body's idempotency_key differ; send one")
     return in_body or in_header or None
 
 
 async def _accept(runtime: KernelRuntime, event: NewEvent) -> Accepted:
     appended = await runtime.events.append(event)
+    if appended.conflict:
+        raise HTTPException(
+            409,
+            f"idempotency key {event.idempotency_key!r} was already used for event {appended.id} with a "
+            "different body; use a new key for a new request",
+        )
     # The event is committed: whatever fails below must not turn the answer into an error, or the
     # client would retry something that is already queued.
     if not appended.duplicate:

@@ -87,7 +87,9 @@ class SayRequest(BaseModel):
 
     model_config = ConfigDict(extra="forbid", str_strip_whitespace=True)
 
-    text: str = Field(min_length=1, max_length=4000, description="Stripped; must not be blank.")
+    text: str = Field(
+        min_length=1, max_length=4000, pattern=r"\S", description="Stripped; must not be blank."
+    )
     idempotency_key: IdempotencyKey | None = None
     source: Source | None = Field(default=None, description="Defaults to 'chat' or 'stt'.")
 
@@ -167,3 +169,45 @@ class EmergencyStopRequest(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
     reason: str = Field(default="requested by a person", min_length=1, max_length=500)
+
+
+class ErrorBody(BaseModel):
+    """Every error the API answers: what was wrong and how to fix it."""
+
+    detail: str
+
+
+class Problem(BaseModel):
+    """One invalid part of a request."""
+
+    loc: list[str]
+    msg: str
+    type: str
+
+
+class InvalidRequest(BaseModel):
+    """A 422: the request's parts that did not validate, as one sentence and one by one."""
+
+    detail: str
+    errors: list[Problem] = Field(default_factory=list)
+
+
+def _error(description: str) -> dict[str, Any]:
+    return {"model": ErrorBody, "description": description}
+
+
+COMMON_ERRORS: dict[int | str, dict[str, Any]] = {
+    403: _error("A browser request from a foreign origin"),
+    413: _error("The body is larger than the API accepts"),
+    421: _error("A Host name that is neither loopback nor allowed (DNS-rebinding protection)"),
+    422: {"model": InvalidRequest, "description": "The request did not validate"},
+}
+"""Answers any route may give; every error body has ``detail``."""
+PROTECTED_ERRORS: dict[int | str, dict[str, Any]] = {
+    **COMMON_ERRORS,
+    400: _error("A header or parameter that cannot be used"),
+    401: _error("Missing or wrong bearer token"),
+    404: _error("No such event, process or device"),
+    409: _error("An Idempotency-Key reused with a different body, or a conflicting request"),
+}
+"""Answers of the routes behind the token."""

@@ -5,7 +5,7 @@ Registered on the protected router of :mod:`rosaos.kernel.api_routes` (the beare
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Any
 
 from fastapi import HTTPException, Query
 
@@ -23,7 +23,19 @@ MAX_WAIT = 30.0
 @protected.post("/confirmations", status_code=201)
 async def ask_confirmation(body: ConfirmationRequest, runtime: Runtime) -> Confirmation:
     """A worker asks before a call that needs a yes; the kernel asks the person (chat, web, voice)."""
+    running = {
+        _field(process, "id")
+        for process in await runtime.processes()
+        if _field(process, "state") == "running"
+    }
+    if body.process_id not in running:
+        raise HTTPException(404, f"no running process {body.process_id}; only a running process can ask")
     return await runtime.confirmations.ask(body)
+
+
+def _field(process: Any, name: str) -> Any:
+    """A field of a process as ``runtime.processes()`` gives it (a model, an object or a dict)."""
+    return process.get(name) if isinstance(process, dict) else getattr(process, name, None)
 
 
 @protected.get("/confirmations")

@@ -30,7 +30,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Annotated, Any, Literal, NamedTuple, TypeVar
 
-from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, TypeAdapter, ValidationError, field_validator
 
 from rosaos.processes.jobs import WorkerCallback
 
@@ -59,6 +59,25 @@ class DeviceNotice(BaseModel):
     device: str = Field(min_length=1, max_length=100)
     message: str = Field(min_length=1, max_length=4000)
     data: dict[str, Any] = Field(default_factory=dict)
+    """Any JSON, nested at most :data:`MAX_DATA_DEPTH` levels (deeper breaks JSON encoders)."""
+
+    @field_validator("data")
+    @classmethod
+    def _not_too_deep(cls, data: dict[str, Any]) -> dict[str, Any]:
+        if _depth(data) > MAX_DATA_DEPTH:
+            raise ValueError(f"nested more than {MAX_DATA_DEPTH} levels deep; flatten it")
+        return data
+
+
+MAX_DATA_DEPTH = 32
+
+
+def _depth(value: Any, level: int = 1) -> int:
+    """How deep ``value`` nests; stops counting past the limit, so a hostile body costs little."""
+    if level > MAX_DATA_DEPTH:
+        return level
+    children = value.values() if isinstance(value, dict) else value if isinstance(value, list) else ()
+    return max((_depth(child, level + 1) for child in children), default=level)
 
 
 class ErrorReport(BaseModel):
@@ -147,6 +166,9 @@ class Appended(NamedTuple):
     id: int
     duplicate: bool
     """True when the idempotency key was seen before: ``id`` is the first event's, nothing was enqueued."""
+    conflict: bool = False
+    """A duplicate whose kind or payload differs from the first event's: the key was reused for
+    something else (the API answers 409, as the IETF Idempotency-Key draft does)."""
 
 
 class StoreClosedError(RuntimeError):
@@ -307,10 +329,12 @@ class EventStore:
             # index stays as the guarantee.
             if key is not None:
                 first = connection.execute(
-                    "SELECT id FROM events WHERE idempotency_key = ?", (key,)
+                    "SELECT id, kind, payload FROM events WHERE idempotency_key = ?", (key,)
                 ).fetchall()
                 if first:
-                    return Appended(first[0][0], duplicate=True)
+                    first_id, first_kind, first_payload = first[0]
+                    differs = first_kind != event.kind or first_payload != payload
+                    return Appended(first_id, duplicate=True, conflict=differs)
             inserted = connection.execute(
                 "INSERT INTO events (time, kind, source, payload, idempotency_key) VALUES (?, ?, ?, ?, ?) "
                 "RETURNING id",

@@ -1,4 +1,4 @@
-"""How a browser gets in: one-time login codes, and the same-origin rule.
+"""How a browser gets in: one-time login codes.
 
 The web page gets the bearer token without it ever being in a URL.
 
@@ -10,21 +10,18 @@ A code works once, expires after ten minutes, and is compared in constant time. 
 memory only: a restart invalidates them, which is what you want for a secret printed to a
 terminal. The CLI mints a fresh link through ``POST /login-codes`` (which needs the token).
 
-:class:`SameOriginMiddleware` refuses browser requests sent from any other origin, so a web page
-elsewhere cannot drive the robot through the user's browser (not even ``/login``).
+:class:`rosaos.auth.HostOriginGuard` refuses browser requests sent from any other origin, so a web
+page elsewhere cannot drive the robot through the user's browser (not even ``/login``).
 """
 
 from __future__ import annotations
 
 import hashlib
 import hmac
-import json
 import secrets
 import time
-from collections.abc import Callable, Iterable
+from collections.abc import Callable
 from dataclasses import dataclass
-
-from starlette.types import ASGIApp, Receive, Scope, Send
 
 CODE_LIFETIME = 600.0
 """Seconds a login code stays valid."""
@@ -81,35 +78,3 @@ class LoginCodes:
 
 def _digest(code: str) -> bytes:
     return hashlib.sha256(code.encode("utf-8", "surrogatepass")).digest()
-
-
-class SameOriginMiddleware:
-    """ASGI middleware: 403 when a request's ``Origin`` is neither this server's own nor allowed.
-
-    Same-origin means the ``Origin`` header equals ``scheme://Host`` of the request itself, so the
-    rule holds on any port (``rosaos up --port``, port 0 in tests). Requests without ``Origin``
-    (curl, the CLI, workers, page navigations) pass; they still need the token where one is due.
-    ``Host`` can be forged by DNS rebinding, but such a page never has the token.
-    """
-
-    def __init__(self, app: ASGIApp, allowed_origins: Iterable[str] = ()) -> None:
-        self.app = app
-        self._allowed = frozenset(allowed_origins)
-
-    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if scope["type"] == "http":
-            headers = dict(scope.get("headers", []))
-            origin = headers.get(b"origin", b"").decode("latin-1")
-            host = headers.get(b"host", b"").decode("latin-1")
-            if origin and origin != f"{scope.get('scheme', 'http')}://{host}" and origin not in self._allowed:
-                body = json.dumps({"detail": f"origin {origin} is not allowed: open the rosaOS page itself"})
-                await send(
-                    {
-                        "type": "http.response.start",
-                        "status": 403,
-                        "headers": [(b"content-type", b"application/json")],
-                    }
-                )
-                await send({"type": "http.response.body", "body": body.encode()})
-                return
-        await self.app(scope, receive, send)

@@ -23,7 +23,7 @@ import uvicorn
 from pydantic import ValidationError
 from pydantic_ai.models import Model
 
-from rosaos.auth import load_or_create_token
+from rosaos.auth import bound_hosts, load_or_create_token
 from rosaos.config import RosaosConfig
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.devices.runtime import write_atomic
@@ -38,9 +38,11 @@ from rosaos.kernel.api import create_app
 from rosaos.kernel.client import kernel_file, running_kernel_url
 from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people
 from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
+from rosaos.kernel.device_status import DeviceStatusUpdates
 from rosaos.kernel.events import Event, EventStore, StoreClosedError, WorkerCallbackEvent
 from rosaos.kernel.login import LoginCodes, login_url
 from rosaos.kernel.loop import KernelLoop
+from rosaos.kernel.orphans import LiveProcesses, recover_orphans
 from rosaos.kernel.tools import build_kernel_tools
 from rosaos.kernel.updates import UpdateStream
 from rosaos.models.defaults import KernelModels, kernel_models
@@ -155,6 +157,7 @@ class Kernel:
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         self.manager.record_callback(callback)
+        await self._live.ended(callback.worker_id)
         await self._activity.record(event_id, callback.worker_id, callback.receipts)
         if callback.worker_id in self._ended_published:
             return
@@ -192,6 +195,8 @@ class Kernel:
         The latch is cleared on disk first: if that fails, the stop stays latched and this raises.
         """
         latch = self.manager.emergency_stop
+        if latch is None:  # nothing to reset: say nothing on the updates stream
+            return self.emergency_stop_state()
         await self._store.set_value(EMERGENCY_STOP_KEY, None)
         if self.manager.emergency_stop is latch:  # not if a new stop came while the disk was busy
             self.manager.reset_emergency_stop()
@@ -246,8 +251,7 @@ class Kernel:
         """Start devices, the event store, the pool, the loop and the API; return the API's base URL."""
         host = host or self.config.kernel.host
         port = self.config.kernel.port if port is None else port
-        self.data_dir.mkdir(parents=True, exist_ok=True)
-        self._token = load_or_create_token(self.data_dir)
+        self._token = load_or_create_token(self.data_dir)  # creates the data directory, owner-only
         sock = await _bind_or_explain(host, port, self._token)
         self.url = _base_url(sock)
         try:
@@ -267,7 +271,10 @@ class Kernel:
             self.config.kernel.confirm_timeout, lambda item: ask_people(self._updates, self.endpoints(), item)
         )
         self._activity = await ActivityLog.open(self._store.database)
+        self._live = LiveProcesses(self._store)
         self.supervisor = self._hosting or DeviceSupervisor(self.world, self.data_dir, self._token)
+        if isinstance(self.supervisor, DeviceSupervisor):
+            self.supervisor.on_status_change = DeviceStatusUpdates(self._updates).changed
         kernel = self.config.kernel
         pool = WorkerPool(size=kernel.pool_size, env=self._worker_env, fork_server=kernel.fork_server)
         self.manager = ProcessManager(
@@ -291,8 +298,10 @@ class Kernel:
                 group.create_task(self.manager.start(), name="start worker pool")
         except BaseExceptionGroup as failed:
             raise failed.exceptions[0] from None
+        # Before the loop can grant anything: devices a dead kernel's processes held get safe_stop.
+        await recover_orphans(self._live, self._store, self.supervisor.directory(), self._callback_committed)
         self.states = DeviceStateCache(self.endpoints)
-        tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._store.note_process_id)
+        tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._launched)
         agent = build_kernel_agent(self._models.kernel, tools)
         self.loop = KernelLoop(
             self._store,
@@ -303,7 +312,7 @@ class Kernel:
             history_budget=self.config.kernel.history_messages,
         )
         self.loop.before = lambda event: answer_from_chat(self.confirmations, event)
-        app = create_app(self)
+        app = create_app(self, allowed_hosts=[*kernel.allow_hosts, *bound_hosts(sock.getsockname()[0])])
         config = uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=3)
         self._server = uvicorn.Server(config)
         self._tasks.append(asyncio.create_task(self._server.serve(sockets=[sock]), name="kernel api"))
@@ -365,6 +374,16 @@ class Kernel:
         if not appended.duplicate:
             await self._updates.publish_event(appended.id, event)
         await self.worker_callback_recorded(appended.id, callback)
+
+    async def _callback_committed(self, event_id: int, event: WorkerCallbackEvent) -> None:
+        """A callback the kernel wrote itself (for an orphan): on the updates stream, then recorded."""
+        await self._updates.publish_event(event_id, event)
+        await self.worker_callback_recorded(event_id, event.payload)
+
+    async def _launched(self, info: ProcessInfo) -> None:
+        """Keep ids unique across restarts, and remember the process until its end is recorded."""
+        await self._store.note_process_id(info.id)
+        await self._live.launched(info)
 
 
 def _base_url(sock: socket.socket) -> str:

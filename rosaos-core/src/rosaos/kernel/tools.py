@@ -24,12 +24,12 @@ _READ_ONLY = {"readOnlyHint": True, "destructiveHint": False, "idempotentHint": 
 def build_kernel_tools(
     manager: ProcessManager,
     devices: Callable[[], Mapping[str, DeviceEndpoint]],
-    on_launch: Callable[[int], Awaitable[None]] | None = None,
+    on_launch: Callable[[ProcessInfo], Awaitable[None]] | None = None,
 ) -> FastMCP:
     """Build the process-manager server that the kernel agent mounts in-process.
 
-    ``on_launch(process_id)`` runs after each launch; the kernel records the id so ids stay
-    unique across restarts.
+    ``on_launch(info)`` runs after each launch; the kernel records the process so ids stay
+    unique across restarts and a crash leaves a record of what was running.
     """
     server = FastMCP("rosaos-kernel", instructions="Process management for the rosaOS kernel.")
 
@@ -59,7 +59,7 @@ def build_kernel_tools(
         except LaunchRefused as refusal:
             raise ToolError(str(refusal)) from None
         if on_launch is not None:
-            await on_launch(info.id)
+            await on_launch(info)
         return {"process_id": info.id, "devices": info.devices, "state": info.state}
 
     @server.tool(annotations={"readOnlyHint": False, "destructiveHint": True, "idempotentHint": True})

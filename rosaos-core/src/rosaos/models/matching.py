@@ -36,6 +36,7 @@ from hassil.recognize import MISSING_ENTITY, RecognizeResult
 from rosaos.models.ha_intents import NO_AREA, load_ha_intents
 from rosaos.models.intents_file import IntentsFile
 from rosaos.models.phrases import conjunctions, phrase, pronouns
+from rosaos.models.ranges import refuse_bad_number
 from rosaos.models.readings import (
     Reading,
     ReadingContext,
@@ -174,6 +175,9 @@ class IntentMatcher:
                 split = self._partition(tuple(pieces), allow_unknown)
                 if split is not None:
                     return build_result(self.context, text, split, self._focus is not None)
+        refused = refuse_bad_number(text, self._exact, self._display_name, self.context.language)
+        if refused is not None:
+            return refused
         if whole is not None:
             return build_result(self.context, text, [whole], self._focus is not None)
         unknown = self._unknown(text)
@@ -245,6 +249,16 @@ class IntentMatcher:
             readings = self._readings(clause)
             self._cache[key] = max(readings, key=Reading.sort_key) if readings else None
         return self._cache[key]
+
+    def _exact(self, text: str) -> MatchResult:
+        """``text`` as one whole command, or "not understood" (no splitting, no questions)."""
+        whole = self._best(text)
+        if whole is not None and whole.actionable and not self._hides_command(whole):
+            return build_result(self.context, text, [whole], self._focus is not None)
+        return no_match(self.context, text)
+
+    def _display_name(self, device: str) -> str:
+        return self.context.devices[device].display_name
 
     def _hides_command(self, reading: Reading) -> bool:
         """A wildcard that swallowed a conjunction: "play jazz and turn on the lamp"."""

@@ -11,7 +11,8 @@ happen once, at start-up. The protocol with the pool is one JSON object per line
 
 stdout carries protocol lines only: the real stdout is kept for them and fd 1 is pointed at
 stderr, so a stray ``print`` in a library cannot corrupt the protocol. Logs go to stderr.
-The worker exits when stdin closes (the pool is gone).
+The worker exits when stdin closes (the pool is gone); if a job is running then, it is cancelled
+and its devices get ``safe_stop`` first, so no process actuates without a kernel.
 """
 
 from __future__ import annotations
@@ -47,6 +48,7 @@ from rosaos.processes.jobs import (
 )
 from rosaos.processes.prompts import process_system_prompt, tool_prefix
 from rosaos.processes.recording import RecordingToolset
+from rosaos.processes.tool_calls import ToolCallLog, observed
 from rosaos.processes.vision import image_budget_for, image_headers
 from rosaos.receipts import Receipt
 
@@ -57,6 +59,8 @@ CONNECT_TIMEOUT = 10.0
 CALLBACK_RETRY_DELAYS = (0.0, 0.25, 1.0)
 """Delays before each attempt to post the callback; after the last, the pool enqueues it."""
 CALLBACK_TIMEOUT = 5.0
+ORPHAN_STOP_TIMEOUT = 3.0
+"""Seconds each device's ``safe_stop`` may take when the kernel died under a running job."""
 LINE_LIMIT = 16 * 1024 * 1024
 """Largest job line accepted (device prompts make jobs a few KiB; this is only a guard)."""
 
@@ -84,11 +88,12 @@ async def run_job(job: WorkerJob) -> WorkerCallback:
     status: ProcessStatus = "ok"
     output: str | None = None
     error: str | None = None
+    calls = ToolCallLog()
     receipts: list[Receipt] = []  # every tool call, for the activity log (processes/recording.py)
     with capture_run_messages() as messages:
         try:
             async with asyncio.timeout(job.timeout) as deadline:
-                output = await _run_agent(job, receipts)
+                output = await _run_agent(job, calls, receipts)
         except TimeoutError:
             if not deadline.expired():
                 log.exception("process %d failed", job.process_id)
@@ -107,6 +112,10 @@ async def run_job(job: WorkerJob) -> WorkerCallback:
         except Exception as failure:
             log.exception("process %d failed", job.process_id)
             status, error = "error", describe_error(failure)
+    failed = calls.unresolved_failure()
+    if status == "ok" and failed is not None:
+        # The model may have written a polite sentence about it; the device call still failed.
+        status, error = "error", f"{failed.device}: {failed.tool} failed: {failed.error}"
     requests, tool_calls = count_usage(messages)
     return WorkerCallback(
         worker_id=job.process_id,
@@ -170,7 +179,7 @@ class DeviceSessions:
 SESSIONS = DeviceSessions()
 
 
-async def _run_agent(job: WorkerJob, receipts: list[Receipt] | None = None) -> str:
+async def _run_agent(job: WorkerJob, calls: ToolCallLog, receipts: list[Receipt] | None = None) -> str:
     model = process_model(job)
     prefixed = len(job.devices) > 1
     try:
@@ -180,7 +189,9 @@ async def _run_agent(job: WorkerJob, receipts: list[Receipt] | None = None) -> s
             session = await SESSIONS.toolset(device, image_budget_for(job.model, model))
             guarded = ConfirmingToolset(session, device=device.name, rule=device.confirm, asker=asker)
             recorded = receipts if receipts is not None else []
-            toolset = RecordingToolset(guarded, device=device.name, receipts=recorded)
+            toolset = observed(
+                RecordingToolset(guarded, device=device.name, receipts=recorded), device.name, calls
+            )
             toolsets.append(toolset.prefixed(tool_prefix(device.name)) if prefixed else toolset)
         agent = Agent(
             model,
@@ -304,6 +315,43 @@ async def _stdin_reader() -> asyncio.StreamReader:
     return reader
 
 
+async def _run_while_owned(job: WorkerJob, reader: asyncio.StreamReader) -> WorkerCallback | None:
+    """Run ``job``, unless stdin closes first: then the kernel died, and the job must not go on.
+
+    The pool writes nothing while a job runs, so the only thing stdin can bring meanwhile is its
+    end. A robot never moves without an owner: the job is cancelled (its MCP calls with it) and
+    every granted device gets ``safe_stop`` before this worker exits. Returns None in that case.
+    """
+    running = asyncio.create_task(run_job(job), name=f"process-{job.process_id}")
+    ended = asyncio.create_task(reader.read(), name="stdin-eof")  # read() returns at EOF
+    await asyncio.wait({running, ended}, return_when=asyncio.FIRST_COMPLETED)
+    if running.done():
+        ended.cancel()
+        return running.result()
+    log.warning("process %d: the kernel is gone; stopping the job and its devices", job.process_id)
+    running.cancel()
+    with contextlib.suppress(BaseException):
+        await running
+    await safe_stop_devices(job.devices)
+    return None
+
+
+async def safe_stop_devices(devices: Sequence[GrantedDevice], timeout: float = ORPHAN_STOP_TIMEOUT) -> None:
+    """Call every device's ``safe_stop`` at once, over fresh sessions; failures are logged, not raised."""
+
+    async def stop(device: GrantedDevice) -> None:
+        try:
+            async with asyncio.timeout(timeout):
+                client: Client[Any] = Client(device.url, auth=device.token, init_timeout=timeout)
+                async with client:
+                    await client.call_tool("safe_stop", {})
+            log.warning("device %s: safe_stop done (the process that held it lost its kernel)", device.name)
+        except Exception as failure:
+            log.error("device %s: safe_stop failed: %s", device.name, describe_error(failure))
+
+    await asyncio.gather(*(stop(device) for device in devices))
+
+
 async def serve(protocol: ProtocolWriter) -> None:
     """Announce readiness, then run each job read from stdin until stdin closes."""
     reader = await _stdin_reader()
@@ -318,7 +366,9 @@ async def serve(protocol: ProtocolWriter) -> None:
             protocol.send({"event": "rejected", "error": f"not a valid WorkerJob: {invalid}"})
             continue
         log.info("process %d: starting %r with %d device(s)", job.process_id, job.task, len(job.devices))
-        callback = await run_job(job)
+        callback = await _run_while_owned(job, reader)
+        if callback is None:
+            return  # the kernel is gone: nobody owns this process any more
         delivered = await deliver_callback(job, callback)
         log.info("process %d: %s (callback delivered: %s)", job.process_id, callback.status, delivered)
         protocol.send(

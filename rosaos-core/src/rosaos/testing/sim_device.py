@@ -95,7 +95,9 @@ async def open_sim_device(
         backend = spec.backends["sim"](context)
         try:
             await backend.start()
-            async with Client(spec.server(context, backend)) as client:
+            server = spec.server(context, backend)
+            server.strict_input_validation = True  # as rosaos serves it (devices/serve.py)
+            async with Client(server) as client:
                 yield SimDevice(context, backend, client)
         finally:
             await backend.close()

@@ -56,6 +56,10 @@ class NamedAction(_Strict):
     description: str
     goal: dict[str, Any] = Field(default_factory=dict)
     timeout: Annotated[float, Field(gt=0, le=3600)] = 60.0
+    leaves: dict[str, Any] = Field(default_factory=dict)
+    """State keys the action leaves when it succeeds (``undock`` → ``{docked: false}``). The driver
+    waits until the state topics show them before it answers, so the next motion is not refused
+    on a status message that was already on its way when the action ended."""
 
 
 class Limits(_Strict):
@@ -217,6 +221,13 @@ def load_profile_file(path: Path) -> Profile:
     for kind in ("linear", "angular"):
         if getattr(profile.speeds, kind) > getattr(profile.limits, kind):
             raise ProfileError(f"{path}: speeds.{kind} is above limits.{kind}; lower it")
+    for name, action in profile.actions.items():
+        unknown = sorted(set(action.leaves) - set(profile.state))
+        if unknown:
+            raise ProfileError(
+                f"{path}: actions.{name}.leaves names {', '.join(unknown)}, which is not a state key; "
+                f"state keys: {', '.join(profile.state) or 'none'}"
+            )
     return profile
 
 

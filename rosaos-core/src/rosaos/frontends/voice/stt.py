@@ -1,4 +1,4 @@
-"""Speech-to-text engines: Moonshine offline (the default), Groq, any OpenAI-compatible endpoint.
+"""Speech-to-text engines: Moonshine offline on onnxruntime (the default), Groq, any OpenAI-compatible endpoint.
 
 Each takes one utterance (mono float32 at 16 kHz) and returns its transcript. The local engine
 runs in a worker thread, so the event loop keeps reading audio while it thinks.
@@ -7,18 +7,18 @@ runs in a worker thread, so the event loop keeps reading audio while it thinks.
 from __future__ import annotations
 
 import asyncio
-import ctypes
 import io
 import os
 import threading
 import wave
-from typing import Any, Protocol
+from typing import Protocol
 
 import httpx
 import numpy as np
 
 from rosaos.config import VoiceConfig
 from rosaos.frontends.voice.sources import SAMPLE_RATE, Samples, VoiceError
+from rosaos.native import probe
 
 GROQ_BASE_URL = "https://api.groq.com/openai/v1"
 GROQ_MODEL = "whisper-large-v3-turbo"
@@ -36,31 +36,37 @@ class SpeechToText(Protocol):
 
 
 class MoonshineSTT:
-    """Moonshine base (English) through moonshine-cpp: the weights ship inside the wheel, no network.
+    """Moonshine base (English) on onnxruntime: the weights ship inside a wheel, no network.
 
-    Calls the library's C function directly: the wheel's own ``MoonshineModel.transcribe`` refers
-    to ``ctypes.c_float_p``, which does not exist, so only its WAV-file path works.
+    Before loading it in this process, the engine is loaded once in a child process
+    (:func:`rosaos.native.probe`): a native library that does not fit this CPU then becomes a
+    message naming it and the cloud engines, not a dead ``rosaos voice``.
     """
 
     name = "local (moonshine base-en)"
 
-    def __init__(self, language: str = "en") -> None:
+    def __init__(self, language: str = "en", probe_first: bool = True) -> None:
         if language != "en":
             raise VoiceError(
                 f"the local engine (Moonshine) is English-only, not {language!r}: "
                 "set [voice] stt = 'groq' or 'openai' for other languages"
             )
-        try:
-            import moonshine_cpp
-        except ImportError:
-            raise VoiceError(
-                "the local speech-to-text engine needs moonshine-cpp: pip install 'rosaos[voice]'"
-            ) from None
-        except OSError as error:  # its bundled shared libraries failed to load
-            raise VoiceError(f"moonshine-cpp is installed but cannot load: {error}") from None
-        self._lib: Any = moonshine_cpp.moonshine_lib
-        self._model = moonshine_cpp.MoonshineModel()  # the bundled models/base-en
-        self._lock = threading.Lock()  # one model handle: one transcription at a time
+        from rosaos.frontends.voice.moonshine import MoonshineOnnx
+
+        if probe_first:
+            check = probe(
+                "onnxruntime (Moonshine speech-to-text)",
+                "import numpy as np\n"
+                "from rosaos.frontends.voice.moonshine import MoonshineOnnx\n"
+                "MoonshineOnnx().transcribe(np.zeros(8000, dtype=np.float32))\n",
+            )
+            if not check.ok:
+                raise VoiceError(
+                    f"{check.explain()}. Use a cloud engine instead: [voice] stt = 'groq' "
+                    "(GROQ_API_KEY) or stt = 'openai' (OPENAI_API_KEY, or stt_base_url for a local server)"
+                )
+        self._engine = MoonshineOnnx()
+        self._lock = threading.Lock()  # one decoder cache at a time
 
     async def transcribe(self, samples: Samples) -> str:
         return await asyncio.to_thread(self.transcribe_sync, samples)
@@ -70,19 +76,8 @@ class MoonshineSTT:
         audio = np.ascontiguousarray(samples, dtype=np.float32)
         if audio.size < SAMPLE_RATE // 10:  # under 0.1 s: the model only hallucinates on these
             return ""
-        text = ctypes.c_char_p()
         with self._lock:
-            error = self._lib.moonshine_transcribe(
-                self._model.model_handle,
-                audio.ctypes.data_as(ctypes.POINTER(ctypes.c_float)),
-                audio.size,
-                ctypes.byref(text),
-            )
-            if error != 0:
-                raise VoiceError(f"Moonshine could not transcribe the utterance (error {error})")
-            result = (text.value or b"").decode("utf-8", errors="replace")
-            self._lib.moonshine_free_text(text)
-        return result.strip()
+            return self._engine.transcribe(audio)
 
 
 class OpenAITranscriptionSTT:
@@ -128,6 +123,23 @@ class OpenAITranscriptionSTT:
 
     async def aclose(self) -> None:
         await self._http.aclose()
+
+
+def word_error_rate(reference: str, hypothesis: str) -> float:
+    """Word edits (substitutions, insertions, deletions) per reference word, on normalized text."""
+    from rosaos.frontends.voice.wake import normalize
+
+    def words(text: str) -> list[str]:
+        return normalize(text.replace("%", " percent")).split()
+
+    ref, hyp = words(reference), words(hypothesis)
+    previous = list(range(len(hyp) + 1))
+    for i, word in enumerate(ref, 1):
+        current = [i]
+        for j, heard in enumerate(hyp, 1):
+            current.append(min(previous[j] + 1, current[j - 1] + 1, previous[j - 1] + (word != heard)))
+        previous = current
+    return previous[-1] / max(1, len(ref))
 
 
 def wav_bytes(samples: Samples) -> bytes:

@@ -1,0 +1,191 @@
+"""Footprint of `rosaos up` on the demo world: time to "rosaOS is up", and memory (PSS) per process.
+
+Starts the real command, as a user would, in a fresh data directory on a free port, waits for the
+banner, lets it idle for a moment, then reads every process of its tree from /proc: PSS (the
+shared pages split among the processes that map them, so the sum is the tree's real cost), RSS,
+and a role from its command line (kernel, worker, fork server, device host of which instance, the
+Reachy daemon). Linux only (/proc/PID/smaps_rollup). It measures, it does not assert.
+
+    .venv/bin/python benchmarks/footprint.py [--runs 3] [--idle 5] [--json benchmarks/results/footprint.json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import re
+import signal
+import socket
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from rich.console import Console
+from rich.table import Table
+
+BANNER = "rosaOS is up at"
+START_LIMIT = 300.0
+"""Seconds to wait for the banner before the run counts as failed."""
+
+
+def free_port() -> int:
+    with socket.socket() as sock:
+        sock.bind(("127.0.0.1", 0))
+        return int(sock.getsockname()[1])
+
+
+def children(pid: int) -> list[int]:
+    """Every descendant of ``pid``, from /proc (no psutil needed)."""
+    parents: dict[int, list[int]] = {}
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            fields = (entry / "stat").read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        parents.setdefault(int(fields[1]), []).append(int(entry.name))
+    found, todo = [], [pid]
+    while todo:
+        for child in parents.get(todo.pop(), []):
+            found.append(child)
+            todo.append(child)
+    return found
+
+
+def memory_kib(pid: int) -> dict[str, int]:
+    """PSS and RSS in KiB from /proc/PID/smaps_rollup."""
+    values: dict[str, int] = {}
+    for line in Path(f"/proc/{pid}/smaps_rollup").read_text().splitlines():
+        match = re.match(r"(Pss|Rss):\s+(\d+) kB", line)
+        if match:
+            values[match.group(1).lower()] = int(match.group(2))
+    return values
+
+
+def host_instances(data_dir: Path) -> dict[int, str]:
+    """Device host pid → instance name, from the supervisor's ``run/devices.json``."""
+    path = data_dir / "run" / "devices.json"
+    try:
+        devices = json.loads(path.read_text()).get("devices", {})
+    except (OSError, ValueError):
+        return {}
+    return {row["pid"]: name for name, row in devices.items() if row.get("pid")}
+
+
+def role(pid: int, hosts: dict[int, str]) -> str:
+    """What a process of the tree is, read from its command line."""
+    argv = Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace").split("\0")
+    line = " ".join(argv)
+    if "rosaos.processes.worker" in line:
+        return "worker"
+    if "rosaos.processes.forkserver" in line:
+        return "fork server"
+    if "rosaos.devices.host" in line:
+        return f"device host {hosts.get(pid, '?')}"
+    if "reachy" in line.lower() and "daemon" in line.lower():
+        return "reachy daemon"
+    if "rosaos" in line and " up" in line:
+        return "kernel (rosaos up)"
+    return Path(argv[0]).name or "other"
+
+
+def one_run(idle: float) -> dict[str, Any]:
+    with tempfile.TemporaryDirectory() as home:
+        env = dict(os.environ, ROSAOS_DATA_DIR=str(Path(home) / "data"), COLUMNS="200")
+        env.pop("ROSAOS_CONFIG", None)
+        command = [sys.executable, "-m", "rosaos.cli", "up", "--port", str(free_port())]
+        started = time.perf_counter()
+        up = subprocess.Popen(
+            command, cwd=home, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
+        )
+        assert up.stdout is not None
+        lines: list[str] = []
+        try:
+            for line in up.stdout:
+                lines.append(line.rstrip())
+                if BANNER in line:
+                    break
+                if time.perf_counter() - started > START_LIMIT:
+                    raise RuntimeError(f"no banner after {START_LIMIT:.0f} s")
+            else:
+                raise RuntimeError("rosaos up exited before its banner:\n" + "\n".join(lines[-20:]))
+            start_seconds = time.perf_counter() - started
+            time.sleep(idle)
+            processes = []
+            hosts = host_instances(Path(home) / "data")
+            for pid in [up.pid, *children(up.pid)]:
+                try:
+                    processes.append({"pid": pid, "role": role(pid, hosts), **memory_kib(pid)})
+                except OSError:  # ended between the listing and the read
+                    continue
+        finally:
+            up.send_signal(signal.SIGINT)
+            try:
+                up.wait(30)
+            except subprocess.TimeoutExpired:
+                up.kill()
+                up.wait()
+    total = sum(p.get("pss", 0) for p in processes)
+    daemon = sum(p.get("pss", 0) for p in processes if p["role"] == "reachy daemon")
+    return {
+        "start_seconds": round(start_seconds, 2),
+        "processes": processes,
+        "pss_total_mib": round(total / 1024, 1),
+        "pss_without_reachy_daemon_mib": round((total - daemon) / 1024, 1),
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
+    parser.add_argument("--runs", type=int, default=3, help="starts of rosaos up (default 3)")
+    parser.add_argument(
+        "--idle", type=float, default=5.0, help="seconds after the banner before reading memory"
+    )
+    parser.add_argument("--json", type=Path, default=Path("benchmarks/results/footprint.json"))
+    args = parser.parse_args()
+    console = Console()
+    runs = []
+    for number in range(1, args.runs + 1):
+        console.print(f"run {number}/{args.runs}: starting rosaos up (demo world)…")
+        runs.append(one_run(args.idle))
+    starts = [run["start_seconds"] for run in runs]
+    summary = Table(title="rosaos up, demo world")
+    for column in ("figure", "min", "median", "max"):
+        summary.add_column(column, justify="right" if column != "figure" else "left")
+    for label, values in (
+        ("start to banner (s)", starts),
+        ("PSS, whole tree (MiB)", [run["pss_total_mib"] for run in runs]),
+        ("PSS without Reachy daemon (MiB)", [run["pss_without_reachy_daemon_mib"] for run in runs]),
+        ("processes", [len(run["processes"]) for run in runs]),
+    ):
+        summary.add_row(label, f"{min(values):g}", f"{statistics.median(values):g}", f"{max(values):g}")
+    console.print(summary)
+    last = Table(title="PSS by process (last run)")
+    last.add_column("role")
+    last.add_column("PSS MiB", justify="right")
+    last.add_column("RSS MiB", justify="right")
+    for process in sorted(runs[-1]["processes"], key=lambda p: -p.get("pss", 0)):
+        last.add_row(
+            process["role"], f"{process.get('pss', 0) / 1024:.1f}", f"{process.get('rss', 0) / 1024:.1f}"
+        )
+    console.print(last)
+    report = {
+        "machine": {"cpus": os.cpu_count(), "platform": platform.platform(), "load": os.getloadavg()},
+        "runs": runs,
+    }
+    args.json.parent.mkdir(parents=True, exist_ok=True)
+    args.json.write_text(json.dumps(report, indent=2))
+    console.print(f"wrote {args.json}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,136 @@
+"""Moonshine base (English) on the official onnxruntime wheel: the offline speech-to-text engine.
+
+The weights are the ones the ``moonshine-cpp`` wheel ships (ORT-format encoder and merged decoder,
+and its tokenizer). Only its data files are read: its own ``libmoonshine.so`` was built for CPUs
+with AVX-512 and dies with SIGILL on the many that lack it (AMD before Zen 4, most laptops), so
+the package is never imported. onnxruntime picks its kernels by CPU feature at run time.
+
+Decoding is greedy: the encoder reads the samples once, then the merged decoder emits one token a
+step, reusing its key/value cache (``use_cache_branch``), until end-of-text or a length bound that
+grows with the audio's duration (Moonshine's own rule of thumb: about 6 tokens a second).
+"""
+
+from __future__ import annotations
+
+import importlib.util
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from rosaos.frontends.voice.sources import SAMPLE_RATE, Samples, VoiceError
+
+WEIGHTS_PACKAGE = "moonshine-cpp"
+"""The PyPI package whose wheel carries the weights (``pip install 'rosaos[voice]'``)."""
+MODEL_DIR = ("models", "base-en")
+BOS, EOS = 1, 2
+TOKENS_PER_SECOND = 6.5
+"""Upper bound of tokens per second of speech; stops a decoder that never says end-of-text."""
+WORD_START = "\u2581"  # SentencePiece's word marker
+
+
+def weights_dir() -> Path:
+    """The folder of base-en inside the installed moonshine-cpp wheel, found without importing it."""
+    spec = importlib.util.find_spec("moonshine_cpp")  # finds the package; does not run its __init__
+    if spec is None or not spec.submodule_search_locations:
+        raise VoiceError(
+            f"the local speech-to-text engine needs the Moonshine weights from {WEIGHTS_PACKAGE}: "
+            "pip install 'rosaos[voice]'"
+        )
+    folder = Path(next(iter(spec.submodule_search_locations))).joinpath(*MODEL_DIR)
+    missing = [
+        name
+        for name in ("encoder_model.ort", "decoder_model_merged.ort", "tokenizer.bin")
+        if not (folder / name).is_file()
+    ]
+    if missing:
+        raise VoiceError(
+            f"{folder} lacks {', '.join(missing)}; reinstall {WEIGHTS_PACKAGE} (pip install --force-reinstall)"
+        )
+    return folder
+
+
+def read_tokenizer(path: Path) -> list[bytes]:
+    """The vocabulary: ``tokenizer.bin`` is each token's bytes, each after a one-byte length."""
+    data = path.read_bytes()
+    tokens: list[bytes] = []
+    offset = 0
+    while offset < len(data):
+        length = data[offset]
+        tokens.append(data[offset + 1 : offset + 1 + length])
+        offset += 1 + length
+    if offset != len(data) or len(tokens) < 1000:
+        raise VoiceError(f"{path} is not a Moonshine tokenizer (read {len(tokens)} tokens)")
+    return tokens
+
+
+def detokenize(tokens: list[bytes], ids: list[int]) -> str:
+    """Text from token ids: byte tokens join into UTF-8, the word marker becomes a space."""
+    pieces = b"".join(tokens[i] for i in ids if i > EOS and i < len(tokens))
+    return pieces.decode("utf-8", errors="replace").replace(WORD_START, " ").strip()
+
+
+@dataclass(frozen=True)
+class _Cache:
+    names: list[str]
+    """``past_key_values.N.{decoder,encoder}.{key,value}``, in the decoder's input order."""
+    heads: int
+    head_size: int
+
+
+class MoonshineOnnx:
+    """Encoder + merged decoder sessions, and greedy decoding with the key/value cache."""
+
+    def __init__(self, folder: Path | None = None, threads: int = 0) -> None:
+        try:
+            import onnxruntime as ort
+        except ImportError:
+            raise VoiceError(
+                "the local speech-to-text engine needs onnxruntime: pip install 'rosaos[voice]'"
+            ) from None
+        folder = folder or weights_dir()
+        options = ort.SessionOptions()
+        options.add_session_config_entry("session.load_model_format", "ORT")
+        if threads:
+            options.intra_op_num_threads = threads
+        providers = ["CPUExecutionProvider"]
+        self._encoder: Any = ort.InferenceSession(
+            str(folder / "encoder_model.ort"), options, providers=providers
+        )
+        self._decoder: Any = ort.InferenceSession(
+            str(folder / "decoder_model_merged.ort"), options, providers=providers
+        )
+        self._tokens = read_tokenizer(folder / "tokenizer.bin")
+        past = [i for i in self._decoder.get_inputs() if i.name.startswith("past_key_values.")]
+        self._cache = _Cache([i.name for i in past], int(past[0].shape[1]), int(past[0].shape[3]))
+        self._outputs = [o.name for o in self._decoder.get_outputs()]
+
+    def transcribe(self, samples: Samples) -> str:
+        """The transcript of one utterance (mono float32 at 16 kHz). Blocking; call it in a thread."""
+        audio = np.ascontiguousarray(samples, dtype=np.float32).reshape(1, -1)
+        (hidden,) = self._encoder.run(["last_hidden_state"], {"input_values": audio})
+        limit = max(4, int(audio.shape[1] / SAMPLE_RATE * TOKENS_PER_SECOND))
+        empty = np.zeros((1, self._cache.heads, 0, self._cache.head_size), dtype=np.float32)
+        past = dict.fromkeys(self._cache.names, empty)
+        ids: list[int] = []
+        token = BOS
+        for step in range(limit):
+            feed = {
+                "input_ids": np.array([[token]], dtype=np.int64),
+                "encoder_hidden_states": hidden,
+                "use_cache_branch": np.array([step > 0]),
+                **past,
+            }
+            logits, *present = self._decoder.run(self._outputs, feed)
+            token = int(np.argmax(logits[0, -1]))
+            if token == EOS:
+                break
+            ids.append(token)
+            for name, value in zip(self._outputs[1:], present, strict=True):
+                key = name.replace("present.", "past_key_values.", 1)
+                # The encoder's keys and values are computed on the first step only; on the cached
+                # branch the decoder passes back placeholders for them, so keep the first ones.
+                if step == 0 or ".decoder." in key:
+                    past[key] = value
+        return detokenize(self._tokens, ids)

@@ -1,0 +1,129 @@
+"""Processes a dead kernel left behind: remembered while they run, made safe and reported on restart.
+
+A process is written to the event store when it is launched and removed when its end is recorded.
+A kernel killed with ``kill -9`` removes nothing, so at the next start the store still lists the
+processes that were running. Their workers died with the old kernel (they watch its pipe and stop
+their devices), but the kernel does not take that on trust: before its loop grants anything,
+:func:`recover_orphans` calls ``safe_stop`` on every device such a process held, then reports each
+process as ``crashed (kernel restarted)`` with its task, as a worker callback, so the kernel model
+(or the user, reading the chat) can decide whether to try again.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections.abc import Awaitable, Callable, Mapping
+from datetime import datetime
+
+from pydantic import BaseModel, ValidationError
+
+from rosaos.devices.supervisor import DirectoryEntry, SafeStopOutcome, safe_stop_entry
+from rosaos.kernel.events import EventStore, WorkerCallbackEvent
+from rosaos.processes.jobs import WorkerCallback, callback_idempotency_key
+from rosaos.processes.manager import ProcessInfo
+
+log = logging.getLogger("rosaos.kernel.orphans")
+
+LIVE_PROCESSES_KEY = "live_processes"
+RESTART_ERROR = "kernel restarted"
+"""The error of a process a dead kernel left: with status ``crashed`` it reads ``crashed (kernel restarted: …)``."""
+
+
+class LiveProcess(BaseModel):
+    """A running process, as the store remembers it."""
+
+    id: int
+    task: str
+    devices: list[str]
+    started_at: datetime
+
+
+class LiveProcesses:
+    """The store's list of running processes (the ``live_processes`` value)."""
+
+    def __init__(self, store: EventStore) -> None:
+        self._store = store
+        self._lock = asyncio.Lock()  # launches and ends interleave at awaits
+
+    async def launched(self, info: ProcessInfo) -> None:
+        """Remember a process that was just launched."""
+        async with self._lock:
+            live = await self._read()
+            live[info.id] = LiveProcess(
+                id=info.id, task=info.task, devices=info.devices, started_at=info.started_at
+            )
+            await self._write(live)
+
+    async def ended(self, process_id: int) -> None:
+        """Forget a process whose end was recorded."""
+        async with self._lock:
+            live = await self._read()
+            if live.pop(process_id, None) is not None:
+                await self._write(live)
+
+    async def left(self) -> list[LiveProcess]:
+        """The processes the store lists as running: at start-up, those a dead kernel left."""
+        return sorted((await self._read()).values(), key=lambda p: p.id)
+
+    async def _read(self) -> dict[int, LiveProcess]:
+        stored = await self._store.get_value(LIVE_PROCESSES_KEY) or {}
+        live = {}
+        for raw in stored.values() if isinstance(stored, dict) else []:
+            try:
+                process = LiveProcess.model_validate(raw)
+            except ValidationError:
+                log.error("ignoring an unreadable live process record: %r", raw)
+                continue
+            live[process.id] = process
+        return live
+
+    async def _write(self, live: Mapping[int, LiveProcess]) -> None:
+        await self._store.set_value(
+            LIVE_PROCESSES_KEY, {str(key): value.model_dump(mode="json") for key, value in live.items()}
+        )
+
+
+async def recover_orphans(
+    live: LiveProcesses,
+    store: EventStore,
+    directory: Mapping[str, DirectoryEntry],
+    recorded: Callable[[int, WorkerCallbackEvent], Awaitable[None]],
+) -> list[SafeStopOutcome]:
+    """``safe_stop`` every device a left-behind process held, then report each process as crashed.
+
+    Call it after the devices started and before the kernel loop runs, so nothing is granted
+    before its device is safe. ``recorded(event_id, callback)`` is the kernel's usual handling of
+    a callback it committed (updates stream, lease release).
+    """
+    orphans = await live.left()
+    if not orphans:
+        return []
+    held = sorted({name for process in orphans for name in process.devices if name in directory})
+    outcomes = list(await asyncio.gather(*(safe_stop_entry(directory[name]) for name in held)))
+    stops = {outcome.instance: outcome for outcome in outcomes}
+    for process in orphans:
+        stopped = ", ".join(
+            f"{name} {'safe-stopped' if stops[name].ok else 'NOT safe-stopped: ' + stops[name].detail}"
+            for name in process.devices
+            if name in stops
+        )
+        callback = WorkerCallback(
+            worker_id=process.id,
+            status="crashed",
+            error=f"{RESTART_ERROR}: the kernel stopped while this process ran"
+            + (f"; {stopped}" if stopped else ""),
+            task=process.task,
+        )
+        event = WorkerCallbackEvent(
+            kind="worker_callback",
+            source="kernel",
+            payload=callback,
+            idempotency_key=callback_idempotency_key(process.id),
+        )
+        appended = await store.append(event)
+        if not appended.duplicate:  # else its own callback got through and waits in the queue
+            await recorded(appended.id, event)
+        await live.ended(process.id)
+        log.warning("process %d (%s): %s", process.id, process.task, callback.error)
+    return outcomes

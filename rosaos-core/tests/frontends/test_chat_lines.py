@@ -1,0 +1,28 @@
+"""What `rosaos chat` prints: device and model text never reaches the terminal as escape sequences."""
+
+from __future__ import annotations
+
+import pytest
+
+from rosaos.frontends.chat import format_update, printable
+
+
+@pytest.mark.parametrize(
+    ("raw", "shown"),
+    [
+        ("\x1b[2J\x1b[Hcleared", "cleared"),  # clear screen, cursor home
+        ("\x1b]0;pwned\x07title", "title"),  # set the window title (OSC ... BEL)
+        ("\x1b]8;;http://evil.example\x1b\\link\x1b]8;;\x1b\\", "link"),  # OSC 8 hyperlink
+        ("red \x1b[31malert\x1b[0m", "red alert"),
+        ("bell\x07 and \x9bcsi", "bell and csi"),
+        ("two\nlines\tand a tab", "two\nlines\tand a tab"),
+        ("Lumière 30 %", "Lumière 30 %"),
+    ],
+)
+def test_printable_drops_escapes_and_controls_but_keeps_text(raw: str, shown: str) -> None:
+    assert printable(raw) == shown
+
+
+def test_a_reply_with_escapes_is_shown_without_them() -> None:
+    line = format_update({"kind": "kernel_reply", "text": "Done\x1b[2J: light on"})
+    assert line == "rosaos: Done: light on"
