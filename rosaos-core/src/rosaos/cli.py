@@ -318,6 +318,26 @@ def ps(
     raise typer.Exit(ps_command(config, url, json_output, all_processes))
 
 
+@app.command("log")
+def log(
+    config: ConfigOption = None,
+    url: UrlOption = None,
+    json_output: JsonOption = False,
+    device: Annotated[str | None, typer.Option("--device", "-d", help="Only this device's calls.")] = None,
+    process: Annotated[
+        int | None, typer.Option("--process", "-p", help="Only this process's calls.", min=1)
+    ] = None,
+    since: Annotated[
+        str | None, typer.Option("--since", "-s", help="Only since: 30s, 10m, 2h, 1d ago, or an ISO time.")
+    ] = None,
+    limit: Annotated[int, typer.Option("--limit", "-n", help="The newest this many.", min=1, max=2000)] = 200,
+) -> None:
+    """Show the activity log: every tool call of the processes, its result and the safety decision."""
+    from rosaos.kernel.activity_command import log_command
+
+    raise typer.Exit(log_command(config, url, device, process, since, limit, json_output))
+
+
 @app.command("kill")
 def kill(
     process_id: Annotated[int, typer.Argument(help="Process id, as `rosaos ps` shows it.", min=1)],

@@ -59,6 +59,10 @@ class DeviceConfig(BaseModel):
     port: int | None = Field(default=None, ge=1, le=65535)
     """Fixed loopback port for a local instance; a free port is chosen when unset."""
     sim: dict[str, Any] = Field(default_factory=dict)
+    confirm: list[str] | Literal["destructive", "off"] | None = None
+    """Tools that need a person's yes before they run: names, ``"destructive"`` (every tool
+    annotated destructiveHint) or ``"off"``. Unset: the global ``confirm``, else on
+    (destructive) for a real ROS robot and off for simulators."""
     """Initial simulator state and sim-only settings."""
 
     def driver_settings(self) -> dict[str, Any]:
@@ -83,6 +87,8 @@ class KernelConfig(BaseModel):
     """Fork one-off workers from a pre-imported fork server (milliseconds instead of seconds);
     it costs one more process of about a warm worker's memory. Off: one-offs start a new Python."""
     job_timeout: float = Field(default=120.0, gt=0, le=3600)
+    confirm_timeout: float = Field(default=30.0, gt=0, le=600)
+    """Seconds a confirmation question waits for a yes; silence is a no."""
     """Seconds a process agent may run before it is killed and its leases released."""
     request_limit: int = Field(default=30, ge=1, le=1000)
     """Model requests one process agent may make (pydantic-ai usage limit)."""
@@ -112,6 +118,11 @@ class ModelConfig(BaseModel):
     model_name: str | None = None
     prefer_local: bool = True
     language: str = "en"
+    vision: bool | None = None
+    """Whether the process model takes images (camera tools then send the picture too).
+    Unset: pydantic-ai's profile of the model says (``supports_image_input``)."""
+    image_max_px: int = Field(default=768, ge=64, le=4096)
+    """Longest side, in pixels, of a picture sent to a model (a JPEG of at most ~400 kB)."""
 
 
 class VoiceConfig(BaseModel):
@@ -187,6 +198,8 @@ class RosaosConfig(BaseSettings):
     data_dir: Path = Field(default_factory=default_data_dir)
     """Event store, token, caches and images. Default: the user data directory."""
     devices: dict[str, DeviceConfig] = Field(default_factory=dict)
+    confirm: list[str] | Literal["destructive", "off"] | None = None
+    """What needs a yes on every device without its own ``confirm`` (see DeviceConfig.confirm)."""
     kernel: KernelConfig = Field(default_factory=KernelConfig)
     models: ModelConfig = Field(default_factory=ModelConfig)
     voice: VoiceConfig = Field(default_factory=VoiceConfig)

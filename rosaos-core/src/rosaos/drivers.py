@@ -129,6 +129,8 @@ class DriverSpec(BaseModel):
     """Optional hassil-format ``intents.yaml`` mapping sentence templates to tool calls."""
     safe_stop: SafeStop = no_safe_stop
     """Awaitable called with the backend on an emergency stop: stop motion, cancel goals."""
+    confirm_on_real: bool = False
+    """Ask a person before destructive tools of a ``real`` instance unless config says otherwise."""
     demo: Mapping[str, DemoInstance] = Field(default_factory=dict)
     """Instances this driver adds to the demo world; defaults to one instance named after it."""
     implemented: bool = True

@@ -17,6 +17,7 @@ from typing import Any
 import cv2
 import numpy as np
 
+from rosaos.devices.images import scaled_size
 from rosaos.drivers import DeviceError
 from rosaos_reachy.robot import Posture, RobotLink
 
@@ -142,3 +143,19 @@ def save_jpeg(image: Image, folder: Path, stem: str) -> Path:
     if not cv2.imwrite(str(path), image, [cv2.IMWRITE_JPEG_QUALITY, 90]):
         raise DeviceError(f"could not write {path}; check that the images directory is writable")
     return path
+
+
+def jpeg_for_model(image: Image, max_px: int, max_bytes: int) -> bytes:
+    """``image`` downscaled so its longer side is at most ``max_px``, as a JPEG of at most
+    ``max_bytes`` (lower quality first, then smaller): a bounded picture for a model's context."""
+    height, width = image.shape[:2]
+    size = scaled_size(width, height, max_px)
+    while True:
+        resized = image if size == (width, height) else cv2.resize(image, size, interpolation=cv2.INTER_AREA)
+        for quality in (80, 65, 50, 35):
+            ok, encoded = cv2.imencode(".jpg", resized, [cv2.IMWRITE_JPEG_QUALITY, quality])
+            if not ok:
+                raise DeviceError("could not encode the picture as JPEG")
+            if len(encoded) <= max_bytes or size[0] <= 64:
+                return bytes(encoded.tobytes())
+        size = (max(1, size[0] * 3 // 4), max(1, size[1] * 3 // 4))

@@ -10,11 +10,14 @@ import asyncio
 from typing import Annotated, Any
 
 from fastmcp import FastMCP
+from fastmcp.tools.base import ToolResult
 from pydantic import Field
 
+from rosaos.devices.images import MAX_IMAGE_BYTES, image_budget, picture_result
 from rosaos.drivers import DeviceError
 from rosaos_reachy.annotations import ACT, CLOUD_READ, DELETE, READ_ONLY
 from rosaos_reachy.backend import ReachyBackend
+from rosaos_reachy.camera import jpeg_for_model
 from rosaos_reachy.faces import Face, FaceAnalysis, face_from_box
 from rosaos_reachy.state import FacesReport, MotionReport, PictureReport
 from rosaos_reachy.vision import load_image
@@ -46,13 +49,18 @@ def register_vision_tools(mcp: FastMCP, backend: ReachyBackend) -> None:
         return name, image, boxes
 
     @mcp.tool(annotations=ACT)
-    async def take_picture() -> PictureReport:
+    async def take_picture() -> PictureReport | ToolResult:
         """Take a picture with the robot's camera; returns its path in the shared images directory.
 
-        In simulation the picture is generated (``simulated`` is true) and says so.
+        In simulation the picture is generated (``simulated`` is true) and says so. If you can
+        see images, the picture comes with it.
         """
-        report, _ = await backend.take_picture()
-        return report
+        max_px = image_budget()
+        report, image = await backend.take_picture()
+        if max_px is None:  # a text-only model: the path (describe_image says what is in it)
+            return report
+        jpeg = await asyncio.to_thread(jpeg_for_model, image, max_px, MAX_IMAGE_BYTES)
+        return picture_result(report.model_dump(), jpeg)
 
     @mcp.tool(annotations=CLOUD_READ)
     async def describe_image(path: ImagePath = None, question: Question = "Describe what you see.") -> str:

@@ -18,6 +18,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from PIL.Image import Image as PILImage
+
 from rosaos.drivers import DeviceBackend, DeviceError
 from rosaos_ros import camera
 from rosaos_ros.bridge import RosbridgeClient
@@ -129,6 +131,11 @@ class RosBackend(DeviceBackend):
 
     async def capture_image(self, timeout: float) -> dict[str, Any]:
         """One camera frame saved as JPEG in the images directory; returns its relative path."""
+        report, _ = await self.capture_frame(timeout)
+        return report
+
+    async def capture_frame(self, timeout: float) -> tuple[dict[str, Any], PILImage]:
+        """:meth:`capture_image`, also returning the decoded frame (for a model that takes images)."""
         topic = self.settings.camera_topic or (self.profile.camera.topic if self.profile.camera else None)
         if topic is None:
             raise DeviceError(
@@ -153,7 +160,8 @@ class RosBackend(DeviceBackend):
             )
         image = await asyncio.to_thread(camera.decode, msg_type, frames[0])
         relative = await asyncio.to_thread(camera.save_jpeg, image, self.images_dir, self.instance)
-        return {"image": relative.as_posix(), "width": image.width, "height": image.height, "topic": topic}
+        report = {"image": relative.as_posix(), "width": image.width, "height": image.height, "topic": topic}
+        return report, image
 
     # Motion
 

@@ -1,8 +1,9 @@
 """Camera captures: one frame from an image topic, decoded and saved as a JPEG file.
 
 Both ``sensor_msgs/Image`` (``rgb8``, ``bgr8``, ``rgba8``, ``bgra8``, ``mono8``, ``mono16``) and
-``sensor_msgs/CompressedImage`` (JPEG or PNG) are understood. The bytes never go to the model:
-the tool returns the file's path relative to the shared images directory.
+``sensor_msgs/CompressedImage`` (JPEG or PNG) are understood. The tool returns the file's path
+relative to the shared images directory; when the calling model accepts images it also gets a
+downscaled JPEG (:func:`jpeg_for_model`).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from typing import Any
 
 from PIL import Image, UnidentifiedImageError
 
+from rosaos.devices.images import scaled_size
 from rosaos.drivers import DeviceError
 from rosaos_ros.messages import COMPRESSED_IMAGE, IMAGE, normalize_type
 
@@ -72,3 +74,18 @@ def save_jpeg(image: Image.Image, images_dir: Path, instance: str) -> Path:
     relative = Path(f"{_UNSAFE.sub('_', instance)}-{stamp}.jpg")
     image.save(images_dir / relative, format="JPEG", quality=85)
     return relative
+
+
+def jpeg_for_model(image: Image.Image, max_px: int, max_bytes: int) -> bytes:
+    """``image`` downscaled so its longer side is at most ``max_px``, as a JPEG of at most ``max_bytes``
+    (lower quality first, then smaller, so a model's context gets a bounded picture)."""
+    frame = image.convert("RGB")
+    size = scaled_size(frame.width, frame.height, max_px)
+    while True:
+        resized = frame.resize(size) if size != frame.size else frame
+        for quality in (80, 65, 50, 35):
+            buffer = io.BytesIO()
+            resized.save(buffer, format="JPEG", quality=quality)
+            if buffer.tell() <= max_bytes or size[0] <= 64:
+                return buffer.getvalue()
+        size = (max(1, size[0] * 3 // 4), max(1, size[1] * 3 // 4))

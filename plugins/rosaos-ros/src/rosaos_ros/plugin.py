@@ -89,6 +89,7 @@ SPEC = DriverSpec(
     backends={"sim": sim_backend, "real": real_backend},
     intents=Path(__file__).parent / "intents.yaml",
     safe_stop=stop_robot,
+    confirm_on_real=True,  # a real robot moves only after a person's yes, unless config says otherwise
     demo={
         "turtlebot": DemoInstance(
             description="TurtleBot 4 wheeled mobile robot with a camera and a charging dock",

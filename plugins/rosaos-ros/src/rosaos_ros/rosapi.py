@@ -133,3 +133,58 @@ class Rosapi:
         answer = await self._call("delete_param", name=name)
         if answer.get("successful") is False:
             raise DeviceError(f"{self.bridge.instance}: cannot delete {name}: {answer.get('reason')}")
+
+    async def has_param(self, name: str) -> bool:
+        """Whether parameter ``name`` (``/node:param``) exists."""
+        return bool((await self._call("has_param", name=name)).get("exists"))
+
+    # Interface definitions (rosapi_msgs/TypeDef lists: the type first, then its nested types)
+
+    async def message_details(self, msg_type: str) -> list[dict[str, Any]]:
+        """The typedefs of a message type; :class:`DeviceError` when the robot does not know it."""
+        return await self._typedefs("message_details", msg_type, "message")
+
+    async def service_details(self, srv_type: str) -> tuple[list[dict[str, Any]], list[dict[str, Any]]]:
+        """The typedefs of a service type's request and response."""
+        return await asyncio.gather(
+            self._typedefs("service_request_details", srv_type, "service"),
+            self._typedefs("service_response_details", srv_type, "service"),
+        )
+
+    async def action_details(self, action_type: str) -> list[list[dict[str, Any]]]:
+        """The typedefs of an action type's goal, result and feedback.
+
+        Newer rosapi has ``action_{goal,result,feedback}_details``; an older one still describes the
+        generated ``<Action>_Goal``/``_Result``/``_Feedback`` messages through ``message_details``.
+        """
+        parts = ("goal", "result", "feedback")
+        try:
+            return list(
+                await asyncio.gather(
+                    *(self._typedefs(f"action_{part}_details", action_type, "action") for part in parts)
+                )
+            )
+        except ServiceCallFailed:
+            return list(
+                await asyncio.gather(
+                    *(
+                        self._typedefs("message_details", f"{action_type}_{part.capitalize()}", "action")
+                        for part in parts
+                    )
+                )
+            )
+
+    async def _typedefs(self, rosapi_service: str, type_name: str, kind: str) -> list[dict[str, Any]]:
+        try:
+            answer = await self._call(rosapi_service, type=type_name)
+        except ServiceCallFailed as failure:
+            if rosapi_service.startswith("action_") and "does not exist" in str(failure):
+                raise  # an older rosapi: action_details falls back to message_details
+            raise DeviceError(
+                f"{self.bridge.instance}: the robot does not know the {kind} type {type_name} ({failure}); "
+                f"check the spelling (package/{'msg' if kind == 'message' else 'srv' if kind == 'service' else 'action'}/Name)"
+            ) from None
+        typedefs = list(answer.get("typedefs") or [])
+        if not typedefs:
+            raise DeviceError(f"{self.bridge.instance}: the robot has no definition of {type_name}")
+        return typedefs

@@ -6,7 +6,7 @@ from fastmcp import FastMCP
 
 from rosaos.drivers import DeviceContext
 from rosaos_ros.backend import RosBackend
-from rosaos_ros.tools import actions, motion, robot, services, topics
+from rosaos_ros.tools import actions, interfaces, motion, robot, services, topics
 
 
 def build_server(ctx: DeviceContext, backend: RosBackend) -> FastMCP:
@@ -25,4 +25,5 @@ def build_server(ctx: DeviceContext, backend: RosBackend) -> FastMCP:
     topics.register(mcp, backend)
     services.register(mcp, backend)
     actions.register(mcp, backend)
+    interfaces.register(mcp, backend)
     return mcp

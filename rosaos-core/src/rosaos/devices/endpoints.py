@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Literal
 
 from rosaos.devices.runtime import DeviceStatus
 from rosaos.drivers import Concurrency
@@ -22,6 +23,8 @@ class DeviceEndpoint:
     """Streamable-HTTP MCP URL, or None while the instance is not served."""
     token: str
     status: DeviceStatus
+    confirm: list[str] | Literal["destructive"] | None = None
+    """What needs a person's yes (:func:`rosaos.kernel.confirmations.confirm_rule`)."""
 
     @property
     def grantable(self) -> bool:

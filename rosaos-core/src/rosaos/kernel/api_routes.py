@@ -23,6 +23,9 @@ from fastapi.security import HTTPBearer
 from sse_starlette import EventSourceResponse, ServerSentEvent
 
 import rosaos
+from rosaos.kernel.activity import DEFAULT_LIMIT as DEFAULT_ACTIVITY
+from rosaos.kernel.activity import MAX_LIMIT as MAX_ACTIVITY
+from rosaos.kernel.activity import ActivityPage
 from rosaos.kernel.api_types import (
     COMMON_ERRORS,
     PROTECTED_ERRORS,
@@ -196,6 +199,25 @@ async def _stream(updates: UpdateStream, after: int) -> AsyncIterator[ServerSent
     yield ServerSentEvent(comment="rosaOS updates", retry=SSE_RETRY_MS)
     async for update in updates.follow(after):
         yield ServerSentEvent(data=update.model_dump_json(), id=str(update.id))
+
+
+@protected.get("/activity")
+async def list_activity(
+    runtime: Runtime,
+    device: Annotated[str | None, Query(max_length=100, description="Only this device's calls.")] = None,
+    process: Annotated[
+        int | None, Query(ge=1, le=2**63 - 1, description="Only this process's calls.")  # SQLite's range
+    ] = None,
+    since: Annotated[
+        float | None, Query(ge=0, description="Only calls started at or after this time (epoch seconds).")
+    ] = None,
+    limit: Annotated[
+        int, Query(ge=1, le=MAX_ACTIVITY, description="The newest this many.")
+    ] = DEFAULT_ACTIVITY,
+) -> ActivityPage:
+    """The activity log: every tool call of the processes, with its result and safety decision."""
+    entries = await runtime.activity.query(device=device, process_id=process, since=since, limit=limit)
+    return ActivityPage(entries=entries)
 
 
 @protected.get("/processes")

@@ -13,6 +13,8 @@ from typing import Any, Literal, Protocol
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from rosaos.kernel.activity import ActivityLog
+from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.events import EventStore, IdempotencyKey, Source
 from rosaos.kernel.login import LoginCodes
 from rosaos.kernel.updates import Update, UpdateStream
@@ -29,6 +31,14 @@ class KernelRuntime(Protocol):
     @property
     def updates(self) -> UpdateStream:
         """The updates stream (same SQLite file)."""
+
+    @property
+    def confirmations(self) -> ConfirmationDesk:
+        """The pending confirmation questions."""
+
+    @property
+    def activity(self) -> ActivityLog:
+        """The activity log: every tool call of every process (same SQLite file)."""
 
     @property
     def login_codes(self) -> LoginCodes:

@@ -9,7 +9,7 @@ from __future__ import annotations
 import asyncio
 import json
 import logging
-from collections.abc import Callable
+from collections.abc import Awaitable, Callable
 from typing import Any
 
 from pydantic_ai import Agent
@@ -21,6 +21,7 @@ from pydantic_ai.usage import UsageLimits
 from rosaos.kernel.agent import trim_history
 from rosaos.kernel.events import Event, EventStore
 from rosaos.kernel.updates import UpdateKind, UpdateStream
+from rosaos.receipts import receipts_text
 
 log = logging.getLogger(__name__)
 
@@ -43,9 +44,12 @@ def render_event(event: Event) -> str:
             head = f"[Worker callback] worker={payload.worker_id} status={payload.status}"
             if payload.task:
                 head += f" task={payload.task!r}"
-            if payload.error:
-                return f"{head}\nerror: {payload.error}"
-            return f"{head}\noutput: {payload.output or '(no output)'}"
+            body = (
+                f"error: {payload.error}" if payload.error else f"output: {payload.output or '(no output)'}"
+            )
+            if payload.receipts:  # what was really done, whatever the output claims
+                body += "\n" + receipts_text(payload.receipts)
+            return f"{head}\n{body}"
         case "device_notice":
             return f"[Device notice] device={payload.device} {payload.message}"
         case "error":
@@ -75,6 +79,8 @@ class KernelLoop:
         self.request_limit = request_limit
         self.history: list[ModelMessage] = []
         self.handled = 0
+        self.before: Callable[[Event], Awaitable[list[Output] | None]] | None = None
+        """Sees each event before the model; outputs instead of a model run (confirmation answers)."""
 
     async def run_forever(self) -> None:
         """Handle events until cancelled."""
@@ -105,6 +111,8 @@ class KernelLoop:
         """Run the kernel agent on one event; return the updates that say what it did."""
         if event.attempts > MAX_DELIVERIES:
             return [_error(f"event {event.id} was skipped: handling it failed {event.attempts - 1} times")]
+        if self.before is not None and (outputs := await self.before(event)) is not None:
+            return outputs
         prompt = render_event(event)
         for attempt in range(1, MODEL_RETRIES + 1):
             try:

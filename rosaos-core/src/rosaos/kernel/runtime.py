@@ -32,9 +32,12 @@ from rosaos.devices.state_cache import DeviceStateCache
 from rosaos.devices.supervisor import DeviceSupervisor, DirectoryEntry, SafeStopOutcome
 from rosaos.devices.world import World
 from rosaos.drivers import DeviceError
+from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
 from rosaos.kernel.api import create_app
 from rosaos.kernel.client import kernel_file, running_kernel_url
+from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people
+from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
 from rosaos.kernel.device_status import DeviceStatusUpdates
 from rosaos.kernel.events import Event, EventStore, StoreClosedError, WorkerCallbackEvent
 from rosaos.kernel.login import LoginCodes, login_url
@@ -111,6 +114,10 @@ class Kernel:
         return self._updates
 
     @property
+    def activity(self) -> ActivityLog:
+        return self._activity
+
+    @property
     def token(self) -> str:
         return self._token
 
@@ -151,6 +158,7 @@ class Kernel:
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         self.manager.record_callback(callback)
         await self._live.ended(callback.worker_id)
+        await self._activity.record(event_id, callback.worker_id, callback.receipts)
         if callback.worker_id in self._ended_published:
             return
         self._ended_published.add(callback.worker_id)
@@ -228,8 +236,14 @@ class Kernel:
                 url=entry.url,
                 token=entry.token or self._token,
                 status=entry.status,
+                confirm=self._confirm_rule(name),
             )
         return endpoints
+
+    def _confirm_rule(self, name: str) -> ConfirmRule:
+        instance, configured = self.world.instances[name], self.config.devices.get(name)
+        own = configured.confirm if configured is not None else None
+        return confirm_rule(own, self.config.confirm, instance.backend, instance.spec.confirm_on_real)
 
     # --- lifecycle ---------------------------------------------------------------------------------
 
@@ -253,6 +267,10 @@ class Kernel:
     async def _start_parts(self, sock: socket.socket) -> None:
         self._store = await EventStore.open(self.data_dir / EVENTS_FILE)
         self._updates = await UpdateStream.open(self._store.database)
+        self.confirmations = ConfirmationDesk(
+            self.config.kernel.confirm_timeout, lambda item: ask_people(self._updates, self.endpoints(), item)
+        )
+        self._activity = await ActivityLog.open(self._store.database)
         self._live = LiveProcesses(self._store)
         self.supervisor = self._hosting or DeviceSupervisor(self.world, self.data_dir, self._token)
         if isinstance(self.supervisor, DeviceSupervisor):
@@ -293,6 +311,7 @@ class Kernel:
             model=self._model_for_event,
             history_budget=self.config.kernel.history_messages,
         )
+        self.loop.before = lambda event: answer_from_chat(self.confirmations, event)
         app = create_app(self, allowed_hosts=[*kernel.allow_hosts, *bound_hosts(sock.getsockname()[0])])
         config = uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=3)
         self._server = uvicorn.Server(config)

@@ -24,6 +24,8 @@ from pydantic_ai.messages import (
     UserPromptPart,
 )
 
+from rosaos.receipts import RECEIPTS_HEADING
+
 EVENT_TAG = re.compile(r"^\[(?P<tag>[A-Za-z ]+)\]\s?(?P<body>.*)$", re.DOTALL)
 _TASK = re.compile(r"\stask=(?P<task>(?:'.*'|\".*\"))$")
 _STATUS = re.compile(r"\bstatus=(?P<status>\w+)")
@@ -78,6 +80,7 @@ def parse_callback(body: str) -> WorkerCallbackEvent:
         except (ValueError, SyntaxError):
             task = None
     output = error = None
+    rest = rest.split(f"\n{RECEIPTS_HEADING}", 1)[0]  # the receipts follow the output or error
     if rest.startswith("error:"):
         error = rest[len("error:") :].strip()
     elif rest.startswith("output:"):

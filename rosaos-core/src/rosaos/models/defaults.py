@@ -46,6 +46,8 @@ def kernel_spec(config: RosaosConfig) -> ModelSpec:
         model_name=models.model_name,
         prefer_local=models.prefer_local,
         language=models.language,
+        vision=models.vision,
+        image_max_px=models.image_max_px,
     )
 
 

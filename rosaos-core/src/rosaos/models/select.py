@@ -41,6 +41,10 @@ class ModelSpec(BaseModel):
     """With a model set: tasks the offline engine planned still run locally (no LLM call)."""
     language: str = "en"
     """Language of the offline engine's replies."""
+    vision: bool | None = None
+    """Whether the model takes images; ``None``: its pydantic-ai profile says."""
+    image_max_px: int = 768
+    """Longest side of a picture sent to the model, in pixels."""
 
     @property
     def is_offline_default(self) -> bool:

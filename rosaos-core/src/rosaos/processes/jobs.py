@@ -11,6 +11,7 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field
 
 from rosaos.models.select import ModelSpec
+from rosaos.receipts import Receipt
 
 ProcessStatus = Literal["ok", "error", "crashed", "timeout", "terminated"]
 """How a process ended: ``ok`` (the agent finished), ``error`` (it raised), ``crashed`` (the
@@ -28,6 +29,8 @@ class GrantedDevice(BaseModel):
     token: str
     description: str
     prompt: str
+    confirm: list[str] | Literal["destructive"] | None = None
+    """Tools that need a person's yes first (names, or every destructive one)."""
 
 
 class WorkerJob(BaseModel):
@@ -59,6 +62,9 @@ class WorkerCallback(BaseModel):
     task: str | None = None
     model_requests: int = Field(default=0, ge=0)
     tool_calls: int = Field(default=0, ge=0)
+    receipts: list[Receipt] = Field(
+        default_factory=list, description="Every tool call the process made (the activity log)."
+    )
 
 
 def callback_idempotency_key(process_id: int) -> str:

@@ -236,6 +236,7 @@ def _granted(endpoint: DeviceEndpoint) -> GrantedDevice:
         token=endpoint.token,
         description=endpoint.description,
         prompt=endpoint.prompt,
+        confirm=endpoint.confirm,
     )
 
 

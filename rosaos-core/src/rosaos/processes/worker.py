@@ -28,6 +28,7 @@ from typing import IO, Any
 
 import httpx
 from fastmcp import Client
+from fastmcp.client.transports import StreamableHttpTransport
 from pydantic import ValidationError
 from pydantic_ai import Agent, UsageLimitExceeded, capture_run_messages
 from pydantic_ai.mcp import MCPToolset
@@ -37,6 +38,7 @@ from pydantic_ai.toolsets import AbstractToolset
 from pydantic_ai.usage import UsageLimits
 
 from rosaos.models.select import ModelError, build_model
+from rosaos.processes.confirming import ConfirmationDeclined, ConfirmingToolset, KernelAsker
 from rosaos.processes.jobs import (
     GrantedDevice,
     ProcessStatus,
@@ -45,7 +47,10 @@ from rosaos.processes.jobs import (
     callback_idempotency_key,
 )
 from rosaos.processes.prompts import process_system_prompt, tool_prefix
+from rosaos.processes.recording import RecordingToolset
 from rosaos.processes.tool_calls import ToolCallLog, observed
+from rosaos.processes.vision import image_budget_for, image_headers
+from rosaos.receipts import Receipt
 
 log = logging.getLogger("rosaos.processes.worker")
 
@@ -84,10 +89,11 @@ async def run_job(job: WorkerJob) -> WorkerCallback:
     output: str | None = None
     error: str | None = None
     calls = ToolCallLog()
+    receipts: list[Receipt] = []  # every tool call, for the activity log (processes/recording.py)
     with capture_run_messages() as messages:
         try:
             async with asyncio.timeout(job.timeout) as deadline:
-                output = await _run_agent(job, calls)
+                output = await _run_agent(job, calls, receipts)
         except TimeoutError:
             if not deadline.expired():
                 log.exception("process %d failed", job.process_id)
@@ -95,6 +101,8 @@ async def run_job(job: WorkerJob) -> WorkerCallback:
             else:
                 status = "timeout"
                 error = f"the process ran past its timeout of {job.timeout:g} s and was stopped"
+        except ConfirmationDeclined as declined:  # a person said no: the process ends, nothing done
+            status, error = "terminated", str(declined)
         except UsageLimitExceeded:
             status = "error"
             error = (
@@ -117,6 +125,7 @@ async def run_job(job: WorkerJob) -> WorkerCallback:
         task=job.task,
         model_requests=requests,
         tool_calls=tool_calls,
+        receipts=receipts,
     )
 
 
@@ -131,10 +140,14 @@ class DeviceSessions:
 
     def __init__(self) -> None:
         self._open: dict[tuple[str, str], MCPToolset[Any]] = {}
+        self._images: dict[tuple[str, str], int | None] = {}
 
-    async def toolset(self, device: GrantedDevice) -> MCPToolset[Any]:
+    async def toolset(self, device: GrantedDevice, images: int | None = None) -> MCPToolset[Any]:
         key = (device.url, device.token)
         kept = self._open.get(key)
+        if kept is not None and self._images.get(key) != images:  # the images header is per session
+            await self._close(key)
+            kept = None
         if kept is not None:
             try:
                 async with asyncio.timeout(CONNECT_TIMEOUT):
@@ -142,8 +155,8 @@ class DeviceSessions:
                 return kept
             except Exception:
                 await self._close(key)
-        toolset = await _connect(device)
-        self._open[key] = toolset
+        toolset = await _connect(device, images)
+        self._open[key], self._images[key] = toolset, images
         return toolset
 
     async def forget(self, devices: Sequence[GrantedDevice]) -> None:
@@ -156,6 +169,7 @@ class DeviceSessions:
             await self._close(key)
 
     async def _close(self, key: tuple[str, str]) -> None:
+        self._images.pop(key, None)
         toolset = self._open.pop(key, None)
         if toolset is not None:
             with contextlib.suppress(Exception):
@@ -165,13 +179,19 @@ class DeviceSessions:
 SESSIONS = DeviceSessions()
 
 
-async def _run_agent(job: WorkerJob, calls: ToolCallLog) -> str:
+async def _run_agent(job: WorkerJob, calls: ToolCallLog, receipts: list[Receipt] | None = None) -> str:
     model = process_model(job)
     prefixed = len(job.devices) > 1
     try:
         toolsets: list[AbstractToolset[Any]] = []
+        asker = KernelAsker(job.callback_url.removesuffix("/event"), job.callback_token, job.process_id)
         for device in job.devices:
-            toolset = observed(await SESSIONS.toolset(device), device.name, calls)
+            session = await SESSIONS.toolset(device, image_budget_for(job.model, model))
+            guarded = ConfirmingToolset(session, device=device.name, rule=device.confirm, asker=asker)
+            recorded = receipts if receipts is not None else []
+            toolset = observed(
+                RecordingToolset(guarded, device=device.name, receipts=recorded), device.name, calls
+            )
             toolsets.append(toolset.prefixed(tool_prefix(device.name)) if prefixed else toolset)
         agent = Agent(
             model,
@@ -186,11 +206,10 @@ async def _run_agent(job: WorkerJob, calls: ToolCallLog) -> str:
     return str(result.output)
 
 
-async def _connect(device: GrantedDevice) -> MCPToolset[Any]:
+async def _connect(device: GrantedDevice, images: int | None = None) -> MCPToolset[Any]:
     """Open the device's MCP session up front, so a dead device is reported by name, not as a stack."""
-    client: Client[Any] = Client(
-        device.url, auth=device.token, name=f"rosaos-{device.name}", init_timeout=CONNECT_TIMEOUT
-    )
+    transport = StreamableHttpTransport(device.url, headers=image_headers(images), auth=device.token)
+    client: Client[Any] = Client(transport, name=f"rosaos-{device.name}", init_timeout=CONNECT_TIMEOUT)
     # 'failed': a device error (bulb offline, value refused) goes back to the model as a failed
     # tool result it can read and report, instead of ending the whole run.
     toolset: MCPToolset[Any] = MCPToolset(client, id=device.name, tool_error_behavior="failed")

@@ -7,16 +7,21 @@ services answer introspection from this registry, in the shapes of ``rosapi_msgs
 
 from __future__ import annotations
 
+import base64
 import json
+import uuid
 from collections import Counter
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 from rosaos_ros.messages import normalize_type, stamp
+from rosaos_ros.sim import interfaces
 
 ROSAPI_NODE = "/rosapi"
 BRIDGE_NODE = "/rosbridge_websocket"
+GOAL_STATUS_KEEP = 10
+"""Goals listed in an action's status topic (the newest ones)."""
 
 Message = dict[str, Any]
 
@@ -87,6 +92,9 @@ class RosGraph:
         self._listeners: dict[str, list[Listener]] = {}
         self._bridge_subscriptions: Counter[str] = Counter()
         self._bridge_publishers: Counter[str] = Counter()
+        self.latched: dict[str, Message] = {}
+        """The last message of each transient-local topic (action status), for late subscribers."""
+        self._goal_statuses: dict[str, dict[str, Message]] = {}
         self._add_rosapi()
 
     # Registration by simulated nodes
@@ -116,6 +124,28 @@ class RosGraph:
     def add_action(self, name: str, server: ActionServer) -> None:
         """``server.node`` serves action ``name``."""
         self.actions[name] = server
+
+    def report_goal_status(self, action: str, goal_key: str, status: int) -> None:
+        """A goal of ``action`` changed status: publish ``<action>/_action/status``, as servers do.
+
+        ``goal_key`` is unique per goal; its UUID is derived from it. The list keeps the
+        :data:`GOAL_STATUS_KEEP` most recent goals, and is latched for late subscribers.
+        """
+        goals = self._goal_statuses.setdefault(action, {})
+        entry = goals.pop(goal_key, None) or {
+            "goal_info": {
+                "goal_id": {
+                    "uuid": base64.b64encode(uuid.uuid5(uuid.NAMESPACE_URL, goal_key).bytes).decode()
+                },
+                "stamp": stamp(),
+            }
+        }
+        goals[goal_key] = {**entry, "status": status}
+        while len(goals) > GOAL_STATUS_KEEP:
+            goals.pop(next(iter(goals)))
+        topic = f"{action}/_action/status"
+        self.latched[topic] = {"status_list": list(goals.values())}
+        self.publish(topic, self.latched[topic])
 
     # Traffic
 
@@ -216,6 +246,18 @@ class RosGraph:
         service("delete_param", self._delete_param)
         service("get_time", lambda _: {"time": stamp()})
         service("get_ros_version", lambda _: {"version": 2, "distro": "humble"})
+        service("message_details", lambda a: self._typedefs(a.get("type"), ""))
+        service("service_request_details", lambda a: self._typedefs(a.get("type"), "_Request"))
+        service("service_response_details", lambda a: self._typedefs(a.get("type"), "_Response"))
+        service("action_goal_details", lambda a: self._typedefs(a.get("type"), "_Goal"))
+        service("action_result_details", lambda a: self._typedefs(a.get("type"), "_Result"))
+        service("action_feedback_details", lambda a: self._typedefs(a.get("type"), "_Feedback"))
+
+    def _typedefs(self, type_name: Any, suffix: str) -> Message:
+        try:
+            return {"typedefs": interfaces.typedefs(f"{type_name or ''}{suffix}")}
+        except interfaces.UnknownInterface as unknown:
+            raise ServiceFailure(str(unknown)) from None
 
     def _topics_and_types(self) -> Message:
         names = sorted(self.topics)

@@ -27,7 +27,7 @@ from rosaos_ros.sim.subscription import ClientSubscription
 log = logging.getLogger("rosaos_ros.sim")
 
 STATUS_LEVELS = {"info": 0, "warning": 1, "error": 2, "none": 3}
-GOAL_SUCCEEDED, GOAL_CANCELED, GOAL_ABORTED, GOAL_UNKNOWN = 4, 5, 6, 0
+GOAL_EXECUTING, GOAL_SUCCEEDED, GOAL_CANCELED, GOAL_ABORTED, GOAL_UNKNOWN = 2, 4, 5, 6, 0
 
 
 class ClientSession:
@@ -176,6 +176,8 @@ class ClientSession:
         subscription.add(
             sub_id, int(message.get("throttle_rate") or 0), int(message.get("queue_length") or 0)
         )
+        if topic in self.graph.latched:  # transient-local topics hand a late subscriber the last message
+            subscription.offer(self.graph.latched[topic])
 
     def _unsubscribe(self, message: Message) -> None:
         topic = message["topic"]
@@ -275,6 +277,9 @@ class ClientSession:
                 self.send({"op": "action_feedback", "id": goal_id, "action": name, "values": values})
 
         args = message.get("args") or {}
+        status_key = f"{id(self)}:{goal_id}"
+        self.graph.report_goal_status(name, status_key, GOAL_EXECUTING)
+        status = GOAL_ABORTED
         try:
             values = await server.handler(ActionGoal(args if isinstance(args, dict) else {}, feedback))
             status = GOAL_SUCCEEDED
@@ -286,6 +291,8 @@ class ClientSession:
             log.exception("action %s failed", name)
             self._action_failure(goal_id, name, f"{type(error).__name__}: {error}")
             return
+        finally:
+            self.graph.report_goal_status(name, status_key, status)
         self.send(
             {
                 "op": "action_result",

@@ -43,7 +43,8 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
     ) -> dict[str, Any]:
         """Send a goal to an allowed action and wait for its result, streaming its feedback as progress.
 
-        Only actions on the instance's action allow-list accept goals. The result says the status
+        Look the goal up with action_details(action) first and fill in its ``example``. Only
+        actions on the instance's action allow-list accept goals. The result says the status
         (succeeded, canceled, aborted), the last feedback and the result fields.
         """
         return await backend.send_goal(action, goal, action_type, timeout, wait, progress_reporter(ctx))

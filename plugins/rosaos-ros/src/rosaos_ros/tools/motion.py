@@ -9,6 +9,7 @@ from typing import Annotated, Any
 from fastmcp import FastMCP
 from pydantic import Field
 
+from rosaos.receipts import safety_report
 from rosaos_ros.backend import RosBackend
 from rosaos_ros.motion import MotionResult
 from rosaos_ros.tools import MOVES, STOPS
@@ -34,10 +35,20 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
         ),
     ]
 
-    async def with_state(result: MotionResult) -> dict[str, Any]:
+    async def with_state(result: MotionResult, deadman_before: int) -> dict[str, Any]:
         if result.outcome != "started":
             await backend.state.settle()
-        return {**result.as_dict(), "state": await backend.get_state()}
+        report = {**result.as_dict(), "state": await backend.get_state()}
+        # The safety decision, for the activity log's receipts (rosaos.receipts).
+        if backend.deadman.fired > deadman_before:
+            report |= safety_report(
+                "deadman_stop", "deadman", "the command stream went quiet; the robot was stopped"
+            )
+        elif result.outcome == "stopped":
+            report |= safety_report("stopped", "stop", result.detail)
+        elif result.outcome == "timed out":
+            report |= safety_report("limited", "move timeout", result.detail)
+        return report
 
     @mcp.tool(annotations=MOVES)
     async def drive(
@@ -57,7 +68,8 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
         above the robot's limits are refused, not reduced. Prefer move_distance and rotate for
         exact distances and angles.
         """
-        return await with_state(await backend.drive(linear, angular, duration, wait))
+        fired = backend.deadman.fired
+        return await with_state(await backend.drive(linear, angular, duration, wait), fired)
 
     @mcp.tool(annotations=MOVES)
     async def move_distance(
@@ -74,7 +86,8 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
         ] = None,
     ) -> dict[str, Any]:
         """Drive a distance straight ahead (or back), measured on odometry, then stop."""
-        return await with_state(await backend.move_distance(meters, speed))
+        fired = backend.deadman.fired
+        return await with_state(await backend.move_distance(meters, speed), fired)
 
     @mcp.tool(annotations=MOVES)
     async def rotate(
@@ -96,7 +109,8 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
         ] = None,
     ) -> dict[str, Any]:
         """Turn in place by an angle, measured on odometry, then stop. 90 is a quarter turn left, -90 right."""
-        return await with_state(await backend.rotate(degrees, speed))
+        fired = backend.deadman.fired
+        return await with_state(await backend.rotate(degrees, speed), fired)
 
     @mcp.tool(annotations=STOPS)
     async def stop() -> dict[str, Any]:

@@ -2,11 +2,15 @@
 
 from __future__ import annotations
 
+import asyncio
 from typing import Annotated, Any
 
 from fastmcp import FastMCP
+from fastmcp.tools.base import ToolResult
 from pydantic import Field
 
+from rosaos.devices.images import MAX_IMAGE_BYTES, image_budget, picture_result
+from rosaos_ros import camera
 from rosaos_ros.backend import RosBackend
 from rosaos_ros.tools import READ_ONLY
 
@@ -31,10 +35,17 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
     @mcp.tool(annotations={"readOnlyHint": False, "destructiveHint": False, "idempotentHint": False})
     async def capture_image(
         timeout: Annotated[float, Field(gt=0, le=30, description="Seconds to wait for a frame.")] = 5.0,
-    ) -> dict[str, Any]:
+    ) -> dict[str, Any] | ToolResult:
         """Take a picture with the robot's camera and save it as a JPEG file.
 
-        Returns the file's path relative to the rosaOS images directory (never the image itself),
-        with its size; pass the path on to whoever needs to see it.
+        Returns the file's path relative to the rosaOS images directory, with its size; pass the
+        path on to whoever needs to see it. If you can see images, the picture comes with it.
         """
-        return await backend.capture_image(timeout)
+        max_px = image_budget()
+        report, image = await backend.capture_frame(timeout)
+        if max_px is None:
+            # A text-only model gets the path; a local description of the frame belongs here once
+            # the driver has a detector (the demo issue's detect_people).
+            return report
+        jpeg = await asyncio.to_thread(camera.jpeg_for_model, image, max_px, MAX_IMAGE_BYTES)
+        return picture_result(report, jpeg)

@@ -51,7 +51,8 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
         """Call an allowed service with a request (its fields as JSON) and return the response.
 
         Only services on the instance's service allow-list can be called; a refusal says how to
-        allow one. Use service_info to see a service's type first.
+        allow one. Look the request up with service_details(service) first and fill in its
+        ``example``; never guess field names.
         """
         return await backend.call_service(service, request, timeout)
 

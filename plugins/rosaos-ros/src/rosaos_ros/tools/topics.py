@@ -65,6 +65,8 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
     async def publish(topic: TopicName, msg: Fields, msg_type: TypeName = None) -> dict[str, Any]:
         """Publish one message on an allowed topic.
 
+        Look the type up with message_details(topic) first and fill in its ``example``; never
+        guess field names.
         Only topics on the instance's publish allow-list can be published (a refusal says how to
         allow one). The velocity topic is refused by default: use drive, move_distance or rotate.
         """

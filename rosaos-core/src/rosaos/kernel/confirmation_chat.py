@@ -1,0 +1,46 @@
+"""How the kernel asks people a confirmation question, and reads their spoken or typed answer."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from collections.abc import Mapping
+
+from rosaos.devices.client import DeviceClient
+from rosaos.devices.endpoints import DeviceEndpoint
+from rosaos.kernel.confirmations import Confirmation, ConfirmationDesk
+from rosaos.kernel.events import Event
+from rosaos.kernel.loop import Output
+from rosaos.kernel.updates import UpdateStream
+
+log = logging.getLogger(__name__)
+SPEAK_TIMEOUT = 5.0
+
+
+async def ask_people(
+    updates: UpdateStream, endpoints: Mapping[str, DeviceEndpoint], item: Confirmation
+) -> None:
+    """Ask on the updates stream (chat, web page), and out loud on the always-attached device."""
+    await updates.publish("notice", f"confirm {item.id}: {item.question}", item.model_dump(mode="json"))
+    speaker = next((e for e in endpoints.values() if e.always_attached and e.url), None)
+    if speaker is None or speaker.url is None:
+        return
+    try:
+        async with asyncio.timeout(SPEAK_TIMEOUT):
+            await DeviceClient(speaker.url, speaker.token, SPEAK_TIMEOUT, speaker.name).call(
+                "speak", {"text": item.question}
+            )
+    except Exception as failure:  # the chat and the web page still ask; a mute robot is not fatal
+        log.warning("could not ask confirmation %s out loud on %s: %s", item.id, speaker.name, failure)
+
+
+async def answer_from_chat(desk: ConfirmationDesk, event: Event) -> list[Output] | None:
+    """A typed or spoken "yes"/"no" while a question is pending answers it, before the model runs."""
+    if event.kind not in ("user_said", "user_typed") or not desk.pending():
+        return None
+    item = desk.answer_oldest(str(getattr(event.payload, "text", "")), by=event.source)
+    if item is None:
+        return None
+    verdict = "going ahead" if item.state == "yes" else "cancelled"
+    what = item.question.removesuffix(" Go ahead?")
+    return [("kernel_reply", f"{verdict}: {what}", item.model_dump(mode="json"))]
