@@ -19,6 +19,7 @@ from rosaos.kernel.events import EventStore, IdempotencyKey, Source
 from rosaos.kernel.login import LoginCodes
 from rosaos.kernel.updates import Update, UpdateStream
 from rosaos.processes.jobs import WorkerCallback
+from rosaos.processes.progress import ProcessProgress
 
 
 class KernelRuntime(Protocol):
@@ -113,6 +114,8 @@ class ProcessView(BaseModel):
     started_at: datetime | None = None
     ended_at: datetime | None = None
     worker_pid: int | None = None
+    progress: ProcessProgress | None = None
+    """How far its current long tool call is (a search), as the device last reported it."""
 
 
 class DeviceView(BaseModel):

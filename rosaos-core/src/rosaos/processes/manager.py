@@ -27,6 +27,7 @@ from rosaos.processes.forking import preload_modules
 from rosaos.processes.jobs import GrantedDevice, WorkerCallback, WorkerJob
 from rosaos.processes.leases import LeaseRefused, LeaseTable
 from rosaos.processes.pool import PoolError, WorkerPool
+from rosaos.processes.progress import ProcessProgress
 
 ProcessState = Literal["running", "ok", "error", "crashed", "timeout", "terminated"]
 
@@ -41,6 +42,8 @@ class ProcessInfo(BaseModel):
     started_at: datetime
     ended_at: datetime | None = None
     worker_pid: int | None = None
+    progress: ProcessProgress | None = None
+    """How far its current long tool call is (a search), while it runs."""
 
 
 class EmergencyStop(BaseModel):
@@ -90,6 +93,7 @@ class ProcessManager:
         """The latched emergency stop, or None. While latched every launch is refused. The kernel
         keeps it on disk and passes it in at start, so a restart does not unlatch it."""
         pool.on_ended = self._worker_ended
+        pool.on_progress = self._progressed
         pool.preload.extend(preload_modules(model))
 
     @property
@@ -196,6 +200,11 @@ class ProcessManager:
     def get(self, process_id: int) -> ProcessInfo:
         """One process by id; ``KeyError`` with a readable message for an unknown id."""
         return self._get(process_id).model_copy()
+
+    def _progressed(self, process_id: int, progress: ProcessProgress) -> None:
+        info = self._processes.get(process_id)
+        if info is not None and info.state == "running":
+            info.progress = progress
 
     def record_callback(self, callback: WorkerCallback) -> None:
         """Mark the process ended as ``callback`` says and release its leases. Idempotent.

@@ -25,13 +25,14 @@ import logging
 import os
 import signal
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
 from rosaos.processes.forking import ForkServer, ForkServerError
 from rosaos.processes.jobs import WorkerCallback, WorkerJob
+from rosaos.processes.progress import ProcessProgress
 from rosaos.processes.watcher import OnEnded, Watcher, Worker, WorkerProcess, describe_exit
 
 log = logging.getLogger(__name__)
@@ -101,11 +102,21 @@ class WorkerPool:
         self.fork_server = ForkServer(python, self._env) if fork_server else None
         self._workers: set[Worker] = set()
         self._spawning: set[asyncio.Task[Any]] = set()
+        self.on_progress: Callable[[int, ProcessProgress], None] | None = None
+        """Where a job's progress goes; the process manager sets it."""
         self._watcher = Watcher(
-            self._report, ready=self._worker_ready, gone=self._workers.discard, exited=self._worker_exited
+            self._report,
+            ready=self._worker_ready,
+            gone=self._workers.discard,
+            exited=self._worker_exited,
+            progress=self._progress,
         )
         self._stopping = False
         self._start_failures = 0
+
+    def _progress(self, process_id: int, progress: ProcessProgress) -> None:
+        if self.on_progress is not None:
+            self.on_progress(process_id, progress)
 
     async def start(self) -> None:
         """Start the warm workers and the fork server; wait until they have finished their imports.

@@ -46,6 +46,7 @@ from rosaos.processes.jobs import (
     WorkerJob,
     callback_idempotency_key,
 )
+from rosaos.processes.progress import RELAY
 from rosaos.processes.prompts import process_system_prompt, tool_prefix
 from rosaos.processes.recording import RecordingToolset
 from rosaos.processes.tool_calls import ToolCallLog, observed
@@ -209,7 +210,12 @@ async def _run_agent(job: WorkerJob, calls: ToolCallLog, receipts: list[Receipt]
 async def _connect(device: GrantedDevice, images: int | None = None) -> MCPToolset[Any]:
     """Open the device's MCP session up front, so a dead device is reported by name, not as a stack."""
     transport = StreamableHttpTransport(device.url, headers=image_headers(images), auth=device.token)
-    client: Client[Any] = Client(transport, name=f"rosaos-{device.name}", init_timeout=CONNECT_TIMEOUT)
+    client: Client[Any] = Client(
+        transport,
+        name=f"rosaos-{device.name}",
+        init_timeout=CONNECT_TIMEOUT,
+        progress_handler=RELAY.handler(device.name),  # long calls (a search) report how far they are
+    )
     # 'failed': a device error (bulb offline, value refused) goes back to the model as a failed
     # tool result it can read and report, instead of ending the whole run.
     toolset: MCPToolset[Any] = MCPToolset(client, id=device.name, tool_error_behavior="failed")
@@ -366,7 +372,11 @@ async def serve(protocol: ProtocolWriter) -> None:
             protocol.send({"event": "rejected", "error": f"not a valid WorkerJob: {invalid}"})
             continue
         log.info("process %d: starting %r with %d device(s)", job.process_id, job.task, len(job.devices))
-        callback = await _run_while_owned(job, reader)
+        RELAY.process_id = job.process_id
+        try:
+            callback = await _run_while_owned(job, reader)
+        finally:
+            RELAY.process_id = None
         if callback is None:
             return  # the kernel is gone: nobody owns this process any more
         delivered = await deliver_callback(job, callback)
@@ -391,6 +401,7 @@ def main() -> None:
     )
     logging.getLogger("rosaos").setLevel(os.environ.get("ROSAOS_WORKER_LOG", "INFO").upper())
     protocol = ProtocolWriter()
+    RELAY.sink = protocol
     with contextlib.suppress(KeyboardInterrupt):
         asyncio.run(serve(protocol))
 
