@@ -84,7 +84,6 @@ def render(x: float, y: float, yaw: float, people: Iterable[tuple[float, float]]
             half = FOCAL * PILLAR_WIDTH / 2 / thing.depth
             top, bottom = row_of(PILLAR_HEIGHT, thing.depth), row_of(0.0, thing.depth)
             draw.rectangle((thing.column - half, top, thing.column + half, bottom), fill=thing.colour)
-    draw.text((3, 2), f"x={x:.2f} y={y:.2f} yaw={math.degrees(yaw):.0f}", fill=(20, 20, 20))
     return image
 
 
