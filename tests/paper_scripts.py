@@ -119,7 +119,9 @@ def process_model() -> FunctionModel:
     """A process agent: the tool calls its task asks for, in order, then one sentence."""
 
     async def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
-        task = (info.instructions or "").lower()
+        # The task section of the system prompt only: device prompts mention other tools.
+        _, _, after = (info.instructions or "").partition("# Your task\n")
+        task = after.partition("\n\n#")[0].lower()
         if "search" in task:
             plan: list[tuple[str, dict[str, Any]]] = [("undock", {}), ("search", {"target": "person"})]
         elif "lamp green" in task:
