@@ -28,6 +28,7 @@ from rosaos_ros.deadman import DeadmanWatchdog
 from rosaos_ros.goals import FeedbackCallback, GoalTracker
 from rosaos_ros.messages import COMPRESSED_IMAGE, IMAGE, normalize_type, summarize, twist, twist_speeds
 from rosaos_ros.motion import MotionController, MotionResult
+from rosaos_ros.notices import Notify, RobotNotices
 from rosaos_ros.profiles import Profile
 from rosaos_ros.rosapi import Rosapi
 from rosaos_ros.safety import AccessPolicy, Refused, VelocityLimits
@@ -56,6 +57,7 @@ class RosBackend(DeviceBackend):
         profile: Profile,
         images_dir: Path,
         simulator: SimulatorThread | None = None,
+        notify: Notify | None = None,
     ) -> None:
         self.instance = instance
         self.settings = settings
@@ -83,6 +85,8 @@ class RosBackend(DeviceBackend):
         )
         self.bridge.on_disconnect(self.motion.abort)
         self.sightings = Sightings(settings.camera_fov)
+        self.notices = RobotNotices(instance, notify)
+        self.state.on_field = self.notices.field_changed
         self.last_image: str | None = None
         self.search_run: SearchRun | None = None
         """The running search, so the emergency stop can end it."""

@@ -80,6 +80,7 @@ class SearchRun:
                     break
                 found = await self._look_around(index)
                 if found is not None:
+                    self.backend.notices.person_seen(found)
                     return self._report(True, "found a person", found)
                 if self.elapsed >= self.max_seconds:
                     break

@@ -19,7 +19,6 @@ from rosaos.kernel.events import EventStore, IdempotencyKey, Source
 from rosaos.kernel.login import LoginCodes
 from rosaos.kernel.updates import Update, UpdateStream
 from rosaos.processes.jobs import WorkerCallback
-from rosaos.processes.progress import ProcessProgress
 
 
 class KernelRuntime(Protocol):
@@ -102,6 +101,18 @@ class Accepted(BaseModel):
     duplicate: bool = Field(description="True when the idempotency key was seen: id is the first event's.")
 
 
+class ProgressView(BaseModel):
+    """What a running process's device tool last reported: ``progress`` of ``total`` (if given)."""
+
+    model_config = ConfigDict(from_attributes=True)
+
+    device: str
+    progress: float
+    total: float | None = None
+    message: str = ""
+    at: datetime
+
+
 class ProcessView(BaseModel):
     """One process agent and the devices it holds (its leases)."""
 
@@ -114,8 +125,8 @@ class ProcessView(BaseModel):
     started_at: datetime | None = None
     ended_at: datetime | None = None
     worker_pid: int | None = None
-    progress: ProcessProgress | None = None
-    """How far its current long tool call is (a search), as the device last reported it."""
+    progress: ProgressView | None = None
+    """The latest progress of a long task (a robot's search), while it runs."""
 
 
 class DeviceView(BaseModel):

@@ -11,7 +11,6 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
-from pydantic import ValidationError
 from rich.console import Console
 from rich.table import Table
 
@@ -24,7 +23,6 @@ from rosaos.kernel.client import KernelClient, KernelUnavailable
 from rosaos.kernel.runtime import Kernel, KernelError
 from rosaos.models.select import ModelError
 from rosaos.plugins import load_drivers
-from rosaos.processes.progress import ProcessProgress
 
 EXIT_CONFIG = 2
 
@@ -145,6 +143,15 @@ def _client(config_path: Path | None, url: str | None) -> KernelClient:
     return KernelClient.from_config(load_config(config_path), url=url)
 
 
+def progress_text(progress: dict[str, Any] | None) -> str:
+    """A process's latest progress for ``rosaos ps``: "42% looked 3 of 8 ways ...", or ""."""
+    if not progress:
+        return ""
+    total = progress.get("total")
+    percent = f"{round(100 * progress['progress'] / total)}% " if total else ""
+    return f"{percent}{progress.get('message', '')}"[:70]
+
+
 def ps_command(config_path: Path | None, url: str | None, json_output: bool, all_processes: bool) -> int:
     """Print the kernel's processes."""
 
@@ -165,32 +172,20 @@ def ps_command(config_path: Path | None, url: str | None, json_output: bool, all
     if not processes:
         print("no running processes" if not all_processes else "no processes")
         return 0
-    with_progress = any(process.get("progress") for process in processes)
-    table = Table("id", "state", "devices", "age", *(["progress"] if with_progress else []), "task")
+    table = Table("id", "state", "devices", "age", "task", "progress")
     now = datetime.now(UTC)
     for process in processes:
         started = datetime.fromisoformat(process["started_at"])
-        progress = [progress_text(process.get("progress"))] if with_progress else []
         table.add_row(
             str(process["id"]),
             process["state"],
             ", ".join(process["devices"]),
             f"{(now - started).total_seconds():.0f}s",
-            *progress,
             process["task"].splitlines()[0][:60],
+            progress_text(process.get("progress")),
         )
     terminal().print(table)
     return 0
-
-
-def progress_text(progress: dict[str, Any] | None) -> str:
-    """A process's progress for the ``rosaos ps`` table: ``42% 3 of 8 views`` or ``-``."""
-    if not progress:
-        return "-"
-    try:
-        return ProcessProgress.model_validate(progress).line()[:40]
-    except ValidationError:
-        return "?"
 
 
 def estop_command(

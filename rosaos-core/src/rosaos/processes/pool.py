@@ -32,7 +32,6 @@ from typing import Any, Literal
 
 from rosaos.processes.forking import ForkServer, ForkServerError
 from rosaos.processes.jobs import WorkerCallback, WorkerJob
-from rosaos.processes.progress import ProcessProgress
 from rosaos.processes.watcher import OnEnded, Watcher, Worker, WorkerProcess, describe_exit
 
 log = logging.getLogger(__name__)
@@ -94,6 +93,8 @@ class WorkerPool:
         self.python = python
         self.on_ended = on_ended
         """Where job ends are reported; the process manager sets it."""
+        self.on_progress: Callable[[int, dict[str, Any]], None] | None = None
+        """Where a running job's progress lines go (``process_id``, the line); the manager sets it."""
         self.kill_grace = kill_grace
         self.start_timeout = start_timeout
         self._env = {**os.environ, **(env or {})}
@@ -102,8 +103,6 @@ class WorkerPool:
         self.fork_server = ForkServer(python, self._env) if fork_server else None
         self._workers: set[Worker] = set()
         self._spawning: set[asyncio.Task[Any]] = set()
-        self.on_progress: Callable[[int, ProcessProgress], None] | None = None
-        """Where a job's progress goes; the process manager sets it."""
         self._watcher = Watcher(
             self._report,
             ready=self._worker_ready,
@@ -113,10 +112,6 @@ class WorkerPool:
         )
         self._stopping = False
         self._start_failures = 0
-
-    def _progress(self, process_id: int, progress: ProcessProgress) -> None:
-        if self.on_progress is not None:
-            self.on_progress(process_id, progress)
 
     async def start(self) -> None:
         """Start the warm workers and the fork server; wait until they have finished their imports.
@@ -166,6 +161,10 @@ class WorkerPool:
             worker = await self._spawn(one_off=True, job=job)
         await self._send(worker, job)
         return JobHandle(job.process_id, worker.pid, worker.one_off)
+
+    def _progress(self, process_id: int, line: dict[str, Any]) -> None:
+        if self.on_progress is not None:
+            self.on_progress(process_id, line)
 
     async def terminate(self, process_id: int) -> bool:
         """Kill the worker running ``process_id`` and wait until its end is reported.

@@ -5,7 +5,6 @@ lines (see :mod:`rosaos.processes.worker`) and notices when it exits. That watch
 place a job's end is reported, so each job is reported exactly once, to the pool's ``on_ended``:
 
 - ``done`` line: the worker's own callback, and whether the worker delivered it to the kernel.
-- ``progress`` line: how far the job's current tool call is (:mod:`rosaos.processes.progress`).
 - the process exits mid-job: ``crashed`` (with its exit code or signal), unless the pool killed
   it on purpose: ``timeout`` (the job overran ``timeout + kill_grace``) or ``terminated``.
 
@@ -28,7 +27,6 @@ from typing import Any, Protocol
 from pydantic import ValidationError
 
 from rosaos.processes.jobs import ProcessStatus, WorkerCallback, WorkerJob
-from rosaos.processes.progress import ProcessProgress, progress_from_line
 
 log = logging.getLogger(__name__)
 
@@ -113,7 +111,7 @@ class Watcher:
         ready: Callable[[Worker], None],
         gone: Callable[[Worker], None],
         exited: Callable[[Worker, int], None],
-        progress: Callable[[int, ProcessProgress], None] | None = None,
+        progress: Callable[[int, dict[str, Any]], None] | None = None,
     ) -> None:
         self._report = report
         self._progress = progress
@@ -174,12 +172,10 @@ class Watcher:
             self._ready(worker)
         elif kind == "done":
             await self._on_done(worker, event)
-        elif (
-            kind == "progress" and worker.job is not None and event.get("process_id") == worker.job.process_id
-        ):
-            progress = progress_from_line(event)
-            if progress is not None and self._progress is not None:
-                self._progress(worker.job.process_id, progress)
+        elif kind == "progress" and self._progress is not None:
+            job = worker.job
+            if job is not None and event.get("process_id") == job.process_id:
+                self._progress(job.process_id, event)
         elif kind == "rejected" and worker.job is not None:
             job, worker.job = worker.job, None
             worker.cancel_deadline()
