@@ -72,6 +72,9 @@ async def test_the_paper_demonstration(kernel: Kernel) -> None:
     from paper_scripts import SEARCH_REQUEST, SECOND_REQUEST
 
     async with kernel_api(kernel) as api:
+        await eventually(
+            lambda: _all_healthy(api), timeout=120
+        )  # the ROS simulators take a while on a busy box
         assert (await api.post("/stt", json={"text": SEARCH_REQUEST})).status_code == 202
         search = await eventually(lambda: _process_on(api, "turtlebot"))
         assert search["devices"] == ["turtlebot"]  # the lamp is not held while the search runs
@@ -112,6 +115,10 @@ async def test_the_paper_demonstration(kernel: Kernel) -> None:
     dog_state = await device_state(kernel, "dog")
     assert dog_state["x"] > 0.1
     assert (await device_state(kernel, "spotify"))["track"] == "Here Comes the Sun"
+
+
+async def _all_healthy(api: httpx.AsyncClient) -> bool:
+    return all(device["status"] == "healthy" for device in (await api.get("/devices")).json())
 
 
 async def _process_on(api: httpx.AsyncClient, device: str) -> dict[str, Any] | None:
