@@ -160,7 +160,8 @@ class TimerBook:
         timer = await self.get(timer_id)
         if timer is None:
             raise KeyError(f"no timer {timer_id}")
-        raise TimerError(f"timer {timer_id} has already {timer.state}; nothing to cancel")
+        done = "has already fired" if timer.state == "fired" else "was already cancelled"
+        raise TimerError(f"timer {timer_id} {done}; nothing to cancel")
 
     async def fire_due(self, now: datetime | None = None) -> list[int]:
         """Queue a ``timer_fired`` event for every pending timer due by ``now``; return the event ids."""
