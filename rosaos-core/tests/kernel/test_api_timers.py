@@ -22,6 +22,9 @@ async def test_timers_are_listed_soonest_first_and_cancelled_by_id(
     assert cancelled.status_code == 200 and cancelled.json()["state"] == "cancelled"
     again = await client.delete(f"/timers/{sooner.id}", headers=AUTH)
     assert again.status_code == 409 and "already cancelled" in again.json()["detail"]
+    [notice] = [u for u in await runtime.updates.after(0) if u.kind == "notice"]
+    assert notice.text == f"timer {sooner.id} cancelled: turn off the kitchen light"
+    assert notice.data["timer"]["state"] == "cancelled"
     assert [t["id"] for t in (await client.get("/timers", headers=AUTH)).json()["timers"]] == [later.id]
     everything = (await client.get("/timers", params={"all": "true"}, headers=AUTH)).json()["timers"]
     assert [(t["id"], t["state"]) for t in everything] == [(later.id, "pending"), (sooner.id, "cancelled")]

@@ -112,3 +112,10 @@ async def test_a_fired_timer_launches_its_action_and_says_how_late(kernel: Timer
     plan = decode_plan(task)
     assert plan is not None and plan.steps[0].tool == "turn_off"
     assert reply.startswith(f"Timer {timer.id} (2 hours late")
+
+
+def test_prefer_local_takes_timer_sentences_it_understands_completely(model: LocalIntentModel) -> None:
+    assert model.handles_text("[User typed] turn off the kitchen light in ten minutes")
+    assert model.handles_text("[User said] what timers are set?")
+    assert not model.handles_text("[User typed] turn on the garage door in ten minutes")
+    assert not model.handles_text("[User typed] remind me about the oven at some point")

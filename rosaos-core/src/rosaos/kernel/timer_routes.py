@@ -32,8 +32,12 @@ async def list_timers(
 async def cancel_timer(timer_id: Annotated[int, FastPath(ge=1, le=SQLITE_MAX_ID)], runtime: Runtime) -> Timer:
     """Cancel a pending timer so it never fires; 409 if it has already fired or been cancelled."""
     try:
-        return await runtime.timers.cancel(timer_id)
+        timer = await runtime.timers.cancel(timer_id)
     except KeyError:
         raise HTTPException(404, f"no timer {timer_id}; GET /timers lists them") from None
     except TimerError as settled:
         raise HTTPException(409, str(settled)) from None
+    # Other pages and the CLI chat follow the updates stream: tell them, as the kernel would.
+    data = {"timer": timer.model_dump(mode="json")}
+    await runtime.updates.publish("notice", f"timer {timer.id} cancelled: {timer.action}", data)
+    return timer
