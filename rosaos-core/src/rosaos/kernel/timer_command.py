@@ -1,21 +1,39 @@
-"""``rosaos ps --timers`` and ``rosaos kill --timer ID``: the running kernel's timers from the shell."""
+"""``rosaos ps --timers`` and ``rosaos kill --timer ID``: the kernel's timers from the shell.
+
+They ask the running kernel of the data directory (``GET /timers``, ``DELETE /timers/{id}``),
+else read and change the data directory's event store directly: the timers of a stopped
+kernel fire when it starts again, so they stay listable and cancellable meanwhile.
+"""
 
 from __future__ import annotations
 
 import asyncio
 import json
 import sys
-from datetime import datetime
+from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
 from rich.table import Table
 
-from rosaos.config import ConfigError
+from rosaos.config import ConfigError, load_config
 from rosaos.frontends.console import console as terminal
-from rosaos.kernel.client import KernelUnavailable
-from rosaos.kernel.commands import EXIT_CONFIG, _client
+from rosaos.kernel.activity_command import EVENTS_FILE
+from rosaos.kernel.client import KernelClient, KernelUnavailable, running_kernel_url
+from rosaos.kernel.commands import EXIT_CONFIG
+from rosaos.kernel.events import EventStore
 from rosaos.kernel.timer_text import clock_text, duration_text
+from rosaos.kernel.timers import TimerBook, TimerError
+
+
+async def _stored_book(path: Path) -> tuple[EventStore, TimerBook]:
+    """The timers of a data directory whose kernel is not running."""
+    if not await asyncio.to_thread(path.is_file):
+        raise FileNotFoundError(
+            f"no kernel is running and there is no event store at {path}; start `rosaos up`"
+        )
+    store = await EventStore.open(path)
+    return store, await TimerBook.open(store)
 
 
 def timers_command(
@@ -24,14 +42,22 @@ def timers_command(
     """Print the pending timers (with ``include_settled``, recent fired and cancelled ones too)."""
 
     async def run() -> dict[str, Any]:
-        async with _client(config_path, url) as client:
+        config = load_config(config_path)
+        if url is None and running_kernel_url(config.data_dir) is None:
+            store, book = await _stored_book(config.data_dir / EVENTS_FILE)
+            try:
+                timers = [timer.model_dump(mode="json") for timer in await book.list_timers(include_settled)]
+            finally:
+                await store.close()
+            return {"timers": timers, "now": datetime.now(UTC).isoformat()}
+        async with KernelClient.from_config(config, url=url) as client:
             params = {"all": "true"} if include_settled else {}
             result: dict[str, Any] = await client.request("GET", "/timers", params=params)
             return result
 
     try:
         listing = asyncio.run(run())
-    except (KernelUnavailable, ConfigError) as error:
+    except (KernelUnavailable, ConfigError, FileNotFoundError) as error:
         print(f"rosaos ps --timers: {error}", file=sys.stderr)
         return EXIT_CONFIG
     if json_output:
@@ -61,13 +87,22 @@ def cancel_timer_command(config_path: Path | None, url: str | None, timer_id: in
     """Cancel one pending timer so it never fires."""
 
     async def run() -> dict[str, Any]:
-        async with _client(config_path, url) as client:
+        config = load_config(config_path)
+        if url is None and running_kernel_url(config.data_dir) is None:
+            store, book = await _stored_book(config.data_dir / EVENTS_FILE)
+            try:
+                return (await book.cancel(timer_id)).model_dump(mode="json")
+            except KeyError:
+                raise TimerError(f"no timer {timer_id}; `rosaos ps --timers` lists them") from None
+            finally:
+                await store.close()
+        async with KernelClient.from_config(config, url=url) as client:
             result: dict[str, Any] = await client.request("DELETE", f"/timers/{timer_id}")
             return result
 
     try:
         timer = asyncio.run(run())
-    except (KernelUnavailable, ConfigError) as error:
+    except (KernelUnavailable, ConfigError, FileNotFoundError, TimerError) as error:
         print(f"rosaos kill --timer: {error}", file=sys.stderr)
         return EXIT_CONFIG
     if json_output:
