@@ -88,6 +88,9 @@ def test_what_is_not_a_clock_time(text: str) -> None:
         ),
         ("turn on the light tomorrow at 7 am", SetTimer("turn on the light", at="2026-11-26T07:00")),
         ("stop the music at 11", SetTimer("stop the music", at="23:00", weak=True)),
+        ("stop the music at 11pm tonight", SetTimer("stop the music", at="23:00")),
+        ("turn off the fan in 10 minutes from now", SetTimer("turn off the fan", in_seconds=600)),
+        ("at 7.30pm, turn on the porch light", SetTimer("turn on the porch light", at="19:30")),
     ],
 )
 def test_setting(text: str, expected: SetTimer) -> None:

@@ -200,7 +200,8 @@ def _timing(phrase: str, now: datetime) -> SetTimer | None:
     if not words:
         return None
     if words[0] in ("in", "after"):
-        seconds = parse_duration(" ".join(words[1:]))
+        rest = " ".join(words[1:]).removesuffix(" from now").removesuffix(" time")
+        seconds = parse_duration(rest)
         return None if seconds is None else SetTimer("", in_seconds=seconds)
     tomorrow = words[0] == "tomorrow"
     if tomorrow:
@@ -296,11 +297,13 @@ def parse_clock(text: str, now: datetime) -> tuple[str, bool] | None:
     """``11 pm`` → ``("23:00", False)``; a bare ``11`` → the sooner of 11:00 and 23:00, weak."""
     text = f" {text.strip()} "
     meridiem = None
-    for marker in _PM_MARKERS + _AM_MARKERS:
-        if text.endswith(f" {marker} "):
-            meridiem = "pm" if marker in _PM_MARKERS else "am"
-            text = text[: -len(marker) - 1]
-            break
+    stripped = True
+    while stripped:  # "11 pm tonight": both markers go
+        stripped = False
+        for marker in _PM_MARKERS + _AM_MARKERS:
+            if text.endswith(f" {marker} ") and text.strip() != marker:
+                meridiem = "pm" if marker in _PM_MARKERS else "am"
+                text, stripped = text[: -len(marker) - 1], True
     words = text.replace("oclock", " oclock ").split()
     marked = meridiem is not None or "oclock" in words
     words = [word for word in words if word != "oclock"]
