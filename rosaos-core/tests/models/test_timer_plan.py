@@ -103,6 +103,12 @@ async def test_a_timer_for_an_unknown_device_is_refused_with_the_reason(kernel: 
     assert await kernel.book.pending() == []
 
 
+async def test_an_ambiguous_timer_asks_for_the_whole_timer_again(kernel: TimerKernel) -> None:
+    reply = await kernel.say("[User typed] turn off the light in ten minutes")
+    assert reply.startswith("Which one do you mean:") and reply.endswith("say the timer again with the name.")
+    assert await kernel.book.pending() == []
+
+
 async def test_a_fired_timer_launches_its_action_and_says_how_late(kernel: TimerKernel) -> None:
     timer = await kernel.book.set("turn off the kitchen light", datetime.now(UTC) - timedelta(hours=2))
     event = fired_event(timer, datetime.now(UTC))

@@ -104,6 +104,8 @@ def _set(request: SetTimer, said: str, tools: Sequence[str], match: Match) -> li
             )
         ]
     understood = match(request.action)
+    if understood.kind == "clarify":  # a bare answer would not carry the timer: ask for all of it
+        return [TextPart(f"{understood.reply} Please say the timer again with the name.")]
     if not understood.is_exact:
         return [TextPart(f"I can't set a timer for that: {understood.reply}")]
     timing: dict[str, Any] = {"in_seconds": request.in_seconds} if request.in_seconds else {"at": request.at}
