@@ -43,7 +43,8 @@ _PM_MARKERS = (
     "at night",
 )
 _AM_MARKERS = ("am", "in the morning", "this morning")
-_TIMER_WORD = r"\b(?:timers?|alarms?|reminders?)\b"
+# Not "alarm": "is the alarm on?" is a question for a security device, not about timers.
+_TIMER_WORD = r"\b(?:timers?|reminders?)\b"
 _LIST = re.compile(
     rf"^(?:what|which|any|are|is|list|show|tell|how|do|give|check)\b.*{_TIMER_WORD}|^{_TIMER_WORD}$"
 )
