@@ -130,6 +130,8 @@ def test_cancelling(text: str, expected: CancelTimer) -> None:
 @pytest.mark.parametrize(
     "text",
     [
+        "is the alarm on?",
+        "cancel the alarm",
         "turn on the light in the kitchen",
         "play music in the living room",
         "turn off the kitchen light",
