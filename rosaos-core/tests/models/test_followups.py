@@ -131,7 +131,7 @@ async def test_a_failed_callback_launches_nothing_and_says_so(model: LocalIntent
     )
     assert len(kernel.launched) == 1
     assert "offline" in reply
-    assert reply.endswith("So I did not turn off the bedroom light.")
+    assert reply.endswith("offline. So I did not turn off the bedroom light.")
 
 
 async def test_an_unmet_condition_launches_nothing(model: LocalIntentModel) -> None:

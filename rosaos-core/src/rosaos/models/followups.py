@@ -140,7 +140,9 @@ def callback_response(
     follow_up = plan.then
     output = (callback.output or "").strip()
     if callback.status != "ok":
-        return [TextPart(f"{failure_reply} So I did not {follow_up.summary}.")]
+        said = failure_reply.strip()
+        said += "" if said.endswith((".", "!", "?")) else "."
+        return [TextPart(f"{said} So I did not {follow_up.summary}.")]
     if follow_up.unmet and output == follow_up.unmet:
         return [TextPart(output)]
     if launch is None:
