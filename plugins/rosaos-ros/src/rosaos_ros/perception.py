@@ -2,7 +2,7 @@
 
 Two detectors read the pixels, and their boxes are merged:
 
-- OpenCV's HOG pedestrian detector (``HOGDescriptor_getDefaultPeopleDetector``, a linear SVM
+- OpenCV's HOG pedestrian detector (``HOGDescriptor.getDefaultPeopleDetector``, a linear SVM
   on histograms of oriented gradients, trained on whole standing people). It finds people from
   about 1.5 m to 6 m in a 320x240 frame.
 - The frontal-face Haar cascade (``cv2.data.haarcascades``), which still finds a face turned to
@@ -72,7 +72,7 @@ class Placement:
 @cache
 def _hog() -> cv2.HOGDescriptor:
     hog = cv2.HOGDescriptor()
-    hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+    hog.setSVMDetector(np.array(cv2.HOGDescriptor.getDefaultPeopleDetector(), dtype=np.float32))
     return hog
 
 
