@@ -31,7 +31,7 @@ from PIL.Image import Image as PILImage
 
 WORK_WIDTH = 640
 """Pixels: every frame is scaled to this width before detection."""
-HOG_MIN_SCORE = 0.7
+HOG_MIN_SCORE = 1.0
 """SVM margin below which a HOG window is not a person (weak hits come from edges and text)."""
 OVERLAP = 0.3
 """Boxes overlapping more than this (intersection over union) are one person."""
@@ -52,7 +52,7 @@ class PersonBox:
     width: int
     height: int
     score: float
-    """HOG: the SVM margin (above 0.7; 2 or more is sure); face: the cascade's neighbour count."""
+    """HOG: the SVM margin (above 1; 2 or more is sure); face: the cascade's neighbour count."""
     method: str
     """``body`` (HOG) or ``face`` (Haar cascade)."""
 
