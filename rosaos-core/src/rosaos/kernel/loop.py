@@ -21,6 +21,7 @@ from pydantic_ai.usage import UsageLimits
 from rosaos.kernel.agent import trim_history
 from rosaos.kernel.events import Event, EventStore
 from rosaos.kernel.notice_text import render_notice
+from rosaos.kernel.timer_text import render_timer_fired
 from rosaos.kernel.updates import UpdateKind, UpdateStream
 from rosaos.receipts import receipts_text
 
@@ -55,6 +56,8 @@ def render_event(event: Event) -> str:
             return render_notice(payload)
         case "error":
             return f"[Error] {payload.message}"
+        case "timer_fired":
+            return render_timer_fired(payload)
     return f"[{event.kind}] {payload}"
 
 
