@@ -46,7 +46,7 @@ VISION_MODEL_HINT = (
 @cache
 def _hog() -> cv2.HOGDescriptor:
     hog = cv2.HOGDescriptor()
-    hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+    hog.setSVMDetector(np.array(cv2.HOGDescriptor.getDefaultPeopleDetector(), dtype=np.float32))
     return hog
 
 
@@ -56,7 +56,7 @@ def count_people(image: np.ndarray[Any, Any]) -> int:
     frame = cv2.resize(image, None, fx=scale, fy=scale) if scale != 1 else image
     rects, weights = _hog().detectMultiScale(frame, winStride=(8, 8), scale=1.05)
     boxes = [
-        tuple(int(v) for v in rect) for rect, w in zip(rects, np.ravel(weights), strict=True) if w >= 0.7
+        tuple(int(v) for v in rect) for rect, w in zip(rects, np.ravel(weights), strict=True) if w >= 1.0
     ]
     if not boxes:
         return 0

@@ -2,7 +2,7 @@
 
 Two detectors read the pixels, and their boxes are merged:
 
-- OpenCV's HOG pedestrian detector (``HOGDescriptor_getDefaultPeopleDetector``, a linear SVM
+- OpenCV's HOG pedestrian detector (``HOGDescriptor.getDefaultPeopleDetector``, a linear SVM
   on histograms of oriented gradients, trained on whole standing people). It finds people from
   about 1.5 m to 6 m in a 320x240 frame.
 - The frontal-face Haar cascade (``cv2.data.haarcascades``), which still finds a face turned to
@@ -31,7 +31,7 @@ from PIL.Image import Image as PILImage
 
 WORK_WIDTH = 640
 """Pixels: every frame is scaled to this width before detection."""
-HOG_MIN_SCORE = 0.7
+HOG_MIN_SCORE = 1.0
 """SVM margin below which a HOG window is not a person (weak hits come from edges and text)."""
 OVERLAP = 0.3
 """Boxes overlapping more than this (intersection over union) are one person."""
@@ -52,7 +52,7 @@ class PersonBox:
     width: int
     height: int
     score: float
-    """HOG: the SVM margin (above 0.7; 2 or more is sure); face: the cascade's neighbour count."""
+    """HOG: the SVM margin (above 1; 2 or more is sure); face: the cascade's neighbour count."""
     method: str
     """``body`` (HOG) or ``face`` (Haar cascade)."""
 
@@ -72,7 +72,7 @@ class Placement:
 @cache
 def _hog() -> cv2.HOGDescriptor:
     hog = cv2.HOGDescriptor()
-    hog.setSVMDetector(cv2.HOGDescriptor_getDefaultPeopleDetector())
+    hog.setSVMDetector(np.array(cv2.HOGDescriptor.getDefaultPeopleDetector(), dtype=np.float32))
     return hog
 
 
