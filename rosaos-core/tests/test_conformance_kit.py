@@ -24,10 +24,10 @@ from pathlib import Path
 from typing import Annotated, Any
 
 from fastmcp import FastMCP
-from pydantic import Field
+from pydantic import BaseModel, Field
 
 from rosaos import hookimpl
-from rosaos.drivers import DeviceBackend, DeviceError, DeviceSettings, DemoInstance, DriverSpec
+from rosaos.drivers import DeviceBackend, DeviceError, DeviceSettings, DemoInstance, DriverSpec, NoticeSpec
 from rosaos.testing import DriverConformance
 
 
@@ -75,6 +75,13 @@ def sloppy_server(ctx, backend):
     return mcp
 
 
+class Heat(BaseModel):
+    celsius: float
+
+
+BROKEN_NOTICES = {"overheated": NoticeSpec(description="Too hot", data=Heat, example={"celsius": "very"})}
+
+
 def spec(**overrides):
     fields = dict(
         name="fake", title="Fake", description="A fake device.", concurrency="exclusive",
@@ -103,7 +110,7 @@ ASKING_INTENTS.write_text(
 @hookimpl
 def register_drivers(register):
     register(spec())
-    register(spec(name="sloppy", server=sloppy_server))
+    register(spec(name="sloppy", server=sloppy_server, notices=BROKEN_NOTICES))
     register(spec(name="placeholder", implemented=False))
     register(spec(name="asks", intents=ASKING_INTENTS))
 
@@ -205,7 +212,7 @@ INTENTS_SKIPPED = {"test_intents_file_parses": "skipped", "test_intents_name_exi
 
 
 def test_a_good_driver_passes_every_check_that_applies(report: Report) -> None:
-    assert len(report["TestGood"]) == 18
+    assert len(report["TestGood"]) == 20
     assert not_passed(report, "TestGood") == INTENTS_SKIPPED
     assert "the driver ships no intents file" in report["TestGood"]["test_intents_file_parses"].message
 
@@ -219,6 +226,7 @@ def test_each_defect_of_a_sloppy_driver_fails_its_own_check(report: Report) -> N
         "test_get_state_is_read_only",
         "test_get_state_returns_a_json_object",
         "test_out_of_range_argument_is_a_tool_error",
+        "test_declared_notices_validate",
     }
 
 
@@ -232,6 +240,11 @@ def test_failure_messages_name_the_tool_and_the_fix(report: Report) -> None:
         "set_level({'level': 101}) was accepted"
         in sloppy["test_out_of_range_argument_is_a_tool_error"].message
     )
+
+
+def test_a_notice_whose_example_breaks_its_model_fails(report: Report) -> None:
+    message = report["TestSloppy"]["test_declared_notices_validate"].message
+    assert "notice 'overheated': its example does not validate" in message
 
 
 def test_a_question_intent_that_calls_an_acting_tool_fails(report: Report) -> None:
@@ -261,6 +274,7 @@ def test_a_placeholder_driver_runs_the_declaration_checks_and_skips_the_server_o
         "test_concurrency_is_declared",
         "test_sim_backend_exists",
         "test_settings_do_not_shadow_instance_keys",
+        "test_declared_notices_validate",
     }
     assert (
         "driver not implemented yet: placeholder is a placeholder"

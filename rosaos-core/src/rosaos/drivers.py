@@ -24,6 +24,13 @@ from typing import Any, Literal
 from fastmcp import FastMCP
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+# Re-exported: notices are part of the driver contract.
+from rosaos.device_notices import Notice as Notice
+from rosaos.device_notices import NoticeBoard as NoticeBoard
+from rosaos.device_notices import NoticeError as NoticeError
+from rosaos.device_notices import NoticeImportance as NoticeImportance
+from rosaos.device_notices import NoticeSpec as NoticeSpec
+
 Concurrency = Literal["exclusive", "shared"]
 """How many live processes may hold one instance: ``exclusive`` means one, ``shared`` any."""
 
@@ -78,10 +85,31 @@ class DeviceContext:
     data_dir: Path = Path(".")
     """The rosaOS data directory; per-driver caches go in ``data_dir / "drivers" / <driver>``."""
 
+    notices: NoticeBoard = field(default_factory=NoticeBoard, compare=False, repr=False)
+    """Where :meth:`notify` posts; the hosting layer serves it to the kernel at ``GET /notices``."""
+
     @property
     def images_dir(self) -> Path:
         """Shared directory for images (camera captures) that tools return by relative path."""
         return self.data_dir / "images"
+
+    def notify(
+        self,
+        name: str,
+        data: Mapping[str, Any] | None = None,
+        *,
+        message: str | None = None,
+        importance: NoticeImportance | None = None,
+    ) -> Notice:
+        """Tell the kernel something happened on this device: it becomes a ``[Device notice]`` event.
+
+        ``name`` must be declared in ``DriverSpec.notices`` and ``data`` must validate against
+        its model (else :class:`NoticeError`). ``message`` is one sentence a person can hear
+        (default "<instance>: <name>"); ``importance`` overrides the declared default. Safe to
+        call from any thread; returns at once (the kernel fetches notices, rate-limited and
+        deduplicated).
+        """
+        return self.notices.post(name, data, message=message, importance=importance)
 
 
 BackendFactory = Callable[[DeviceContext], DeviceBackend]
@@ -135,6 +163,9 @@ class DriverSpec(BaseModel):
     """Instances this driver adds to the demo world; defaults to one instance named after it."""
     implemented: bool = True
     """False for a placeholder driver: listed, never served. Not an error."""
+    notices: Mapping[str, NoticeSpec] = Field(default_factory=dict)
+    """The notices this driver may post with :meth:`DeviceContext.notify`, by name
+    (``battery_low``, ``docked``, ``person_seen``). The conformance kit validates them."""
     login: Callable[[DeviceContext], int] | None = None
     """Interactive account login for ``rosaos devices login NAME`` (cloud services such as Spotify):
     called with the instance's context, talks to the user on stdin/stdout, keeps what it obtains

@@ -79,6 +79,9 @@ class TapoBackend(DeviceBackend):
         self._connect = connect
         self._device: Device | None = None
         self._lock = asyncio.Lock()
+        self.notify: Callable[..., object] | None = None
+        """``DeviceContext.notify``: set by the plugin, so losing the bulb and finding it again are notices."""
+        self._unreachable = False
 
     @classmethod
     def real(
@@ -253,8 +256,25 @@ class TapoBackend(DeviceBackend):
                         await command()
                     await self.device.update()
             except (KasaException, TimeoutError) as error:
-                raise device_error(error, self.host, self.instance, self.timeout) from None
+                failure = device_error(error, self.host, self.instance, self.timeout)
+                if isinstance(error, TimeoutError | _ConnectionError):
+                    self._reachability(False, str(failure))
+                raise failure from None
+            self._reachability(True, "")
             return self._snapshot()
+
+    def _reachability(self, reachable: bool, reason: str) -> None:
+        """Post ``unreachable`` when the bulb stops answering, ``reachable`` when it answers again."""
+        if reachable == (not self._unreachable):
+            return
+        self._unreachable = not reachable
+        if self.notify is not None:
+            if reachable:
+                self.notify("reachable", None, message=f"{self.instance} answers again")
+            else:
+                self.notify(
+                    "unreachable", {"error": reason[:300]}, message=f"{self.instance} is not answering"
+                )
 
     def _snapshot(self) -> BulbState:
         device, light = self.device, self.light

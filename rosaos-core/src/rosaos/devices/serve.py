@@ -21,11 +21,13 @@ from fastmcp import FastMCP
 from starlette.types import ASGIApp
 
 from rosaos.auth import BearerAuthMiddleware, HostOriginGuard, bound_hosts
+from rosaos.device_notices import NoticeBoard, notice_endpoint
 from rosaos.devices.world import DeviceInstance
 from rosaos.drivers import DeviceBackend, DeviceError
 
 MCP_PATH = "/mcp"
 HEALTH_PATH = "/health"
+NOTICES_PATH = "/notices"
 
 
 @dataclass
@@ -57,6 +59,7 @@ async def open_device(instance: DeviceInstance, data_dir: Path) -> AsyncIterator
         # Tool arguments are typed at the boundary: `true` is not a brightness, "50" is not 50.
         server.strict_input_validation = True
         _add_safe_stop(server, instance, backend)
+        add_notice_route(server, ctx.notices)
         yield OpenDevice(instance, backend, server)
     finally:
         await backend.close()
@@ -76,6 +79,12 @@ def _add_safe_stop(server: FastMCP, instance: DeviceInstance, backend: DeviceBac
         name="safe_stop",
         annotations={"readOnlyHint": False, "destructiveHint": False, "idempotentHint": True},
     )
+
+
+def add_notice_route(server: FastMCP, board: NoticeBoard) -> None:
+    """Every device server gets ``GET /notices`` (behind its token): the kernel long-polls it for the
+    notices the driver posts with ``ctx.notify`` (:mod:`rosaos.device_notices`)."""
+    server.custom_route(NOTICES_PATH, methods=["GET"])(notice_endpoint(board))
 
 
 def device_http_app(server: FastMCP, token: str, allowed_hosts: Iterable[str] = ()) -> ASGIApp:

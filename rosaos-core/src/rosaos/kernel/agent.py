@@ -34,6 +34,10 @@ is ambiguous (which light?) or names a device that does not exist, ask or refuse
 devices that exist; never actuate on a guess. Answer questions you can answer from a callback
 without launching anything. Keep replies short: they may be spoken aloud.
 
+A [Device notice] with importance=notify is something the user should hear: launch one short
+process on the always-attached device to say it with its speak tool. With importance=info, reply
+with nothing unless it changes something you are doing (a process waiting on that device).
+
 Devices:
 {devices}
 """

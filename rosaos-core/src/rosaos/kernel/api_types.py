@@ -106,6 +106,18 @@ class Accepted(BaseModel):
     duplicate: bool = Field(description="True when the idempotency key was seen: id is the first event's.")
 
 
+class ProgressView(BaseModel):
+    """What a running process's device tool last reported: ``progress`` of ``total`` (if given)."""
+
+    model_config = ConfigDict(from_attributes=True)
+
+    device: str
+    progress: float
+    total: float | None = None
+    message: str = ""
+    at: datetime
+
+
 class ProcessView(BaseModel):
     """One process agent and the devices it holds (its leases)."""
 
@@ -118,6 +130,8 @@ class ProcessView(BaseModel):
     started_at: datetime | None = None
     ended_at: datetime | None = None
     worker_pid: int | None = None
+    progress: ProgressView | None = None
+    """The latest progress of a long task (a robot's search), while it runs."""
 
 
 class DeviceView(BaseModel):

@@ -60,6 +60,12 @@ class DeviceNotice(BaseModel):
     message: str = Field(min_length=1, max_length=4000)
     data: dict[str, Any] = Field(default_factory=dict)
     """Any JSON, nested at most :data:`MAX_DATA_DEPTH` levels (deeper breaks JSON encoders)."""
+    name: str | None = Field(default=None, pattern=r"^[a-z][a-z0-9_]{0,63}$")
+    """What happened, as the driver declares it (``battery_low``, ``person_seen``); see
+    :mod:`rosaos.device_notices`. None for a free-form notice posted by hand."""
+    driver: str | None = Field(default=None, max_length=100)
+    importance: Literal["info", "notify"] = "info"
+    """``notify``: the kernel tells the user; ``info``: it notes it and stays quiet."""
 
     @field_validator("data")
     @classmethod

@@ -39,9 +39,10 @@ from rosaos.kernel.client import kernel_file, running_kernel_url
 from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people
 from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
 from rosaos.kernel.device_status import DeviceStatusUpdates
-from rosaos.kernel.events import Event, EventStore, StoreClosedError, WorkerCallbackEvent
+from rosaos.kernel.events import DeviceNoticeEvent, Event, EventStore, StoreClosedError, WorkerCallbackEvent
 from rosaos.kernel.login import LoginCodes, login_url
 from rosaos.kernel.loop import KernelLoop
+from rosaos.kernel.notices import NoticeWatcher
 from rosaos.kernel.orphans import LiveProcesses, recover_orphans
 from rosaos.kernel.timer_tools import add_timer_tools
 from rosaos.kernel.timers import TimerBook
@@ -326,6 +327,8 @@ class Kernel:
                 raise KernelError("the kernel API stopped during start-up")
             await asyncio.sleep(0.01)
         self._tasks.append(asyncio.create_task(self.states.run(), name="device states"))
+        self.notices = NoticeWatcher(self.endpoints, self._enqueue_notice)
+        self._tasks.append(asyncio.create_task(self.notices.run(), name="device notices"))
         self._tasks.append(asyncio.create_task(self._run_loop(), name="kernel loop"))
         # Timers that fell due while the kernel was down fire now, once, and say they are late.
         self._tasks.append(asyncio.create_task(self.timers.run(), name="timers"))
@@ -385,6 +388,12 @@ class Kernel:
         """A callback the kernel wrote itself (for an orphan): on the updates stream, then recorded."""
         await self._updates.publish_event(event_id, event)
         await self.worker_callback_recorded(event_id, event.payload)
+
+    async def _enqueue_notice(self, event: DeviceNoticeEvent) -> None:
+        """A device notice the filter let through: into the queue, and onto the updates stream."""
+        appended = await self._store.append(event)
+        if not appended.duplicate:
+            await self._updates.publish_event(appended.id, event)
 
     async def _launched(self, info: ProcessInfo) -> None:
         """Keep ids unique across restarts, and remember the process until its end is recorded."""

@@ -12,7 +12,9 @@ handled (see :func:`rosaos.kernel.loop.render_event`) and answers:
   kitchen light."), or the refusal (an exclusive device held by another process) passed on.
 - ``[Worker callback]``: the process's output (its plan made it a user-facing sentence), or an
   apology with the error. No new process.
-- ``[Device notice]`` / ``[Error]``: acknowledged in one sentence.
+- ``[Device notice]``: ``notify`` ones are said through the Reachy Mini (one process that calls its
+  ``speak``); ``info`` ones get no reply (:mod:`rosaos.models.notice_plan`).
+- ``[Error]``: acknowledged in one sentence.
 - timers ("… in ten minutes", "what timers are set?", "cancel that timer") and ``[Timer fired]``:
   :mod:`rosaos.models.timer_plan`, asked first.
 """
@@ -44,6 +46,7 @@ from rosaos.models.conversation import (
     user_text,
 )
 from rosaos.models.matching import IntentMatcher, MatchResult
+from rosaos.models.notice_plan import SILENCE, notice_response
 from rosaos.models.phrases import phrase
 from rosaos.models.plan import PlanError, decode_plan, has_plan
 from rosaos.models.sources import DeviceIntentSource
@@ -62,10 +65,14 @@ class LocalIntentModel(Model):
     ``language`` is ``[models] language``. The hassil grammars are built here, once.
     """
 
-    def __init__(self, devices: Sequence[DeviceIntentSource], language: str = "en") -> None:
+    def __init__(
+        self, devices: Sequence[DeviceIntentSource], language: str = "en", speaker: str | None = None
+    ) -> None:
         super().__init__()
         self.language = language
         self.matcher = IntentMatcher(devices, language)
+        self.speaker = speaker
+        """The always-attached device that speaks to the user (the Reachy Mini), if any."""
 
     @property
     def model_name(self) -> str:
@@ -133,7 +140,7 @@ class LocalIntentModel(Model):
         if event.tag == CALLBACK_TAG:
             return [TextPart(self._callback_reply(event.body))]
         if event.tag == "Device notice":
-            return [TextPart(phrase(self.language, "device_notice", message=event.body))]
+            return notice_response(event.body, self.speaker, _launch_tool(tools))
         return [TextPart(phrase(self.language, "error", message=event.body))]
 
     def _open_question(self, messages: Sequence[ModelMessage]) -> str | None:
@@ -161,9 +168,7 @@ class LocalIntentModel(Model):
         result = answered or self.match(text)
         if not result.is_exact:
             return [TextPart(result.reply)]
-        launch = next((name for name in tools if name == LAUNCH_TOOL), None) or next(
-            (name for name in tools if name.endswith(LAUNCH_TOOL)), None
-        )
+        launch = _launch_tool(tools)
         if launch is None:  # misconfigured agent: say so rather than pretend
             return [
                 TextPart(
@@ -195,6 +200,8 @@ class LocalIntentModel(Model):
     def _callback_reply(self, body: str) -> str:
         callback = parse_callback(body)
         if callback.status == "ok":
+            if _quiet(callback.task):
+                return SILENCE
             output = (callback.output or "").strip()
             return output if output and output != NO_OUTPUT else phrase(self.language, "callback_done")
         error = callback.error or callback.output or callback.status
@@ -205,6 +212,21 @@ class LocalIntentModel(Model):
         if plan is not None:
             return plan.failure.replace("{error}", error)
         return phrase(self.language, "callback_failed", status=callback.status, error=error)
+
+
+def _quiet(task: str | None) -> bool:
+    """Whether the callback's plan asks for no reply (it only told the user something)."""
+    try:
+        plan = decode_plan(task or "")
+    except PlanError:
+        return False
+    return plan is not None and plan.quiet
+
+
+def _launch_tool(tools: Sequence[str]) -> str | None:
+    return next((name for name in tools if name == LAUNCH_TOOL), None) or next(
+        (name for name in tools if name.endswith(LAUNCH_TOOL)), None
+    )
 
 
 def _first_request(messages: Sequence[ModelMessage]) -> ModelRequest | None:

@@ -74,6 +74,8 @@ class Plan(BaseModel):
     fills_state: bool = False
     """Whether ``{key}`` placeholders in the reply (or answer) name keys of the last step's
     result, to fill in ("Playing {track} by {artist}."): a driver's question template."""
+    quiet: bool = False
+    """The kernel says nothing when this process succeeds (it only told the user something)."""
 
     @property
     def devices(self) -> list[str]:

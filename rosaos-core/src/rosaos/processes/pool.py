@@ -25,7 +25,7 @@ import logging
 import os
 import signal
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -93,6 +93,8 @@ class WorkerPool:
         self.python = python
         self.on_ended = on_ended
         """Where job ends are reported; the process manager sets it."""
+        self.on_progress: Callable[[int, dict[str, Any]], None] | None = None
+        """Where a running job's progress lines go (``process_id``, the line); the manager sets it."""
         self.kill_grace = kill_grace
         self.start_timeout = start_timeout
         self._env = {**os.environ, **(env or {})}
@@ -102,7 +104,11 @@ class WorkerPool:
         self._workers: set[Worker] = set()
         self._spawning: set[asyncio.Task[Any]] = set()
         self._watcher = Watcher(
-            self._report, ready=self._worker_ready, gone=self._workers.discard, exited=self._worker_exited
+            self._report,
+            ready=self._worker_ready,
+            gone=self._workers.discard,
+            exited=self._worker_exited,
+            progress=self._progress,
         )
         self._stopping = False
         self._start_failures = 0
@@ -155,6 +161,10 @@ class WorkerPool:
             worker = await self._spawn(one_off=True, job=job)
         await self._send(worker, job)
         return JobHandle(job.process_id, worker.pid, worker.one_off)
+
+    def _progress(self, process_id: int, line: dict[str, Any]) -> None:
+        if self.on_progress is not None:
+            self.on_progress(process_id, line)
 
     async def terminate(self, process_id: int) -> bool:
         """Kill the worker running ``process_id`` and wait until its end is reported.

@@ -29,8 +29,10 @@ import mcp_types
 import pytest
 
 from rosaos.config import DeviceConfig
+from rosaos.device_notices import NoticeBatch, check_notice_specs
 from rosaos.devices.world import DeviceInstance
 from rosaos.drivers import DriverSpec
+from rosaos.kernel.notices import notices_url
 from rosaos.models.intents_file import IntentsFile, IntentsFileError, load_intents_file
 from rosaos.plugins import DriverInfo, DriverRegistry
 from rosaos.testing.device_runner import RunningDevice, build_instance, load_all_drivers, run_device
@@ -177,6 +179,24 @@ class DriverConformance:
         """The intents file parses with hassil, and every intent names a tool."""
         intents = _intents_file(rosaos_driver.spec)
         assert intents.actions, f"{intents.path}: declares no intent"
+
+    def test_declared_notices_validate(self, rosaos_driver: DriverInfo) -> None:
+        """Every notice in ``DriverSpec.notices`` has a valid name, a schema, and an example that validates."""
+        problems = check_notice_specs(rosaos_driver.spec.notices)
+        assert not problems, "; ".join(problems)
+
+    @pytest.mark.asyncio
+    async def test_notices_are_served_behind_the_token(self, shared_device: RunningDevice) -> None:
+        """``GET /notices`` (how the kernel reads ``ctx.notify``) answers with the token, 401 without."""
+        url = notices_url(shared_device.url)
+        async with httpx.AsyncClient(timeout=10) as http:
+            anonymous = await http.get(url)
+            answer = await http.get(url, headers={"Authorization": f"Bearer {shared_device.token}"})
+        assert anonymous.status_code == 401
+        assert answer.status_code == 200, answer.text
+        batch = NoticeBatch.model_validate_json(answer.content)
+        undeclared = {n.name for n in batch.notices} - set(shared_device.instance.spec.notices)
+        assert not undeclared, f"posted notices not declared in DriverSpec.notices: {sorted(undeclared)}"
 
     # The server, over HTTP
 

@@ -44,8 +44,7 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
         max_px = image_budget()
         report, image = await backend.capture_frame(timeout)
         if max_px is None:
-            # A text-only model gets the path; a local description of the frame belongs here once
-            # the driver has a detector (the demo issue's detect_people).
+            # A text-only model gets the path; detect_people says who is in the picture.
             return report
         jpeg = await asyncio.to_thread(camera.jpeg_for_model, image, max_px, MAX_IMAGE_BYTES)
         return picture_result(report, jpeg)
