@@ -76,3 +76,9 @@ def test_sources_from_config_keep_unknown_drivers_without_intents() -> None:
 def test_strip_article_is_per_language() -> None:
     assert strip_article("  L'Ampoule ", "fr") == "ampoule"
     assert strip_article("the", "en") == "the"
+
+
+def test_what_a_device_is_on_names_it_when_it_is_a_thing_not_a_room() -> None:
+    source = DeviceIntentSource(name="spotify", driver="x", description="Music on the living room speaker")
+    assert {"music", "living room speaker", "speaker"} <= set(source.spoken_names("en"))
+    assert source.areas("en") == []

@@ -109,8 +109,11 @@ class DeviceIntentSource:
         """
         names = [self.display_name, *self.aliases]
         if self._described is not None:
-            thing, _, place = self._described
+            thing, preposition, place = self._described
             names += [thing, f"{place} {thing.split()[-1]}"]
+            if preposition == "on" and len(place.split()) >= 2:
+                # "Music on the living room speaker": the thing it is on is a name of its own.
+                names += [place, place.split()[-1]]
         kinds = _unique(self._kinds())
         names += kinds
         names += [synonym for kind in kinds for synonym in kind_synonyms(language, kind)]
