@@ -163,6 +163,13 @@ class FuzzyMatcher:
         }
         self._sets = [frozenset(skeleton.words) for skeleton in self._skeletons]
         self._sizes = [sum(self._weight(word) for word in words) for words in self._sets]
+        self._slots = [frozenset(word for word in words if word.startswith("{")) for words in self._sets]
+        self._by_word: dict[str, list[int]] = {}
+        """Content word → the skeletons that use it: only those can score (a word must be shared)."""
+        for index, words in enumerate(self._sets):
+            for word in words:
+                if word not in self._stop and not word.startswith("{"):
+                    self._by_word.setdefault(word, []).append(index)
         self._widest = max((len(value.split()) for value in self._values), default=1)
 
     def _weigh(self, word: str, idf: float) -> float:
@@ -207,11 +214,12 @@ class FuzzyMatcher:
                         ranges.append(slot.group(1))
                         word = NUMBER
                 words.append(word)
-            key = tuple(words)
+            # The model is a bag of words: samples with the same words are one skeleton.
+            key = tuple(sorted(words))
             if wildcard or key in seen:  # free text cannot be told from a typo: never guessed
                 continue
             seen.add(key)
-            yield _Skeleton(driver, key, tuple(ranges))
+            yield _Skeleton(driver, tuple(words), tuple(ranges))
 
     def tag(self, text: str) -> list[tuple[str, str]]:
         """``(token, spoken text)`` pairs: slot values replaced by their placeholders (longest first)."""
@@ -241,16 +249,15 @@ class FuzzyMatcher:
         spoken_devices = {spoken for token, spoken in tagged if token == "{device}"}
         size = sum(self._weight(token) for token in tokens)
         best: tuple[float, int] | None = None
-        for index, skeleton in enumerate(self._skeletons):
-            words = self._sets[index]
-            if not {word for word in words if word.startswith("{")} <= tokens:
+        # A name alone is not a command: a skeleton must share a word of its own with the sentence.
+        candidates = sorted({index for token in tokens for index in self._by_word.get(token, ())})
+        for index in candidates:
+            skeleton, words = self._skeletons[index], self._sets[index]
+            if not self._slots[index] <= tokens:
                 continue  # a slot the sentence cannot fill
             if spoken_devices and not spoken_devices <= self._driver_names[skeleton.driver]:
                 continue  # a name this driver's devices do not answer to
-            common = words & tokens
-            if not any(word not in self._stop and not word.startswith("{") for word in common):
-                continue  # a name alone is not a command: some word of the template must be said
-            shared = sum(self._weight(word) for word in common)
+            shared = sum(self._weight(word) for word in words & tokens)
             precision, recall = shared / size, shared / self._sizes[index]
             score = 2 * precision * recall / (precision + recall)
             if best is None or score > best[0]:

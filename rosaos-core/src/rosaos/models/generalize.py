@@ -39,8 +39,11 @@ def understand(
     names: dict[str, list[str]],
     fuzzy: FuzzyMatcher | None,
     language: str,
+    whole: Literal | None = None,
 ) -> MatchResult:
-    """What ``text`` means (see the module docstring); ``literal`` is the exact-reading matcher."""
+    """What ``text`` means (see the module docstring). ``literal`` reads a sentence exactly as
+    said (whole, split or elided); ``whole`` (default: ``literal``) only as one whole command,
+    which is all a filled-in fuzzy guess needs and is much cheaper."""
     first = literal(text, focus)
     if first.is_exact:
         return first
@@ -63,7 +66,7 @@ def understand(
             first = found
     if fuzzy is None or first.kind != "no_match" or first.refusal:
         return first
-    return _guess(text, first, literal, fuzzy, focus, language)
+    return _guess(text, first, whole or literal, fuzzy, focus, language)
 
 
 def _guess(

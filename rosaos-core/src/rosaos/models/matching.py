@@ -195,7 +195,13 @@ class IntentMatcher:
         text = " ".join(text.split())
         if not text:
             return no_match(self.context, text)
-        return understand(text, focus, self._literal, self.context.names, self._fuzzy, self.language)
+        return understand(
+            text, focus, self._literal, self.context.names, self._fuzzy, self.language, self._whole
+        )
+
+    def _whole(self, text: str, focus: frozenset[str] | None = None) -> MatchResult:
+        self._focus = focus
+        return self._exact(text)
 
     def _literal(self, text: str, focus: frozenset[str] | None = None) -> MatchResult:
         """``text`` read against the templates as said: whole, split at conjunctions, or elided."""
