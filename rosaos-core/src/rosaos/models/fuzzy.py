@@ -166,8 +166,8 @@ class FuzzyMatcher:
         self._slots = [frozenset(word for word in words if word.startswith("{")) for words in self._sets]
         self._by_word: dict[str, list[int]] = {}
         """Content word → the skeletons that use it: only those can score (a word must be shared)."""
-        for index, words in enumerate(self._sets):
-            for word in words:
+        for index, skeleton_words in enumerate(self._sets):
+            for word in skeleton_words:
                 if word not in self._stop and not word.startswith("{"):
                     self._by_word.setdefault(word, []).append(index)
         self._widest = max((len(value.split()) for value in self._values), default=1)
