@@ -18,6 +18,7 @@ import pytest
 import uvicorn
 from fastapi import FastAPI
 
+from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api import create_app
 from rosaos.kernel.events import EventStore
 from rosaos.kernel.updates import UpdateStream
@@ -44,13 +45,20 @@ async def updates(store: EventStore) -> UpdateStream:
 
 
 @pytest.fixture
-def runtime(store: EventStore, updates: UpdateStream) -> TestRuntime:
-    return TestRuntime(events=store, updates=updates, device_list=[kitchen_light()])
+async def runtime(store: EventStore, updates: UpdateStream) -> TestRuntime:
+    activity = await ActivityLog.open(store.database)
+    return TestRuntime(events=store, updates=updates, device_list=[kitchen_light()], activity=activity)
 
 
 @pytest.fixture
-def app(runtime: TestRuntime) -> FastAPI:
-    return create_app(runtime)
+def images_dir(tmp_path: Path) -> Path:
+    """Where the app looks for camera frames (``<device>-<time>.jpg``)."""
+    return tmp_path / "images"
+
+
+@pytest.fixture
+def app(runtime: TestRuntime, images_dir: Path) -> FastAPI:
+    return create_app(runtime, images_dir=images_dir)
 
 
 @pytest.fixture

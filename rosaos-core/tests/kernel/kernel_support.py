@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from typing import Any
 
+from rosaos.kernel.activity import ActivityLog
+from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.events import EventStore
 from rosaos.kernel.login import LoginCodes
 from rosaos.kernel.updates import UpdateStream
@@ -53,6 +55,9 @@ class TestRuntime:
     terminated: list[int] = field(default_factory=list)
     estop_reason: str | None = None
     estop_time: datetime | None = None
+    activity: ActivityLog | None = None
+    """Set by fixtures that need ``GET /activity`` (it shares the event store's database)."""
+    confirmations: ConfirmationDesk = field(default_factory=lambda: ConfirmationDesk(timeout=60))
 
     async def processes(self, include_ended: bool = False) -> Sequence[Any]:
         return [p for p in self.process_list if include_ended or p.state == "running"]
