@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import asyncio
 import importlib
+import json
 import shutil
 import subprocess
 import sys
@@ -24,6 +25,7 @@ from rosaos.drivers import DeviceContext
 from rosaos.kernel.confirmations import ConfirmationRequest
 from rosaos.kernel.updates import UpdateStream
 from rosaos.plugins import load_drivers
+from rosaos.receipts import Receipt
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 ARTIFACTS = Path(__file__).resolve().parents[3] / "artifacts" / "web"
@@ -320,4 +322,48 @@ async def test_a_driver_from_the_template_gets_a_proper_card(
     assert await page.inner_text(f"{fan} [data-widget-key=level] .widget-value") == "70 %"
     assert await page.get_attribute(f"{fan} [data-widget-key=level] meter", "value") == "70"
     assert await page.is_hidden(f"{fan} details.raw dl")  # raw state behind the toggle, as built-in cards
+    assert page.errors == []  # type: ignore[attr-defined]
+
+
+def save_picture(path: Path) -> None:
+    """A 320x240 JPEG: a grey room with a pale face-sized square (what a camera saved)."""
+    from PIL import Image, ImageDraw
+
+    path.parent.mkdir(parents=True, exist_ok=True)
+    picture = Image.new("RGB", (320, 240), (150, 150, 140))
+    ImageDraw.Draw(picture).rectangle((120, 60, 200, 150), fill=(225, 190, 160))
+    picture.save(path, format="JPEG")
+
+
+async def test_the_last_frame_shows_on_its_card_with_the_faces_outlined(
+    page: Page, runtime: TestRuntime, images_dir: Path
+) -> None:
+    runtime.device_list = desk()
+    name = "reachy-20260101-120000-001.jpg"
+    await asyncio.to_thread(save_picture, images_dir / name)
+    faces = [{"x": 120, "y": 60, "width": 80, "height": 90, "looks_like": "Ada"}]
+    receipts = [
+        Receipt(
+            device="reachy",
+            tool="detect_faces",
+            ok=True,
+            started=1.0,
+            duration=0.2,
+            result=json.dumps({"path": name, "count": 1, "faces": faces, "width": 320, "height": 240}),
+        ),
+    ]
+    assert runtime.activity is not None
+    await runtime.activity.record(1, 3, receipts)
+    await page.goto(f"/#login={runtime.login_codes.mint()}")
+    frame = f"{card('reachy')} [data-widget-kind=image]"
+    await page.wait_for_selector(f"{frame}[data-file='{name}'][data-boxes='1'] img")
+    assert await page.eval_on_selector(f"{frame} img", "img => img.naturalWidth") == 320
+    assert await page.get_attribute(f"{frame} .frame-box rect", "width") == "80"
+    assert await page.text_content(f"{frame} .frame-box text") == "Ada"
+    assert "1 found by detect_faces: Ada" in await page.inner_text(f"{frame} figcaption")
+    assert "Ada" in (await page.get_attribute(f"{frame} img", "alt") or "")
+    # The image came through the API with the token: the src is the page's own blob, not a path.
+    assert (await page.get_attribute(f"{frame} img", "src") or "").startswith("blob:")
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    await page.locator(card("reachy")).screenshot(path=str(ARTIFACTS / "frame-with-face.png"))
     assert page.errors == []  # type: ignore[attr-defined]
