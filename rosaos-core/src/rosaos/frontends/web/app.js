@@ -9,6 +9,7 @@ import {
 import { followUpdates } from "./stream.js";
 import { renderEmergencyStop, wireEmergencyStop } from "./estop.js";
 import { wireMap } from "./map.js";
+import { cancelTimer, detectTimers } from "./timers.js";
 import { answerConfirmation, renderConfirmations, timelineProcesses } from "./timeline.js";
 
 const POLL_MS = 1000;
@@ -88,6 +89,7 @@ function start() {
   pollForever("/processes", renderProcesses);
   pollForever("/processes?all=true", timelineProcesses);
   pollForever("/confirmations", renderConfirmations);
+  detectTimers();
   pollForever("/devices", renderDevices);
   pollForever("/estop", renderEmergencyStop);
 }
@@ -102,6 +104,7 @@ async function main() {
   wireEmergencyStop();
   wireMap();
   $("#timeline").addEventListener("click", answerConfirmation);
+  $("#timers").addEventListener("click", cancelTimer);
   // A new login link pasted into this tab changes only the fragment, which does not reload the
   // page: start over so the new code is used.
   window.addEventListener("hashchange", () => {

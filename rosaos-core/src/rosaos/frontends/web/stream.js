@@ -2,6 +2,7 @@
 
 import { $, api, errorText, page, setConnection, SignedOut, sleep, timeOf } from "./session.js";
 import { timelineUpdate } from "./timeline.js";
+import { timersUpdate } from "./timers.js";
 
 const POLL_MS = 1000;
 const MAX_LINES = 300; // keep the DOM small: older chat and event lines are dropped
@@ -82,6 +83,7 @@ function addUpdate(update) {
   page.lastUpdateId = update.id;
   appendEventLine(update);
   timelineUpdate(update);
+  timersUpdate(update);
   const chat = chatLine(update);
   if (chat) appendChatLine(update.id, chat);
 }

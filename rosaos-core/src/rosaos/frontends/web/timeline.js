@@ -96,22 +96,31 @@ export function timelineProcesses(processes) {
   }
 }
 
-// Progress a process reports (see PROGRESS_API): {"progress": 0.4, "message": "..."} or a number.
+// Progress a running process reports (PROGRESS_API): {"progress": 7.2, "total": 120, "message": "…"}
+// (a share when total is set, else an indeterminate bar with the message), or a bare 0-1 number.
+export function progressOf(raw) {
+  if (typeof raw === "number") return { fraction: raw, message: "" };
+  if (!raw || typeof raw !== "object") return null;
+  const fraction = typeof raw.progress === "number" && typeof raw.total === "number" && raw.total > 0
+    ? raw.progress / raw.total : null;
+  return { fraction, message: raw.message || "" };
+}
+
 function showProgress(entry, process) {
   const box = $(".tl-progress", entry);
-  const raw = process.progress;
-  const fraction = typeof raw === "number" ? raw : raw && typeof raw === "object" ? (raw.fraction ?? raw.progress ?? (raw.total ? raw.done / raw.total : null)) : null;
-  const message = raw && typeof raw === "object" ? raw.message || "" : "";
-  if (process.state !== "running" || (fraction == null && !message)) {
+  const progress = progressOf(process.progress);
+  if (process.state !== "running" || !progress || (progress.fraction == null && !progress.message)) {
     box.hidden = true;
     return;
   }
   box.hidden = false;
   const bar = $("progress", box);
+  const { fraction, message } = progress;
   if (typeof fraction === "number") bar.value = Math.max(0, Math.min(1, fraction));
   else bar.removeAttribute("value"); // indeterminate
   bar.setAttribute("aria-label", `Progress of process ${process.id}`);
-  $(".tl-progress-text", box).textContent = [typeof fraction === "number" ? `${Math.round(fraction * 100)} %` : "", message].filter(Boolean).join(" · ");
+  const percent = typeof fraction === "number" ? `${Math.round(Math.max(0, Math.min(1, fraction)) * 100)} %` : "";
+  $(".tl-progress-text", box).textContent = [percent, message].filter(Boolean).join(" · ");
 }
 
 /** The confirmations poll: each pending question gets Yes/No buttons in its process's entry. */
