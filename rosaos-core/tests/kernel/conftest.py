@@ -30,6 +30,7 @@ if HERE not in sys.path:
     sys.path.insert(0, HERE)
 
 from kernel_support import ORIGIN, TestRuntime, eventually, kitchen_light  # noqa: E402
+from web_support import page  # noqa: E402, F401  (the Chromium fixture of the web page tests)
 
 
 @pytest.fixture
