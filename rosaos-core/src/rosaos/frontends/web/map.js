@@ -12,7 +12,7 @@ const TRAIL_POINTS = 300;
 const TRAIL_STEP = 0.02; // metres between kept trail points
 const MIN_SPAN = 4; // metres: the map never zooms in further than this when fitting
 const robots = new Map(); // name -> { x, y, yaw, docked, trail, dock, people }
-const view = { auto: true, cx: 0, cy: 0, span: MIN_SPAN };
+const view = { auto: true, cx: 0, cy: 0, span: MIN_SPAN, shrink: 1 };
 
 function poseOf(device) {
   const widget = (device.card?.widgets || []).find((w) => w.kind === "pose");
@@ -106,7 +106,8 @@ function robotGroup(name, robot, index) {
     group.append(mark, label(px, py + 20, "person", "map-person-label"));
   }
   const [sx, sy] = toScreen(robot.x, robot.y);
-  const radius = Math.min(14, Math.max(7, 0.17 * scale())); // true size, within legible bounds
+  // True size, within bounds that stay visible on screen however small the map is drawn.
+  const radius = Math.min(14, Math.max(7, 0.17 * scale())) * (view.shrink || 1);
   const marker = svg("g", { class: "map-marker", transform: `translate(${sx.toFixed(1)} ${sy.toFixed(1)}) rotate(${(-robot.yaw * 180) / Math.PI})` });
   marker.append(svg("circle", { r: radius }), svg("path", { d: `M ${radius + 6} 0 L ${radius - 3} -6 L ${radius - 3} 6 Z`, class: "map-heading" }));
   group.append(marker, label(sx, sy - radius - 6, name, "map-label"));
@@ -125,6 +126,10 @@ function describe() {
 function redraw() {
   const map = $("#floor-map");
   if (view.auto) fit();
+  // The SVG scales with its box: on a phone, labels would shrink to a few pixels.
+  const shrink = map.clientWidth ? WIDTH / map.clientWidth : 1;
+  view.shrink = Math.max(1, shrink);
+  map.style.setProperty("--map-font", `${Math.round(13 * view.shrink)}px`);
   const names = [...robots.keys()];
   map.replaceChildren(grid(), ...names.map((name, index) => robotGroup(name, robots.get(name), index)));
   $("#map-summary").textContent = describe();
