@@ -21,6 +21,7 @@ from fastapi import FastAPI
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api import create_app
 from rosaos.kernel.events import EventStore
+from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
 
 # Test modules import kernel_support from this folder (pytest's importlib mode does not put it
@@ -48,7 +49,10 @@ async def updates(store: EventStore) -> UpdateStream:
 @pytest.fixture
 async def runtime(store: EventStore, updates: UpdateStream) -> TestRuntime:
     activity = await ActivityLog.open(store.database)
-    return TestRuntime(events=store, updates=updates, device_list=[kitchen_light()], activity=activity)
+    timers = await TimerBook.open(store)
+    return TestRuntime(
+        events=store, updates=updates, device_list=[kitchen_light()], activity=activity, timers=timers
+    )
 
 
 @pytest.fixture

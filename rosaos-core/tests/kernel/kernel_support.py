@@ -16,6 +16,7 @@ from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.events import EventStore
 from rosaos.kernel.login import LoginCodes
+from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
 from rosaos.processes.jobs import WorkerCallback
 
@@ -58,6 +59,8 @@ class TestRuntime:
     activity: ActivityLog | None = None
     """Set by fixtures that need ``GET /activity`` (it shares the event store's database)."""
     confirmations: ConfirmationDesk = field(default_factory=lambda: ConfirmationDesk(timeout=60))
+    timers: TimerBook | None = None
+    """Set by the ``runtime`` fixture (opening the table needs the event loop)."""
 
     async def processes(self, include_ended: bool = False) -> Sequence[Any]:
         return [p for p in self.process_list if include_ended or p.state == "running"]

@@ -3,7 +3,7 @@ timers, and a phone's width with every control named for screen readers."""
 
 from __future__ import annotations
 
-import re
+from datetime import UTC, datetime, timedelta
 from typing import Any
 
 from kernel_support import TestRuntime, eventually
@@ -140,8 +140,8 @@ async def test_the_page_fits_a_phone_and_everything_has_a_name(page: Page, runti
     assert page.errors == []  # type: ignore[attr-defined]
 
 
-# The two slots below are filled by other work (PROGRESS_API, TIMERS_API in the helpers' notes):
-# until this kernel serves them, the browser's requests are answered in the agreed shapes.
+# Progress is not in GET /processes yet (PROGRESS_API in the helpers' notes): until the kernel
+# sends it, the browser's request is answered in the agreed shape.
 
 
 async def test_a_running_process_shows_its_progress(page: Page, runtime: TestRuntime) -> None:
@@ -169,51 +169,33 @@ async def test_a_running_process_shows_its_progress(page: Page, runtime: TestRun
     assert page.errors == []  # type: ignore[attr-defined]
 
 
-async def test_timers_show_when_the_kernel_has_them_and_cancel_from_the_page(
-    page: Page, runtime: TestRuntime
-) -> None:
-    timers = [
-        {
-            "id": 2,
-            "action": "stop the music",
-            "due": "2026-11-25T23:00:00Z",
-            "created": "2026-11-25T21:58:12Z",
-            "state": "pending",
-            "settled_at": None,
-            "event_id": None,
-        }
-    ]
-    cancelled: list[str] = []
-
-    async def openapi(route: Any) -> None:
-        response = await route.fetch()
-        spec = await response.json()
-        spec["paths"]["/timers"] = {"get": {}}
-        await route.fulfill(response=response, json=spec)
-
-    async def timers_route(route: Any) -> None:
-        if route.request.method == "DELETE":
-            cancelled.append(route.request.url.rsplit("/", 1)[1])
-            timers.clear()
-            await route.fulfill(json={"id": 2, "state": "cancelled"})
-        else:
-            await route.fulfill(json={"timers": timers, "now": "2026-11-25T22:50:00Z"})
-
-    await page.route("**/openapi.json", openapi)
-    await page.route(re.compile(r"/timers(/\d+)?$"), timers_route)  # not /static/timers.js
+async def test_timers_count_down_and_cancel_from_the_page(page: Page, runtime: TestRuntime) -> None:
+    assert runtime.timers is not None
+    timer = await runtime.timers.set("stop the music", datetime.now(UTC) + timedelta(minutes=10, seconds=20))
     await page.goto(f"/#login={runtime.login_codes.mint()}")
-    item = '#timers li[data-timer="2"]'
+    item = f'#timers li[data-timer="{timer.id}"]'
     await page.wait_for_selector(f"{item} time:has-text('(in 10 min)')")  # on the kernel's clock
-    await page.click(f'{item} button[aria-label="Cancel timer 2: stop the music"]')
+    await page.click(f'{item} button[aria-label="Cancel timer {timer.id}: stop the music"]')
     await page.wait_for_selector(item, state="detached")
-    assert cancelled == ["2"]
+    assert [t.state for t in await runtime.timers.list_timers(include_settled=True)] == ["cancelled"]
     assert await page.is_visible("#timers-empty")
     assert page.errors == []  # type: ignore[attr-defined]
 
 
 async def test_without_the_timers_api_the_panel_stays_hidden(page: Page, runtime: TestRuntime) -> None:
+    # A kernel from before timers: its OpenAPI has no /timers, so the page never asks for them.
+    async def without_timers(route: Any) -> None:
+        response = await route.fetch()
+        spec = await response.json()
+        spec["paths"].pop("/timers", None)
+        await route.fulfill(response=response, json=spec)
+
+    await page.route("**/openapi.json", without_timers)
+    requests: list[str] = []
+    page.on("request", lambda request: requests.append(request.url))
     await page.goto(f"/#login={runtime.login_codes.mint()}")
     await page.wait_for_selector("#app", state="visible")
     await page.wait_for_timeout(500)
     assert await page.is_hidden("#timers-panel")
+    assert not [url for url in requests if url.endswith("/timers")]
     assert page.errors == []  # type: ignore[attr-defined]
