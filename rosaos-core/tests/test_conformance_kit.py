@@ -27,6 +27,7 @@ from fastmcp import FastMCP
 from pydantic import BaseModel, Field
 
 from rosaos import hookimpl
+from rosaos.cards import Card, flag, gauge
 from rosaos.drivers import DeviceBackend, DeviceError, DeviceSettings, DemoInstance, DriverSpec, NoticeSpec
 from rosaos.testing import DriverConformance
 
@@ -87,6 +88,7 @@ def spec(**overrides):
         name="fake", title="Fake", description="A fake device.", concurrency="exclusive",
         prompt="You control a fake device.", server=good_server, backends={"sim": Backend},
         demo={"fake_one": DemoInstance(description="Fake one", sim={"level": 20})},
+        card=Card.of(flag("on"), gauge("level", unit="%")),
     )
     return DriverSpec(**(fields | overrides))
 
@@ -110,9 +112,10 @@ ASKING_INTENTS.write_text(
 @hookimpl
 def register_drivers(register):
     register(spec())
-    register(spec(name="sloppy", server=sloppy_server, notices=BROKEN_NOTICES))
+    register(spec(name="sloppy", server=sloppy_server, notices=BROKEN_NOTICES, card=None))
     register(spec(name="placeholder", implemented=False))
     register(spec(name="asks", intents=ASKING_INTENTS))
+    register(spec(name="miscarded", card=Card.of(gauge("level"), gauge("brightness"))))
 
 
 class Kit(DriverConformance):
@@ -153,6 +156,10 @@ class TestMissing(Kit):
 
 class TestAsksWithATool(Kit):
     driver = "asks"
+
+
+class TestMiscarded(Kit):
+    driver = "miscarded"
 """
 
 
@@ -212,7 +219,7 @@ INTENTS_SKIPPED = {"test_intents_file_parses": "skipped", "test_intents_name_exi
 
 
 def test_a_good_driver_passes_every_check_that_applies(report: Report) -> None:
-    assert len(report["TestGood"]) == 20
+    assert len(report["TestGood"]) == 21
     assert not_passed(report, "TestGood") == INTENTS_SKIPPED
     assert "the driver ships no intents file" in report["TestGood"]["test_intents_file_parses"].message
 
@@ -252,6 +259,14 @@ def test_a_question_intent_that_calls_an_acting_tool_fails(report: Report) -> No
     message = report["TestAsksWithATool"]["test_intents_name_existing_tools"].message
     assert "LevelUp: a question (answer/reply) must call a read-only tool" in message
     assert "Level:" not in message  # the get_state question is fine
+
+
+def test_a_card_that_reads_a_key_get_state_lacks_fails(report: Report) -> None:
+    assert not_passed(report, "TestMiscarded") == INTENTS_SKIPPED | {
+        "test_card_reads_keys_of_get_state": "failed"
+    }
+    message = report["TestMiscarded"]["test_card_reads_keys_of_get_state"].message
+    assert "reads brightness, which get_state does not return (it returns: on, level)" in message
 
 
 def test_an_explicit_out_of_range_call_is_used(report: Report) -> None:

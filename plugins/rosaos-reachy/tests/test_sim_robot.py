@@ -158,7 +158,10 @@ async def test_describe_image_without_a_model_describes_locally_and_says_a_model
     await face_forward(robot)
     picture = await robot.call("take_picture")
     answer = await robot.call("describe_image", path=picture["path"])
-    assert answer.startswith("Described on this computer, without a vision model: I see 1 face")
+    faces = (await robot.call("detect_faces", path=picture["path"]))["count"]
+    assert faces >= 1, "the simulated camera faces the photo of a person"
+    seen = f"{faces} face{'s' if faces != 1 else ''}"
+    assert answer.startswith(f"Described on this computer, without a vision model: I see {seen}")
     assert "Main colours:" in answer and "brightness" in answer
     assert "A vision model would say more" in answer and "GROQ_API_KEY" in answer
 

@@ -346,6 +346,21 @@ def log(
     raise typer.Exit(log_command(config, url, device, process, since, limit, json_output))
 
 
+@app.command("open")
+def open_page(
+    config: ConfigOption = None,
+    url: UrlOption = None,
+    json_output: JsonOption = False,
+    browser: Annotated[
+        bool, typer.Option("--browser", "-b", help="Also open the link in a web browser.")
+    ] = False,
+) -> None:
+    """Print a fresh one-time login link for the web page of the running kernel."""
+    from rosaos.kernel.open_command import open_command
+
+    raise typer.Exit(open_command(config, url, browser, json_output))
+
+
 @app.command("kill")
 def kill(
     process_id: Annotated[int, typer.Argument(help="Process id, as `rosaos ps` shows it.", min=1)],

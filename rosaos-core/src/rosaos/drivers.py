@@ -24,6 +24,8 @@ from typing import Any, Literal
 from fastmcp import FastMCP
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
+from rosaos.cards import Card
+
 # Re-exported: notices are part of the driver contract.
 from rosaos.device_notices import Notice as Notice
 from rosaos.device_notices import NoticeBoard as NoticeBoard
@@ -170,6 +172,8 @@ class DriverSpec(BaseModel):
     """Interactive account login for ``rosaos devices login NAME`` (cloud services such as Spotify):
     called with the instance's context, talks to the user on stdin/stdout, keeps what it obtains
     under ``ctx.data_dir / "drivers" / <driver>``, and returns the exit code. None: no login needed."""
+    card: Card | None = None
+    """How the web page draws an instance's state (:mod:`rosaos.cards`); None: a plain key list."""
 
     @field_validator("name")
     @classmethod

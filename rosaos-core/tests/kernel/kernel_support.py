@@ -12,6 +12,8 @@ from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from typing import Any
 
+from rosaos.kernel.activity import ActivityLog
+from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.events import EventStore
 from rosaos.kernel.login import LoginCodes
 from rosaos.kernel.timers import TimerBook
@@ -54,6 +56,9 @@ class TestRuntime:
     terminated: list[int] = field(default_factory=list)
     estop_reason: str | None = None
     estop_time: datetime | None = None
+    activity: ActivityLog | None = None
+    """Set by fixtures that need ``GET /activity`` (it shares the event store's database)."""
+    confirmations: ConfirmationDesk = field(default_factory=lambda: ConfirmationDesk(timeout=60))
     timers: TimerBook | None = None
     """Set by the ``runtime`` fixture (opening the table needs the event loop)."""
 

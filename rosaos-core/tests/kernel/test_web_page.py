@@ -88,6 +88,7 @@ async def test_without_a_valid_login_code_the_page_says_where_to_get_one(
     await p.goto(f"/#login={used}")
     await p.wait_for_selector("#login-error:has-text('already used')")
     assert "rosaos up" in await p.inner_text("#login-needed")
+    assert "rosaos open" in await p.inner_text("#login-needed")  # how to get a fresh link
     assert await p.is_hidden("#app")
     assert await p.is_visible("#model-notice")
 

@@ -42,9 +42,7 @@ from rosaos.processes.prompts import DEFAULT_PROCESS_PROMPT, process_system_prom
 
 READ_ONLY_TOOLS = {"get_state"}
 # Task files that no implementation can pass as written; reported to the bench's owner.
-TASK_FILE_ISSUES = {
-    "multi-undock-and-blue": "expect names hue but not saturation, which any blue must raise from 0",
-}
+TASK_FILE_ISSUES: dict[str, str] = {}
 REGISTRY = load_drivers()
 
 

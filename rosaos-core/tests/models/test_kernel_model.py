@@ -166,3 +166,14 @@ def test_handles_text_is_true_only_for_what_it_answers_exactly(model: LocalInten
     [process] = model.match("Turn on the kitchen light").processes
     assert model.handles_text(f"[Worker callback] worker=1 status=ok task={process.task!r}\noutput: Done.")
     assert not model.handles_text("[Worker callback] worker=1 status=ok task='free-form'\noutput: Done.")
+
+
+async def test_yes_to_did_you_mean_launches_the_suggested_command(kernel: Kernel) -> None:
+    asked = await kernel.say("[User said] could the kitchen light go off")
+    assert asked == "Did you mean: turn off the kitchen light?"
+    assert kernel.launched == []
+    await kernel.say("[User said] yes")
+    [(task, devices)] = kernel.launched
+    plan = decode_plan(task)
+    assert devices == ["kitchen_light"]
+    assert plan is not None and plan.steps[0].tool == "turn_off"

@@ -12,6 +12,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from rosaos import hookimpl
+from rosaos.cards import Card, flag, head, image, text
 from rosaos.drivers import DemoInstance, DeviceContext, DeviceError, DriverSpec, read_packaged_text
 from rosaos_reachy.backend import ReachyBackend
 from rosaos_reachy.server import build_server
@@ -57,6 +58,13 @@ SPEC = DriverSpec(
     backends={"sim": sim_backend, "real": real_backend},
     intents=Path(__file__).parent / "intents.yaml",
     safe_stop=stop_moving_and_talking,
+    card=Card.of(
+        head(),
+        flag("speaking", label="Speaking"),
+        text("moving", label="Moving"),
+        image(),
+        text("mode", label="Mode"),
+    ),
     demo={
         "reachy": DemoInstance(
             description="Reachy Mini desktop robot, the user's companion on the desk",

@@ -9,6 +9,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from rosaos import hookimpl
+from rosaos.cards import Card, flag, gauge, image, pose
 from rosaos.drivers import DemoInstance, DeviceContext, DeviceError, DriverSpec, read_packaged_text
 from rosaos_ros.backend import RosBackend
 from rosaos_ros.notices import NOTICES
@@ -98,6 +99,12 @@ SPEC = DriverSpec(
     intents=Path(__file__).parent / "intents.yaml",
     safe_stop=stop_robot,
     notices=NOTICES,
+    card=Card.of(
+        pose(),
+        flag("docked", label="Dock", on_text="docked", off_text="undocked"),
+        gauge("battery", label="Battery", unit="%", max=1.0),
+        image(),
+    ),
     confirm_on_real=True,  # a real robot moves only after a person's yes, unless config says otherwise
     demo={
         "turtlebot": DemoInstance(

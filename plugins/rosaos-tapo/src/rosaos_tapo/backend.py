@@ -43,6 +43,9 @@ from pydantic import BaseModel, Field
 from rosaos.drivers import DeviceBackend, DeviceError
 from rosaos_tapo.simulator import SimState, SimulatedL530, SimulatedL530Transport, simulated_config
 
+NEUTRAL_KELVIN = 4000
+"""Where "warmer"/"cooler" start from when the bulb shows a colour (no white temperature)."""
+
 Connection = Literal["klap", "discover"]
 """How the real backend finds out the bulb's protocol: assume KLAP (current firmware, plain TCP,
 works across subnets) or ask the bulb by UDP discovery (any firmware, same LAN only)."""
@@ -236,6 +239,27 @@ class TapoBackend(DeviceBackend):
                 "(lower is warmer, higher is cooler)"
             )
         return await self._run(lambda: self.light.set_state(LightState(light_on=True, color_temp=kelvin)))
+
+    async def adjust_color_temp(self, change: int) -> BulbState:
+        """Make white light warmer (negative ``change``) or cooler by ``change`` kelvin, and turn on.
+
+        Starts from the current colour temperature, or from neutral white (4000 K) when the bulb
+        shows a colour; the result is kept within what the bulb can do.
+        """
+        if not self.has_color_temp:
+            raise DeviceError(
+                f"{self.instance} ({self.device.model}) cannot change its colour temperature; "
+                "use set_brightness"
+            )
+
+        async def command() -> None:
+            await self.device.update()
+            low, high = self.device.modules[Module.ColorTemperature].valid_temperature_range
+            current = self.light.color_temp or NEUTRAL_KELVIN
+            kelvin = min(high, max(low, current + change))
+            await self.light.set_state(LightState(light_on=True, color_temp=kelvin))
+
+        return await self._run(command)
 
     async def set_color(self, hue: int, saturation: int, brightness: int | None = None) -> BulbState:
         """Switch to colour mode at ``hue``/``saturation`` (and ``brightness``) and turn on."""

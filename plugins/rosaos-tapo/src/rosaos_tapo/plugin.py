@@ -12,6 +12,7 @@ from typing import Annotated
 from pydantic import BaseModel, Field, SecretStr
 
 from rosaos import hookimpl
+from rosaos.cards import Card, swatch
 from rosaos.drivers import (
     DemoInstance,
     DeviceContext,
@@ -127,6 +128,7 @@ SPEC = DriverSpec(
     intents=Path(__file__).parent / "intents.yaml",
     safe_stop=leave_light_as_is,
     notices=NOTICES,
+    card=Card.of(swatch()),  # the web page draws the bulb's real colour and brightness, named
     demo={
         "kitchen_light": DemoInstance(description="Ceiling light in the kitchen", sim={"on": False}),
         "living_room_lamp": DemoInstance(

@@ -33,6 +33,9 @@ BrightnessChange = Annotated[
 Kelvin = Annotated[
     int, Field(ge=2500, le=6500, description="White colour temperature in kelvin: 2700 warm, 6500 cool.")
 ]
+KelvinChange = Annotated[
+    int, Field(ge=-4000, le=4000, description="Kelvin to add; negative is warmer, positive cooler.")
+]
 Hue = Annotated[
     int,
     Field(ge=0, le=360, description="Hue in degrees: 0 red, 60 yellow, 120 green, 240 blue, 300 magenta."),
@@ -98,6 +101,15 @@ def build_server(ctx: DeviceContext, backend: TapoBackend) -> FastMCP:
         Brightness stays as it is.
         """
         return await backend.set_color_temp(kelvin)
+
+    @mcp.tool(annotations=CHANGE)
+    async def adjust_color_temp(change: KelvinChange) -> BulbState:
+        """Make white light warmer (negative kelvin) or cooler (positive), and turn the light on.
+
+        Use for "warmer" (e.g. -700) or "cooler" (e.g. +700) when no exact temperature is asked
+        for. From a colour, it starts at neutral white (4000 K); the result stays 2500-6500 K.
+        """
+        return await backend.adjust_color_temp(change)
 
     @mcp.tool(annotations=SET)
     async def set_color(hue: Hue, saturation: Saturation, brightness: OptionalBrightness = None) -> BulbState:

@@ -100,7 +100,8 @@ async def login(body: LoginRequest, runtime: Runtime, response: Response) -> Log
         raise HTTPException(
             401,
             "this login link is unknown, expired or already used: "
-            "open the newest link printed by `rosaos up`, or mint one with POST /login-codes",
+            "run `rosaos open` on the machine where rosaOS runs for a fresh link "
+            "(`rosaos open --browser` opens it)",
         )
     return LoginToken(token=runtime.token)
 
@@ -277,7 +278,7 @@ async def web_page() -> FileResponse:
 PAGE_HEADERS = {
     "Cache-Control": "no-cache",
     "Content-Security-Policy": (
-        "default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' data:; "
+        "default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' data: blob:; "
         "connect-src 'self'; base-uri 'none'; form-action 'self'; frame-ancestors 'none'"
     ),
     "Referrer-Policy": "no-referrer",

@@ -147,6 +147,8 @@ class DeviceView(BaseModel):
     url: str | None = None
     state: dict[str, Any] | None = None
     description: str = ""
+    card: dict[str, Any] | None = None
+    """How the web page draws the state (``rosaos.cards``): ``{"widgets": [...]}``; null for a key list."""
 
 
 class Health(BaseModel):

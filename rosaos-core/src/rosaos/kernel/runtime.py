@@ -154,6 +154,7 @@ class Kernel:
                     "state": self.states.get(endpoint.name),
                     "description": endpoint.description,
                     "held_by": [p.id for p in self.manager.list() if endpoint.name in p.devices],
+                    "card": instance.spec.card.view() if instance.spec.card else None,
                 }
             )
         return views
@@ -317,7 +318,11 @@ class Kernel:
             history_budget=self.config.kernel.history_messages,
         )
         self.loop.before = lambda event: answer_from_chat(self.confirmations, event)
-        app = create_app(self, allowed_hosts=[*kernel.allow_hosts, *bound_hosts(sock.getsockname()[0])])
+        app = create_app(
+            self,
+            allowed_hosts=[*kernel.allow_hosts, *bound_hosts(sock.getsockname()[0])],
+            images_dir=self.data_dir / "images",
+        )
         config = uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=3)
         self._server = uvicorn.Server(config)
         self._tasks.append(asyncio.create_task(self._server.serve(sockets=[sock]), name="kernel api"))

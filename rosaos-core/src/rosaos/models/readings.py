@@ -140,12 +140,14 @@ def driver_reading(
     slots = slot_values(result)
     if "device" in slots:
         targets = [name for name in context.names.get(str(slots["device"]), []) if name in driver_devices]
+    elif "area" in slots:  # "it's too dark in the kitchen": this driver's instances there
+        targets = [name for name in context.areas.get(str(slots["area"]), []) if name in driver_devices]
     else:  # a template with no {device}: it means this driver's only instance, if it has one
         targets = list(driver_devices)
     if focus is not None:
         targets = [name for name in targets if name in focus]
     literal = result.text_chunks_matched
-    if len(targets) != 1:
+    if not targets or (len(targets) > 1 and not action.every):
         return context.clarify(clause, literal, RANK_DRIVER, targets) if targets else None
     references = action.slot_arguments()
     if not set(references.values()) <= slots.keys():
@@ -153,14 +155,16 @@ def driver_reading(
     args = {
         name: slots[references[name]] if name in references else value for name, value in action.args.items()
     }
-    device = targets[0]
     reading = Reading(
         clause,
         RANK_DRIVER,
         literal,
-        calls={device: [PlanStep(device=device, tool=action.tool, args=args)]},
+        calls={device: [PlanStep(device=device, tool=action.tool, args=args)] for device in targets},
         wildcards=wildcard_texts(result),
     )
+    if len(targets) > 1:
+        return reading
+    device = targets[0]
     display = context.devices[device].display_name
     if action.is_question:
         reading.fills_state.add(device)

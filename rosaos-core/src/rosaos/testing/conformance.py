@@ -28,6 +28,7 @@ import httpx
 import mcp_types
 import pytest
 
+from rosaos.cards import card_keys_missing
 from rosaos.config import DeviceConfig
 from rosaos.device_notices import NoticeBatch, check_notice_specs
 from rosaos.devices.world import DeviceInstance
@@ -247,6 +248,22 @@ class DriverConformance:
             result = await client.call_tool_mcp("get_state", {})
         assert not result.is_error, result_text(result)
         assert isinstance(result_object(result), dict)
+
+    @pytest.mark.asyncio
+    async def test_card_reads_keys_of_get_state(
+        self, rosaos_driver: DriverInfo, shared_device: RunningDevice
+    ) -> None:
+        """The web card the driver declares (``DriverSpec.card``) reads keys ``get_state`` has."""
+        card = rosaos_driver.spec.card
+        if card is None:
+            return  # no card declared: the page lists the state keys as they are
+        async with shared_device.client() as client:
+            state = result_object(await client.call_tool_mcp("get_state", {}))
+        missing = card_keys_missing(card, state)
+        assert not missing, (
+            f"the card of driver {rosaos_driver.spec.name!r} reads {', '.join(missing)}, "
+            f"which get_state does not return (it returns: {', '.join(state)})"
+        )
 
     @pytest.mark.asyncio
     async def test_out_of_range_argument_is_a_tool_error(

@@ -1,5 +1,7 @@
 // The processes table and the device cards, redrawn in place from polled JSON.
 
+import { renderCardView, showValue } from "./cards.js";
+import { drawMap } from "./map.js";
 import { $, api, errorText, setBadge, setStatus, SignedOut, timeOf } from "./session.js";
 
 export function renderProcesses(processes) {
@@ -48,13 +50,6 @@ export async function terminate(button) {
   }
 }
 
-function showValue(value) {
-  if (value === null || value === undefined) return "—";
-  if (typeof value === "number") return String(Number.isInteger(value) ? value : Math.round(value * 1000) / 1000);
-  if (typeof value === "object") return JSON.stringify(value);
-  return String(value);
-}
-
 export function renderDevices(devices) {
   const root = $("#devices");
   $(".empty", root)?.remove();
@@ -68,15 +63,23 @@ export function renderDevices(devices) {
       card.className = "device-card";
       card.dataset.device = device.name;
       card.innerHTML = '<header><h3></h3><span class="badge-slot"></span></header>' +
-        '<p class="meta"></p><p class="description"></p><dl></dl>';
+        '<p class="meta"></p><p class="description"></p><div class="card-view"></div>' +
+        '<details class="raw"><summary>Details</summary><dl></dl></details>';
       $("h3", card).textContent = device.name;
+      card.setAttribute("aria-label", `Device ${device.name}`);
       root.append(card);
     }
     setBadge($(".badge-slot", card), device.status);
     $(".meta", card).textContent = [device.driver, device.backend, device.concurrency].filter(Boolean).join(" · ");
     $(".description", card).textContent = device.description || "";
+    renderCardView($(".card-view", card), device);
+    // Without a declared card the raw state is the card: show it open.
+    const raw = $("details.raw", card);
+    if (!device.card && !raw.dataset.touched) raw.open = true;
+    raw.ontoggle ??= () => { raw.dataset.touched = "1"; };
     renderState($("dl", card), device.state || {});
   }
+  drawMap(devices);
 }
 
 function renderState(list, state) {
