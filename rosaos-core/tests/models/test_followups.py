@@ -64,7 +64,7 @@ def test_then_plans_one_process_that_carries_the_next(model: LocalIntentModel) -
 
 
 def test_a_condition_about_finding_waits_for_found(model: LocalIntentModel) -> None:
-    result = plan_follow_up(WHEN_FOUND, model.match)
+    result = plan_follow_up(WHEN_FOUND, model.match, literal=model.matcher._literal)
     assert result is not None
     follow_up = result.processes[0].plan.then
     assert follow_up is not None

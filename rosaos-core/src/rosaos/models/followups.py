@@ -78,15 +78,24 @@ def candidate_splits(text: str, is_command: Callable[[str], bool]) -> list[Follo
 
 
 def plan_follow_up(
-    text: str, match: Callable[[str], MatchResult], language: str = "en"
+    text: str,
+    match: Callable[[str], MatchResult],
+    language: str = "en",
+    literal: Callable[[str], MatchResult] | None = None,
 ) -> MatchResult | None:
-    """The processes for a follow-up sentence (one process for X carrying Y), or None if it is not one."""
+    """The processes for a follow-up sentence (one process for X carrying Y), or None if it is not one.
+
+    ``literal`` reads a part exactly as said (no everyday rephrasing, no close guess): where no
+    comma ends the condition, it finds where the action starts, so "someone turn off the light"
+    is not taken for the action of "when you find someone turn off the light".
+    """
     text = " ".join(text.split())
-    for split in candidate_splits(text, lambda part: match(part).is_exact):
+    strict = literal or match
+    for split in candidate_splits(text, lambda part: strict(part).is_exact):
         first = match(split.first)
         if not first.is_exact or len(first.processes) != 1:
             continue
-        then = plan_follow_up(split.then, match, language) or match(split.then)
+        then = plan_follow_up(split.then, match, language, literal) or match(split.then)
         if not then.is_exact:
             continue
         summary = " and ".join(_clause(process.summary) for process in then.processes)

@@ -171,7 +171,8 @@ class LocalIntentModel(Model):
         # An answer to "which one?" ("the kitchen light") completes the question's sentence; on
         # its own it would read as "turn on the kitchen light".
         answered = self.matcher.follow_up(open_question, text) if open_question else None
-        result = answered or plan_follow_up(text, self.match, self.language) or self.match(text)
+        literal = getattr(self.matcher, "_literal", None)  # the engine's reading as said, if it has one
+        result = answered or plan_follow_up(text, self.match, self.language, literal) or self.match(text)
         if not result.is_exact:
             return [TextPart(result.reply)]
         launch = _launch_tool(tools)
