@@ -31,7 +31,7 @@ WORLD = """
 driver = "ros"
 description = "TurtleBot4 wheeled mobile robot with a camera and a charging dock"
 profile = "turtlebot4"
-sim = { docked = true, people = [{ x = -2.5, y = 0.5 }] }
+sim = { docked = true, people = [{ x = 0.3, y = -2.5 }] }  # to its right: found late in the turn
 
 [devices.dog]
 driver = "ros"
