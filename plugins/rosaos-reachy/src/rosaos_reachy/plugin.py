@@ -41,7 +41,7 @@ async def stop_moving_and_talking(backend: ReachyBackend) -> None:
     await backend.safe_stop()
 
 
-SPEC = DriverSpec(
+SPEC: DriverSpec[ReachyBackend] = DriverSpec(
     name="reachy",
     title="Pollen Robotics Reachy Mini",
     description=(
@@ -57,6 +57,8 @@ SPEC = DriverSpec(
     backends={"sim": sim_backend, "real": real_backend},
     intents=Path(__file__).parent / "intents.yaml",
     safe_stop=stop_moving_and_talking,
+    own_process=True,  # the host runs the Reachy daemon (MuJoCo): hundreds of MB, native code
+    background_start=True,  # the simulator boots for seconds; everything else need not wait
     demo={
         "reachy": DemoInstance(
             description="Reachy Mini desktop robot, the user's companion on the desk",

@@ -61,7 +61,7 @@ SSE_SEND_TIMEOUT = 30.0
 SSE_RETRY_MS = 2000
 
 
-def _runtime(request: Request) -> KernelRuntime:
+async def _runtime(request: Request) -> KernelRuntime:  # async: no thread hop per request
     runtime: KernelRuntime = request.app.state.runtime
     return runtime
 

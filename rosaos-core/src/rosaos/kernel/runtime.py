@@ -64,8 +64,8 @@ class KernelError(Exception):
 
 
 class DeviceHosting(Protocol):
-    """Where the kernel's devices come from. :class:`DeviceSupervisor` (one process per instance)
-    in ``rosaos up``; the task benchmark serves its simulators in-process instead."""
+    """Where the kernel's devices come from. :class:`DeviceSupervisor` (host processes) in
+    ``rosaos up``; the task benchmark serves its simulators in-process instead."""
 
     async def start(self) -> None: ...
 
@@ -298,7 +298,10 @@ class Kernel:
                 group.create_task(self.manager.start(), name="start worker pool")
         except BaseExceptionGroup as failed:
             raise failed.exceptions[0] from None
-        # Before the loop can grant anything: devices a dead kernel's processes held get safe_stop.
+        # Before the loop can grant anything: devices a dead kernel's processes held get safe_stop,
+        # so one still starting in the background (the Reachy simulator) is waited for first.
+        if isinstance(self.supervisor, DeviceSupervisor):
+            await self.supervisor.settle({name for p in await self._live.left() for name in p.devices})
         await recover_orphans(self._live, self._store, self.supervisor.directory(), self._callback_committed)
         self.states = DeviceStateCache(self.endpoints)
         tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._launched)
