@@ -35,6 +35,7 @@ from rosaos.drivers import DeviceError
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
 from rosaos.kernel.api import create_app
+from rosaos.kernel.api_types import DeviceSafeStop, DeviceView, EmergencyStopReport, EmergencyStopState
 from rosaos.kernel.client import kernel_file, running_kernel_url
 from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people
 from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
@@ -135,25 +136,23 @@ class Kernel:
     async def terminate(self, process_id: int) -> ProcessInfo:
         return await self.manager.terminate(process_id)
 
-    async def devices(self) -> Sequence[Mapping[str, Any]]:
+    async def devices(self) -> Sequence[DeviceView]:
         await self.states.wanted()
-        views = []
-        for endpoint in self.endpoints().values():
-            instance = self.world.instances[endpoint.name]
-            views.append(
-                {
-                    "name": endpoint.name,
-                    "driver": endpoint.driver,
-                    "concurrency": endpoint.concurrency,
-                    "backend": instance.backend,
-                    "status": endpoint.status,
-                    "url": endpoint.url,
-                    "state": self.states.get(endpoint.name),
-                    "description": endpoint.description,
-                    "held_by": [p.id for p in self.manager.list() if endpoint.name in p.devices],
-                }
+        running = self.manager.list()
+        return [
+            DeviceView(
+                name=endpoint.name,
+                driver=endpoint.driver,
+                concurrency=endpoint.concurrency,
+                backend=self.world.instances[endpoint.name].backend,
+                status=endpoint.status,
+                url=endpoint.url,
+                state=self.states.get(endpoint.name),
+                description=endpoint.description,
+                held_by=[p.id for p in running if endpoint.name in p.devices],
             )
-        return views
+            for endpoint in self.endpoints().values()
+        ]
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         self.manager.record_callback(callback)
@@ -169,7 +168,7 @@ class Kernel:
             "process_ended", text, callback.model_dump(mode="json"), event_id=event_id
         )
 
-    async def emergency_stop(self, reason: str) -> dict[str, Any]:
+    async def emergency_stop(self, reason: str) -> EmergencyStopReport:
         """Terminate every process, call every device's safe_stop, and latch until reset.
 
         The latch is in memory at once, and saved in the event store while the devices stop: the
@@ -179,17 +178,18 @@ class Kernel:
         latch = self.manager.emergency_stop
         assert latch is not None
         outcomes, saved = await asyncio.gather(self.supervisor.safe_stop_all(), self._save_latch(latch))
-        report = {
-            "latched": True,
-            **latch.model_dump(mode="json"),
-            "terminated": [info.id for info in stopped],
-            "devices": [{"name": o.instance, "ok": o.ok, "detail": o.detail} for o in outcomes],
-            "saved": saved,
-        }
-        await self._updates.publish("error", f"EMERGENCY STOP: {reason}", report)
+        report = EmergencyStopReport(
+            latched=True,
+            reason=latch.reason,
+            time=latch.time,
+            terminated=[info.id for info in stopped],
+            devices=[DeviceSafeStop(name=o.instance, ok=o.ok, detail=o.detail) for o in outcomes],
+            saved=saved,
+        )
+        await self._updates.publish("error", f"EMERGENCY STOP: {reason}", report.model_dump(mode="json"))
         return report
 
-    async def reset_emergency_stop(self) -> dict[str, Any]:
+    async def reset_emergency_stop(self) -> EmergencyStopState:
         """Unlatch the emergency stop (a person decided it is safe).
 
         The latch is cleared on disk first: if that fails, the stop stays latched and this raises.
@@ -203,11 +203,11 @@ class Kernel:
             await self._updates.publish("notice", "emergency stop reset: processes may run again", {})
         return self.emergency_stop_state()
 
-    def emergency_stop_state(self) -> dict[str, Any]:
+    def emergency_stop_state(self) -> EmergencyStopState:
         latch = self.manager.emergency_stop
         if latch is None:
-            return {"latched": False, "reason": None, "time": None}
-        return {"latched": True, **latch.model_dump(mode="json")}
+            return EmergencyStopState(latched=False)
+        return EmergencyStopState(latched=True, reason=latch.reason, time=latch.time)
 
     async def _save_latch(self, latch: EmergencyStop) -> bool:
         """Save the latch for the next start; False (and a log entry) if the store failed."""
