@@ -111,8 +111,14 @@ class DeviceSupervisor:
         backoff_cap: float = 30.0,
         start_timeout: float = START_TIMEOUT,
         stop_grace: float = 5.0,
+        defer_background: bool = False,
     ) -> None:
         self.world = world
+        self._background_go = asyncio.Event()
+        """Background-start instances wait for this: at once, or :meth:`release_background` when
+        ``defer_background`` (``rosaos up`` lets the other devices and the workers boot first)."""
+        if not defer_background:
+            self._background_go.set()
         self.data_dir = data_dir
         self.token = token
         self.host = host
@@ -174,6 +180,8 @@ class DeviceSupervisor:
                 self._run(self._watch_remote(hosted), instance.name)
             elif hosted.shares_host:
                 shared.append(hosted)
+            elif instance.spec.background_start:
+                self._run(self._keep_serving([hosted], wait_for=self._background_go), instance.name)
             else:
                 self._run(self._keep_serving([hosted]), instance.name)
         if len(shared) == 1:
@@ -189,6 +197,10 @@ class DeviceSupervisor:
             if d.status != "not implemented" and not d.instance.spec.background_start
         )
         await self._save()
+
+    def release_background(self) -> None:
+        """Let the background-start instances begin (see ``defer_background``)."""
+        self._background_go.set()
 
     async def settle(self, names: Iterable[str]) -> None:
         """Wait until each named instance has had its first start attempt (unknown names: skipped)."""
@@ -250,9 +262,13 @@ class DeviceSupervisor:
 
     # --- local instances: one host process each, or several in the shared one ------------------
 
-    async def _keep_serving(self, group: list[_Hosted], delay: float = 0.0) -> None:
+    async def _keep_serving(
+        self, group: list[_Hosted], delay: float = 0.0, wait_for: asyncio.Event | None = None
+    ) -> None:
         """Start the group's host; when it dies or stops answering, start it again after a backoff."""
         failures = 0
+        if wait_for is not None:
+            await wait_for.wait()
         await asyncio.sleep(delay)
         while True:
             started = asyncio.get_running_loop().time()

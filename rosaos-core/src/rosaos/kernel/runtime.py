@@ -272,7 +272,11 @@ class Kernel:
         )
         self._activity = await ActivityLog.open(self._store.database)
         self._live = LiveProcesses(self._store)
-        self.supervisor = self._hosting or DeviceSupervisor(self.world, self.data_dir, self._token)
+        # A device that boots in the background (the Reachy simulator: seconds of CPU) waits until
+        # the other devices and the workers are up: on two cores it would otherwise delay them.
+        self.supervisor = self._hosting or DeviceSupervisor(
+            self.world, self.data_dir, self._token, defer_background=True
+        )
         if isinstance(self.supervisor, DeviceSupervisor):
             self.supervisor.on_status_change = DeviceStatusUpdates(self._updates).changed
         kernel = self.config.kernel
@@ -301,6 +305,7 @@ class Kernel:
         # Before the loop can grant anything: devices a dead kernel's processes held get safe_stop,
         # so one still starting in the background (the Reachy simulator) is waited for first.
         if isinstance(self.supervisor, DeviceSupervisor):
+            self.supervisor.release_background()
             await self.supervisor.settle({name for p in await self._live.left() for name in p.devices})
         await recover_orphans(self._live, self._store, self.supervisor.directory(), self._callback_committed)
         self.states = DeviceStateCache(self.endpoints)
