@@ -220,6 +220,14 @@ class Kernel:
 
     # --- devices -----------------------------------------------------------------------------------
 
+    async def devices_settled(self) -> None:
+        """Wait until every device, the background-start ones too, has had its first start attempt.
+
+        ``start`` returns without waiting for those (the Reachy simulator boots for seconds).
+        """
+        if isinstance(self.supervisor, DeviceSupervisor):
+            await self.supervisor.settle(self.world.instances)
+
     def endpoints(self) -> dict[str, DeviceEndpoint]:
         """The world's devices as the process manager grants them."""
         endpoints = {}
