@@ -311,8 +311,16 @@ def ps(
     url: UrlOption = None,
     json_output: JsonOption = False,
     all_processes: Annotated[bool, typer.Option("--all", "-a", help="Include ended processes.")] = False,
+    timers: Annotated[
+        bool,
+        typer.Option("--timers", "-t", help="List the timers instead (with --all, fired and cancelled too)."),
+    ] = False,
 ) -> None:
-    """List the kernel's processes: id, state, devices held, age, task."""
+    """List the kernel's processes: id, state, devices held, age, task. --timers: its timers."""
+    if timers:
+        from rosaos.kernel.timer_command import timers_command
+
+        raise typer.Exit(timers_command(config, url, json_output, all_processes))
     from rosaos.kernel.commands import ps_command
 
     raise typer.Exit(ps_command(config, url, json_output, all_processes))
@@ -344,8 +352,15 @@ def kill(
     config: ConfigOption = None,
     url: UrlOption = None,
     json_output: JsonOption = False,
+    timer: Annotated[
+        bool, typer.Option("--timer", help="The id is a timer's (`rosaos ps --timers`): cancel it.")
+    ] = False,
 ) -> None:
-    """Terminate a process; its device leases are released."""
+    """Terminate a process; its device leases are released. --timer: cancel a timer instead."""
+    if timer:
+        from rosaos.kernel.timer_command import cancel_timer_command
+
+        raise typer.Exit(cancel_timer_command(config, url, process_id, json_output))
     from rosaos.kernel.commands import kill_command
 
     raise typer.Exit(kill_command(config, url, process_id, json_output))

@@ -20,6 +20,7 @@ from fastapi import FastAPI
 
 from rosaos.kernel.api import create_app
 from rosaos.kernel.events import EventStore
+from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
 
 # Test modules import kernel_support from this folder (pytest's importlib mode does not put it
@@ -44,8 +45,9 @@ async def updates(store: EventStore) -> UpdateStream:
 
 
 @pytest.fixture
-def runtime(store: EventStore, updates: UpdateStream) -> TestRuntime:
-    return TestRuntime(events=store, updates=updates, device_list=[kitchen_light()])
+async def runtime(store: EventStore, updates: UpdateStream) -> TestRuntime:
+    timers = await TimerBook.open(store)
+    return TestRuntime(events=store, updates=updates, device_list=[kitchen_light()], timers=timers)
 
 
 @pytest.fixture

@@ -15,6 +15,7 @@ from typing import Any
 from rosaos.kernel.api_types import EmergencyStopReport, EmergencyStopState
 from rosaos.kernel.events import EventStore
 from rosaos.kernel.login import LoginCodes
+from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
 from rosaos.processes.jobs import WorkerCallback
 
@@ -54,6 +55,8 @@ class TestRuntime:
     terminated: list[int] = field(default_factory=list)
     estop_reason: str | None = None
     estop_time: datetime | None = None
+    timers: TimerBook | None = None
+    """Set by the ``runtime`` fixture (opening the table needs the event loop)."""
 
     async def processes(self, include_ended: bool = False) -> Sequence[Any]:
         return [p for p in self.process_list if include_ended or p.state == "running"]

@@ -21,7 +21,10 @@ from fastapi.staticfiles import StaticFiles
 
 import rosaos
 from rosaos.auth import BearerAuthMiddleware, HostOriginGuard
-from rosaos.kernel import confirmation_routes  # noqa: F401  (adds its routes to protected)
+from rosaos.kernel import (
+    confirmation_routes,  # noqa: F401  (adds its routes to protected)
+    timer_routes,  # noqa: F401  (adds its routes to protected)
+)
 from rosaos.kernel.api_routes import WEB_DIR, protected, public
 from rosaos.kernel.api_types import KernelRuntime
 

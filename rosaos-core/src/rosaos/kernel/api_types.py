@@ -17,6 +17,7 @@ from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.events import EventStore, IdempotencyKey, Source
 from rosaos.kernel.login import LoginCodes
+from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import Update, UpdateStream
 from rosaos.processes.jobs import WorkerCallback
 from rosaos.processes.manager import ProcessInfo
@@ -40,6 +41,10 @@ class KernelRuntime(Protocol):
     @property
     def activity(self) -> ActivityLog:
         """The activity log: every tool call of every process (same SQLite file)."""
+
+    @property
+    def timers(self) -> TimerBook:
+        """The durable timers (same SQLite file)."""
 
     @property
     def login_codes(self) -> LoginCodes:

@@ -95,7 +95,8 @@ async def _serve(kernel: Kernel, console: Console, err: Console) -> int:
     loop = asyncio.get_running_loop()
     for signum in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(signum, stop.set)
-    console.print(f"Starting rosaOS with {len(kernel.world)} devices…", markup=False)
+    count = len(kernel.world)
+    console.print(f"Starting rosaOS with {count} device{'' if count == 1 else 's'}…", markup=False)
     try:
         url = await kernel.start()
     except (KernelError, DeviceError, ModelError) as error:

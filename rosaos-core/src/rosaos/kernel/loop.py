@@ -20,6 +20,7 @@ from pydantic_ai.usage import UsageLimits
 
 from rosaos.kernel.agent import trim_history
 from rosaos.kernel.events import Event, EventStore
+from rosaos.kernel.timer_text import render_timer_fired
 from rosaos.kernel.updates import UpdateKind, UpdateStream
 from rosaos.receipts import receipts_text
 
@@ -54,6 +55,8 @@ def render_event(event: Event) -> str:
             return f"[Device notice] device={payload.device} {payload.message}"
         case "error":
             return f"[Error] {payload.message}"
+        case "timer_fired":
+            return render_timer_fired(payload)
     return f"[{event.kind}] {payload}"
 
 

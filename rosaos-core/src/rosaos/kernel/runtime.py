@@ -44,6 +44,8 @@ from rosaos.kernel.events import Event, EventStore, StoreClosedError, WorkerCall
 from rosaos.kernel.login import LoginCodes, login_url
 from rosaos.kernel.loop import KernelLoop
 from rosaos.kernel.orphans import LiveProcesses, recover_orphans
+from rosaos.kernel.timer_tools import add_timer_tools
+from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.tools import build_kernel_tools
 from rosaos.kernel.updates import UpdateStream
 from rosaos.models.defaults import KernelModels, kernel_models
@@ -280,6 +282,7 @@ class Kernel:
         )
         self._activity = await ActivityLog.open(self._store.database)
         self._live = LiveProcesses(self._store)
+        self.timers = await TimerBook.open(self._store, self._updates.publish_event)
         # A device that boots in the background (the Reachy simulator: seconds of CPU) waits until
         # the other devices and the workers are up: on two cores it would otherwise delay them.
         self.supervisor = self._hosting or DeviceSupervisor(
@@ -318,6 +321,7 @@ class Kernel:
         await recover_orphans(self._live, self._store, self.supervisor.directory(), self._callback_committed)
         self.states = DeviceStateCache(self.endpoints)
         tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._launched)
+        add_timer_tools(tools, self.timers)
         agent = build_kernel_agent(self._models.kernel, tools)
         self.loop = KernelLoop(
             self._store,
@@ -339,6 +343,8 @@ class Kernel:
             await asyncio.sleep(0.01)
         self._tasks.append(asyncio.create_task(self.states.run(), name="device states"))
         self._tasks.append(asyncio.create_task(self._run_loop(), name="kernel loop"))
+        # Timers that fell due while the kernel was down fire now, once, and say they are late.
+        self._tasks.append(asyncio.create_task(self.timers.run(), name="timers"))
 
     def _model_for_event(self, event: Event) -> Model | None:
         return self._models.for_event(event)

@@ -13,6 +13,8 @@ handled (see :func:`rosaos.kernel.loop.render_event`) and answers:
 - ``[Worker callback]``: the process's output (its plan made it a user-facing sentence), or an
   apology with the error. No new process.
 - ``[Device notice]`` / ``[Error]``: acknowledged in one sentence.
+- timers ("… in ten minutes", "what timers are set?", "cancel that timer") and ``[Timer fired]``:
+  :mod:`rosaos.models.timer_plan`, asked first.
 """
 
 from __future__ import annotations
@@ -45,6 +47,7 @@ from rosaos.models.matching import IntentMatcher, MatchResult
 from rosaos.models.phrases import phrase
 from rosaos.models.plan import PlanError, decode_plan, has_plan
 from rosaos.models.sources import DeviceIntentSource
+from rosaos.models.timer_plan import is_timer_sentence, timer_turn
 
 LAUNCH_TOOL = "launch_process"
 USER_TAGS = frozenset({"User said", "User typed"})
@@ -85,6 +88,8 @@ class LocalIntentModel(Model):
         A bare choice ("the kitchen light") is not: it may answer the LLM's "which light?".
         """
         event = parse_event(rendered_event)
+        if (event.tag in USER_TAGS or event.tag is None) and is_timer_sentence(event.body, self.match):
+            return True
         if event.tag in USER_TAGS or event.tag is None:
             return self.match(event.body).is_exact and not self.matcher.choice(event.body)
         if event.tag == CALLBACK_TAG:
@@ -115,6 +120,9 @@ class LocalIntentModel(Model):
 
     def respond(self, messages: Sequence[ModelMessage], tools: Sequence[str]) -> list[ModelResponsePart]:
         """The response parts for ``messages``, given the names of the tools the agent offers."""
+        timers = timer_turn(messages, tools, self.match, self._command, self._acknowledge)
+        if timers is not None:  # set/list/cancel timers, or a [Timer fired] event's action
+            return timers
         turn = current_turn(messages)
         outcomes = tool_outcomes(turn)
         if outcomes:
