@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import asyncio
 import json
 import os
 import signal
@@ -9,11 +10,12 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from devices_support import drivers_for_tests, eventually, pid_alive, requires_tapo, world_of
+from devices_support import drivers_for_tests, eventually, pid_alive, plugin, requires_tapo, world_of
 
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.runtime import DeviceStatus, runtime_file_path
 from rosaos.devices.supervisor import DeviceSupervisor
+from rosaos.plugins import load_drivers
 
 TOKEN = "shared-host-test-token"
 FAST: dict[str, Any] = {"health_interval": 0.2, "health_timeout": 2.0, "backoff_base": 0.1, "stop_grace": 2.0}
@@ -92,3 +94,19 @@ async def test_a_real_instance_gets_a_host_of_its_own(data_dir: Path) -> None:
         assert "needs host" in (directory["broken_bulb"].error or "")
         assert directory["kitchen_light"].status == directory["desk_lamp"].status == "healthy"
         assert supervisor.log_file("broken_bulb").is_file()
+
+
+async def test_a_background_device_does_not_hold_up_start_and_boots_when_released(data_dir: Path) -> None:
+    from rosaos_tapo.plugin import SPEC
+
+    slow = SPEC.model_copy(update={"background_start": True})  # as the Reachy simulator declares
+    registry = load_drivers(allow={"test_drivers"}, extra_plugins={"test_drivers": plugin(slow)})
+    world = world_of(registry, data_dir, slow_lamp={"driver": "tapo"})
+    async with DeviceSupervisor(world, data_dir, TOKEN, defer_background=True, **FAST) as supervisor:
+        entry = supervisor.directory()["slow_lamp"]
+        assert (entry.status, entry.url) == ("starting", None)  # start() returned without it
+        await asyncio.sleep(0.5)
+        assert supervisor.directory()["slow_lamp"].status == "starting"  # not before the release
+        supervisor.release_background()
+        await supervisor.settle(["slow_lamp"])
+        assert supervisor.directory()["slow_lamp"].status == "healthy"
