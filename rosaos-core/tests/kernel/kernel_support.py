@@ -13,6 +13,7 @@ from datetime import UTC, datetime
 from typing import Any
 
 from rosaos.kernel.activity import ActivityLog
+from rosaos.kernel.api_types import DeviceView, EmergencyStopReport, EmergencyStopState
 from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.events import EventStore
 from rosaos.kernel.login import LoginCodes
@@ -73,23 +74,21 @@ class TestRuntime:
                 return process
         raise KeyError(f"no process {process_id}")
 
-    async def devices(self) -> Sequence[dict[str, Any]]:
-        return self.device_list
+    async def devices(self) -> Sequence[DeviceView]:
+        return [DeviceView.model_validate(device) for device in self.device_list]
 
-    async def emergency_stop(self, reason: str) -> dict[str, Any]:
+    async def emergency_stop(self, reason: str) -> EmergencyStopReport:
         self.estop_reason, self.estop_time = reason, datetime.now(UTC)
-        return self.emergency_stop_state()
+        return EmergencyStopReport(latched=True, reason=reason, time=self.estop_time)
 
-    async def reset_emergency_stop(self) -> dict[str, Any]:
+    async def reset_emergency_stop(self) -> EmergencyStopState:
         self.estop_reason = self.estop_time = None
         return self.emergency_stop_state()
 
-    def emergency_stop_state(self) -> dict[str, Any]:
-        return {
-            "latched": self.estop_reason is not None,
-            "reason": self.estop_reason,
-            "time": self.estop_time.isoformat() if self.estop_time else None,
-        }
+    def emergency_stop_state(self) -> EmergencyStopState:
+        return EmergencyStopState(
+            latched=self.estop_reason is not None, reason=self.estop_reason, time=self.estop_time
+        )
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         self.callbacks.append((event_id, callback))

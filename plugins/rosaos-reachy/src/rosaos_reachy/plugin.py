@@ -42,7 +42,7 @@ async def stop_moving_and_talking(backend: ReachyBackend) -> None:
     await backend.safe_stop()
 
 
-SPEC = DriverSpec(
+SPEC: DriverSpec[ReachyBackend] = DriverSpec(
     name="reachy",
     title="Pollen Robotics Reachy Mini",
     description=(
@@ -65,6 +65,8 @@ SPEC = DriverSpec(
         image(),
         text("mode", label="Mode"),
     ),
+    own_process=True,  # the host runs the Reachy daemon (MuJoCo): hundreds of MB, native code
+    background_start=True,  # the simulator boots for seconds; everything else need not wait
     demo={
         "reachy": DemoInstance(
             description="Reachy Mini desktop robot, the user's companion on the desk",

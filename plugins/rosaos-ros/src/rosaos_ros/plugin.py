@@ -82,7 +82,7 @@ async def stop_robot(backend: RosBackend) -> None:
     await backend.safe_stop()
 
 
-SPEC = DriverSpec(
+SPEC: DriverSpec[RosBackend] = DriverSpec(
     name="ros",
     title="ROS 2 robot (via rosbridge)",
     description=(

@@ -53,7 +53,7 @@ async def pause_music(backend: SpotifyBackend) -> None:
     await backend.pause()
 
 
-SPEC = DriverSpec(
+SPEC: DriverSpec[SpotifyBackend] = DriverSpec(
     name="spotify",
     title="Spotify playback",
     description=(

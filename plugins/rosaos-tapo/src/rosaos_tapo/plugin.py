@@ -112,7 +112,7 @@ async def leave_light_as_is(backend: TapoBackend) -> None:
     """
 
 
-SPEC = DriverSpec(
+SPEC: DriverSpec[TapoBackend] = DriverSpec(
     name="tapo",
     title="TP-Link Tapo smart bulb",
     description=(

@@ -7,21 +7,20 @@ Anything that sets light output (brightness, colour, colour temperature) also tu
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Annotated
 
 from fastmcp import FastMCP
 from fastmcp.exceptions import ToolError
 from pydantic import Field
 
+from rosaos import drivers
 from rosaos.drivers import DeviceContext
 from rosaos_tapo.backend import BulbState, TapoBackend
 from rosaos_tapo.colors import UnknownColorError, White, lookup_color
 
 # Annotations, per MCP: every tool only changes a light (never destructive), and setting a
 # value twice is the same as once, except for relative changes (toggle, adjust_brightness).
-READ_ONLY: dict[str, Any] = {"readOnlyHint": True, "destructiveHint": False, "idempotentHint": True}
-SET: dict[str, Any] = {"readOnlyHint": False, "destructiveHint": False, "idempotentHint": True}
-CHANGE: dict[str, Any] = {"readOnlyHint": False, "destructiveHint": False, "idempotentHint": False}
+READ_ONLY, SET, CHANGE = drivers.READ_ONLY, drivers.SETS, drivers.CHANGES
 
 Brightness = Annotated[
     int, Field(ge=0, le=100, description="Brightness in percent, 1-100; 0 turns the light off.")

@@ -229,7 +229,7 @@ async def _run_trial(
         if await _settle(kernel, IDLE_TIMEOUT) is None:
             return TrialResult(status="error", reason="the kernel was still busy with the previous task")
         kernel.loop.reset_conversation()
-        if kernel.emergency_stop_state()["latched"]:  # an earlier task's emergency stop must not leak
+        if kernel.emergency_stop_state().latched:  # an earlier task's emergency stop must not leak
             await kernel.reset_emergency_stop()
         initial = task_file.initial_state(task)
         await hosting.restart(

@@ -24,7 +24,7 @@ from starlette.types import ASGIApp
 from rosaos.auth import BearerAuthMiddleware, HostOriginGuard, bound_hosts
 from rosaos.device_notices import NoticeBoard, notice_endpoint
 from rosaos.devices.world import DeviceInstance
-from rosaos.drivers import DeviceBackend, DeviceError
+from rosaos.drivers import SETS, DeviceBackend, DeviceError
 
 MCP_PATH = "/mcp"
 HEALTH_PATH = "/health"
@@ -78,7 +78,7 @@ def _add_safe_stop(server: FastMCP, instance: DeviceInstance, backend: DeviceBac
     server.tool(
         safe_stop,
         name="safe_stop",
-        annotations={"readOnlyHint": False, "destructiveHint": False, "idempotentHint": True},
+        annotations=SETS,
     )
 
 

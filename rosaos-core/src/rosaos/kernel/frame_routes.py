@@ -67,7 +67,7 @@ def _images_dir(request: Request) -> Path:
 
 
 async def _known_device(runtime: Runtime, name: str) -> None:
-    names = [device["name"] for device in await runtime.devices()]
+    names = [device.name for device in await runtime.devices()]
     if name not in names:
         raise HTTPException(404, f"no device {name!r}: GET /devices lists them ({', '.join(names)})")
 

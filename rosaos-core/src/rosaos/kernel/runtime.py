@@ -35,6 +35,7 @@ from rosaos.drivers import DeviceError
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
 from rosaos.kernel.api import create_app
+from rosaos.kernel.api_types import DeviceSafeStop, DeviceView, EmergencyStopReport, EmergencyStopState
 from rosaos.kernel.client import kernel_file, running_kernel_url
 from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people
 from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
@@ -67,8 +68,8 @@ class KernelError(Exception):
 
 
 class DeviceHosting(Protocol):
-    """Where the kernel's devices come from. :class:`DeviceSupervisor` (one process per instance)
-    in ``rosaos up``; the task benchmark serves its simulators in-process instead."""
+    """Where the kernel's devices come from. :class:`DeviceSupervisor` (host processes) in
+    ``rosaos up``; the task benchmark serves its simulators in-process instead."""
 
     async def start(self) -> None: ...
 
@@ -138,26 +139,29 @@ class Kernel:
     async def terminate(self, process_id: int) -> ProcessInfo:
         return await self.manager.terminate(process_id)
 
-    async def devices(self) -> Sequence[Mapping[str, Any]]:
+    async def devices(self) -> Sequence[DeviceView]:
         await self.states.wanted()
-        views = []
-        for endpoint in self.endpoints().values():
-            instance = self.world.instances[endpoint.name]
-            views.append(
-                {
-                    "name": endpoint.name,
-                    "driver": endpoint.driver,
-                    "concurrency": endpoint.concurrency,
-                    "backend": instance.backend,
-                    "status": endpoint.status,
-                    "url": endpoint.url,
-                    "state": self.states.get(endpoint.name),
-                    "description": endpoint.description,
-                    "held_by": [p.id for p in self.manager.list() if endpoint.name in p.devices],
-                    "card": instance.spec.card.view() if instance.spec.card else None,
-                }
+        running = self.manager.list()
+        return [
+            DeviceView(
+                name=endpoint.name,
+                driver=endpoint.driver,
+                concurrency=endpoint.concurrency,
+                backend=self.world.instances[endpoint.name].backend,
+                status=endpoint.status,
+                url=endpoint.url,
+                state=self.states.get(endpoint.name),
+                description=endpoint.description,
+                held_by=[p.id for p in running if endpoint.name in p.devices],
+                card=self._card(endpoint.name),
             )
-        return views
+            for endpoint in self.endpoints().values()
+        ]
+
+    def _card(self, name: str) -> dict[str, Any] | None:
+        """The card its driver declares, as the web page reads it; None draws a key list."""
+        card = self.world.instances[name].spec.card
+        return card.view() if card else None
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         self.manager.record_callback(callback)
@@ -173,7 +177,7 @@ class Kernel:
             "process_ended", text, callback.model_dump(mode="json"), event_id=event_id
         )
 
-    async def emergency_stop(self, reason: str) -> dict[str, Any]:
+    async def emergency_stop(self, reason: str) -> EmergencyStopReport:
         """Terminate every process, call every device's safe_stop, and latch until reset.
 
         The latch is in memory at once, and saved in the event store while the devices stop: the
@@ -183,17 +187,18 @@ class Kernel:
         latch = self.manager.emergency_stop
         assert latch is not None
         outcomes, saved = await asyncio.gather(self.supervisor.safe_stop_all(), self._save_latch(latch))
-        report = {
-            "latched": True,
-            **latch.model_dump(mode="json"),
-            "terminated": [info.id for info in stopped],
-            "devices": [{"name": o.instance, "ok": o.ok, "detail": o.detail} for o in outcomes],
-            "saved": saved,
-        }
-        await self._updates.publish("error", f"EMERGENCY STOP: {reason}", report)
+        report = EmergencyStopReport(
+            latched=True,
+            reason=latch.reason,
+            time=latch.time,
+            terminated=[info.id for info in stopped],
+            devices=[DeviceSafeStop(name=o.instance, ok=o.ok, detail=o.detail) for o in outcomes],
+            saved=saved,
+        )
+        await self._updates.publish("error", f"EMERGENCY STOP: {reason}", report.model_dump(mode="json"))
         return report
 
-    async def reset_emergency_stop(self) -> dict[str, Any]:
+    async def reset_emergency_stop(self) -> EmergencyStopState:
         """Unlatch the emergency stop (a person decided it is safe).
 
         The latch is cleared on disk first: if that fails, the stop stays latched and this raises.
@@ -207,11 +212,11 @@ class Kernel:
             await self._updates.publish("notice", "emergency stop reset: processes may run again", {})
         return self.emergency_stop_state()
 
-    def emergency_stop_state(self) -> dict[str, Any]:
+    def emergency_stop_state(self) -> EmergencyStopState:
         latch = self.manager.emergency_stop
         if latch is None:
-            return {"latched": False, "reason": None, "time": None}
-        return {"latched": True, **latch.model_dump(mode="json")}
+            return EmergencyStopState(latched=False)
+        return EmergencyStopState(latched=True, reason=latch.reason, time=latch.time)
 
     async def _save_latch(self, latch: EmergencyStop) -> bool:
         """Save the latch for the next start; False (and a log entry) if the store failed."""
@@ -223,6 +228,14 @@ class Kernel:
         return True
 
     # --- devices -----------------------------------------------------------------------------------
+
+    async def devices_settled(self) -> None:
+        """Wait until every device, the background-start ones too, has had its first start attempt.
+
+        ``start`` returns without waiting for those (the Reachy simulator boots for seconds).
+        """
+        if isinstance(self.supervisor, DeviceSupervisor):
+            await self.supervisor.settle(self.world.instances)
 
     def endpoints(self) -> dict[str, DeviceEndpoint]:
         """The world's devices as the process manager grants them."""
@@ -277,7 +290,11 @@ class Kernel:
         self._activity = await ActivityLog.open(self._store.database)
         self._live = LiveProcesses(self._store)
         self.timers = await TimerBook.open(self._store, self._updates.publish_event)
-        self.supervisor = self._hosting or DeviceSupervisor(self.world, self.data_dir, self._token)
+        # A device that boots in the background (the Reachy simulator: seconds of CPU) waits until
+        # the other devices and the workers are up: on two cores it would otherwise delay them.
+        self.supervisor = self._hosting or DeviceSupervisor(
+            self.world, self.data_dir, self._token, defer_background=True
+        )
         if isinstance(self.supervisor, DeviceSupervisor):
             self.supervisor.on_status_change = DeviceStatusUpdates(self._updates).changed
         kernel = self.config.kernel
@@ -303,7 +320,11 @@ class Kernel:
                 group.create_task(self.manager.start(), name="start worker pool")
         except BaseExceptionGroup as failed:
             raise failed.exceptions[0] from None
-        # Before the loop can grant anything: devices a dead kernel's processes held get safe_stop.
+        # Before the loop can grant anything: devices a dead kernel's processes held get safe_stop,
+        # so one still starting in the background (the Reachy simulator) is waited for first.
+        if isinstance(self.supervisor, DeviceSupervisor):
+            self.supervisor.release_background()
+            await self.supervisor.settle({name for p in await self._live.left() for name in p.devices})
         await recover_orphans(self._live, self._store, self.supervisor.directory(), self._callback_committed)
         self.states = DeviceStateCache(self.endpoints)
         tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._launched)
