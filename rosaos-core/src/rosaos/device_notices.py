@@ -115,6 +115,7 @@ class NoticeBoard:
         self._seq = 0
         self._lock = threading.Lock()
         self._waiters: list[tuple[asyncio.AbstractEventLoop, asyncio.Event]] = []
+        self._closed = False
 
     def post(
         self,
@@ -157,6 +158,16 @@ class NoticeBoard:
                 loop.call_soon_threadsafe(event.set)
         return notice
 
+    def release_waiters(self) -> None:
+        """End every long poll now and answer later ones at once: the server is stopping, and
+        uvicorn would otherwise wait for those requests before it can shut down."""
+        with self._lock:
+            self._closed = True
+            waiters, self._waiters = self._waiters, []
+        for loop, event in waiters:
+            if not loop.is_closed():
+                loop.call_soon_threadsafe(event.set)
+
     def after(self, seq: int, board: str | None = None) -> NoticeBatch:
         """The notices after ``seq``; all kept ones when ``board`` names an earlier life."""
         start = 0 if board is not None and board != self.board else seq
@@ -167,7 +178,7 @@ class NoticeBoard:
     async def wait_after(self, seq: int, board: str | None = None, wait: float = 0.0) -> NoticeBatch:
         """Like :meth:`after`, but waits up to ``wait`` seconds for one to arrive (long poll)."""
         batch = self.after(seq, board)
-        if batch.notices or wait <= 0:
+        if batch.notices or wait <= 0 or self._closed:
             return batch
         event = asyncio.Event()
         with self._lock:

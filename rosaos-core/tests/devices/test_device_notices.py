@@ -154,3 +154,20 @@ def test_notice_event_keys_are_stable_per_board_and_seq() -> None:
     notice = board().post("docked")
     assert notice_event(notice, "abc").idempotency_key == notice_event(notice, "abc").idempotency_key
     assert notice_event(notice, "abc").idempotency_key != notice_event(notice, "abd").idempotency_key
+
+
+async def test_stopping_the_server_ends_a_pending_long_poll() -> None:
+    notices = board()
+    async with httpx.AsyncClient(timeout=10) as http:
+        served_cm = await _served(notices)
+        served = await served_cm.__aenter__()
+        auth = {"Authorization": f"Bearer {TOKEN}"}
+        waiting = asyncio.create_task(http.get(notices_url(served.url), params={"wait": 30}, headers=auth))
+        await asyncio.sleep(0.3)
+        loop = asyncio.get_running_loop()
+        began = loop.time()
+        await served_cm.__aexit__(None, None, None)
+        assert loop.time() - began < 1.5  # not uvicorn's graceful-shutdown timeout
+        answer = await asyncio.wait_for(waiting, 3)
+    assert answer.status_code == 200
+    assert NoticeBatch.model_validate_json(answer.content).notices == []

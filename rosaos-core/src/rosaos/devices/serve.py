@@ -11,6 +11,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import socket
+import weakref
 from collections.abc import AsyncIterator, Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -81,10 +82,14 @@ def _add_safe_stop(server: FastMCP, instance: DeviceInstance, backend: DeviceBac
     )
 
 
+_BOARDS: weakref.WeakKeyDictionary[FastMCP, NoticeBoard] = weakref.WeakKeyDictionary()
+
+
 def add_notice_route(server: FastMCP, board: NoticeBoard) -> None:
     """Every device server gets ``GET /notices`` (behind its token): the kernel long-polls it for the
     notices the driver posts with ``ctx.notify`` (:mod:`rosaos.device_notices`)."""
     server.custom_route(NOTICES_PATH, methods=["GET"])(notice_endpoint(board))
+    _BOARDS[server] = board  # so serve_http can end its long polls before stopping
 
 
 def device_http_app(server: FastMCP, token: str, allowed_hosts: Iterable[str] = ()) -> ASGIApp:
@@ -143,8 +148,11 @@ class ServedDevice:
     url: str
     server: uvicorn.Server
     task: asyncio.Task[None]
+    notices: NoticeBoard | None = None
 
     async def stop(self) -> None:
+        if self.notices is not None:
+            self.notices.release_waiters()
         self.server.should_exit = True
         with contextlib.suppress(asyncio.CancelledError):
             await self.task
@@ -162,7 +170,7 @@ async def serve_http(
     config = uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=2)
     uv_server = uvicorn.Server(config)
     task = asyncio.create_task(uv_server.serve(sockets=[sock]))
-    served = ServedDevice(url_for(sock), uv_server, task)
+    served = ServedDevice(url_for(sock), uv_server, task, _BOARDS.get(server))
     try:
         while not uv_server.started:
             if task.done():

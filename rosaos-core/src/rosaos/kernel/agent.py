@@ -34,6 +34,14 @@ is ambiguous (which light?) or names a device that does not exist, ask or refuse
 devices that exist; never actuate on a guess. Answer questions you can answer from a callback
 without launching anything. Keep replies short: they may be spoken aloud.
 
+Follow-ups: when a request has a step that depends on another's outcome ("search for a person,
+and when you find someone, turn the lamp green", "dock the robot, then turn off the light"),
+launch only the first process now, with launch_process(task, devices, then="<the next step>").
+Do not give one process both steps' devices. When its [Worker callback] arrives (its task ends
+with the "Kernel follow-up" note), launch the follow-up only if status=ok and the output says it
+achieved what the follow-up waits for (found: true for a search); otherwise do not launch it, and
+tell the user either way.
+
 A [Device notice] with importance=notify is something the user should hear: launch one short
 process on the always-attached device to say it with its speak tool. With importance=info, reply
 with nothing unless it changes something you are doing (a process waiting on that device).

@@ -15,6 +15,7 @@ from pydantic import Field
 
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.drivers import CHANGES, DELETES, READ_ONLY
+from rosaos.kernel.follow_ups import attach_follow_up
 from rosaos.processes.manager import LaunchRefused, ProcessInfo, ProcessManager
 
 KERNEL_TOOL_NAMES = ("launch_process", "terminate_process", "list_processes", "list_devices")
@@ -46,13 +47,27 @@ def build_kernel_tools(
             list[str],
             Field(max_length=16, description="Instance names of the devices it needs (see list_devices)."),
         ],
+        then: Annotated[
+            str | None,
+            Field(
+                max_length=2000,
+                description=(
+                    "Optional follow-up: what to launch when this process succeeds (e.g. 'turn the lamp "
+                    "green' after a search that finds someone). It is not done by this process; it comes "
+                    "back to you with the [Worker callback], so it survives a restart."
+                ),
+            ),
+        ] = None,
     ) -> dict[str, Any]:
         """Start a process agent on a task with the devices it needs; returns its id at once.
 
-        The result arrives later as a [Worker callback] event. An exclusive device held by
+        The result arrives later as a [Worker callback] event, with ``then`` (a follow-up to launch
+        only if this process succeeds) in its task. An exclusive device held by
         another process is refused with the holder named: wait for its callback, ask the user,
         or terminate_process(holder). The always-attached device is granted automatically.
         """
+        if then is not None and then.strip():
+            task = attach_follow_up(task, then)
         try:
             info = await manager.launch(task, list(devices))
         except LaunchRefused as refusal:

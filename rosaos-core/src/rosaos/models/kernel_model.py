@@ -45,6 +45,7 @@ from rosaos.models.conversation import (
     tool_outcomes,
     user_text,
 )
+from rosaos.models.followups import callback_response, plan_follow_up
 from rosaos.models.matching import IntentMatcher, MatchResult
 from rosaos.models.notice_plan import SILENCE, notice_response
 from rosaos.models.phrases import phrase
@@ -133,12 +134,17 @@ class LocalIntentModel(Model):
         turn = current_turn(messages)
         outcomes = tool_outcomes(turn)
         if outcomes:
-            return [TextPart(self._acknowledge(outcomes))]
+            # A follow-up launched on a callback: say how the first process ended, then the ack.
+            started = parse_event(user_text(_first_request(turn)) or "")
+            before = self._callback_reply(started.body) + " " if started.tag == CALLBACK_TAG else ""
+            return [TextPart(before + self._acknowledge(outcomes))]
         event = parse_event(user_text(last_request(messages)) or "")
         if event.tag in USER_TAGS or event.tag is None:
             return self._command(event.body, tools, self._open_question(messages))
         if event.tag == CALLBACK_TAG:
-            return [TextPart(self._callback_reply(event.body))]
+            reply = self._callback_reply(event.body)
+            chained = callback_response(parse_callback(event.body), _launch_tool(tools), reply)
+            return chained or [TextPart(reply)]
         if event.tag == "Device notice":
             return notice_response(event.body, self.speaker, _launch_tool(tools))
         return [TextPart(phrase(self.language, "error", message=event.body))]
@@ -165,7 +171,8 @@ class LocalIntentModel(Model):
         # An answer to "which one?" ("the kitchen light") completes the question's sentence; on
         # its own it would read as "turn on the kitchen light".
         answered = self.matcher.follow_up(open_question, text) if open_question else None
-        result = answered or self.match(text)
+        literal = getattr(self.matcher, "_literal", None)  # the engine's reading as said, if it has one
+        result = answered or plan_follow_up(text, self.match, self.language, literal) or self.match(text)
         if not result.is_exact:
             return [TextPart(result.reply)]
         launch = _launch_tool(tools)

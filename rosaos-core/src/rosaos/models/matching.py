@@ -376,7 +376,9 @@ class IntentMatcher:
             candidates = [" ".join(name if word.lower() in refer else word for word in words)]
         else:
             last = min(MAX_ELIDED_POSITION, len(words))
-            candidates = [" ".join([*words[:at], name, *words[at:]]) for at in range(1, last + 1)]
+            # Position 0 last: "look around for a person" → "turtlebot, look around for a person".
+            positions = [*range(1, last + 1), 0]
+            candidates = [" ".join([*words[:at], name, *words[at:]]) for at in positions]
         found = self._exactly_for(device, candidates)
         return replace(found, clause=clause) if found is not None else None
 
