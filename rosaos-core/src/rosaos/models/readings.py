@@ -84,14 +84,18 @@ class ReadingContext:
         """Spoken name → devices answering to it (several means the name is ambiguous)."""
         self.areas: dict[str, list[str]] = {}
         self.mappings: dict[str, HomeAssistantMapping] = {}
+        given: dict[str, list[str]] = {}
         for device in devices.values():
             for name in device.spoken_names(language):
                 self.names.setdefault(name, []).append(device.name)
+            for name in device.own_names(language):
+                given.setdefault(name, []).append(device.name)
             for area in device.areas(language):
                 self.areas.setdefault(area, []).append(device.name)
             mapping_file = device.mapping_file()
             if mapping_file is not None and mapping_file.homeassistant is not None:
                 self.mappings[device.name] = mapping_file.homeassistant
+        self.names.update(given)  # a name given to a device beats the same word as another's kind
 
     def named_in(self, text: str) -> tuple[frozenset[str], list[str]]:
         """Devices ``text`` names (by name or area), and the words left over once names are removed.

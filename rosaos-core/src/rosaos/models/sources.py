@@ -107,6 +107,18 @@ class DeviceIntentSource:
         everyday synonyms ("pup"). A kind several devices share is ambiguous, and the engine
         asks which one; a kind only one device has names it.
         """
+        names = list(self.own_names(language))
+        kinds = _unique(self._kinds())
+        names += kinds
+        names += [synonym for kind in kinds for synonym in kind_synonyms(language, kind)]
+        return _unique(strip_article(name, language) for name in names)
+
+    def own_names(self, language: str) -> list[str]:
+        """The names given to this device: its name, aliases and what its description calls it.
+
+        A name given to one device beats the same word heard as another device's kind: with an
+        alias "light" on the kitchen light, "light" is the kitchen light, even beside a lamp.
+        """
         names = [self.display_name, *self.aliases]
         if self._described is not None:
             thing, preposition, place = self._described
@@ -114,9 +126,6 @@ class DeviceIntentSource:
             if preposition == "on" and len(place.split()) >= 2:
                 # "Music on the living room speaker": the thing it is on is a name of its own.
                 names += [place, place.split()[-1]]
-        kinds = _unique(self._kinds())
-        names += kinds
-        names += [synonym for kind in kinds for synonym in kind_synonyms(language, kind)]
         return _unique(strip_article(name, language) for name in names)
 
     def _kinds(self) -> list[str]:
