@@ -136,3 +136,32 @@ async def test_a_chat_drives_every_card_the_map_and_the_timeline(page: Page) -> 
     assert await page.evaluate("document.documentElement.scrollWidth") <= 390
     print(f"screenshots: {ARTIFACTS}")
     assert page.errors == []  # type: ignore[attr-defined]
+
+
+async def test_a_long_search_shows_its_progress_while_a_second_request_finishes(
+    page: Page, kernel: Kernel
+) -> None:
+    """The paper's concurrency, as a person sees it: the search's progress bar moves on in the
+    timeline while the light, asked for after it, changes and its process ends."""
+    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    await say(page, "turtlebot, look around for someone")
+    bar = "#timeline .tl-process .tl-progress:not([hidden]) .tl-progress-text"
+    await page.wait_for_selector(bar, timeout=WAIT)
+    await say(page, "set the kitchen light to blue")
+    await page.wait_for_selector(
+        f"{card('kitchen_light')} .swatch-name:text-matches('^blue, ')", timeout=WAIT
+    )
+    light = "#timeline .tl-process:has(.tl-call[data-tool='set_color_name'])"
+    await page.wait_for_selector(f"{light} .tl-callback:has-text('Ended: ok')", timeout=WAIT)
+    # The search still holds the turtlebot and still reports progress.
+    running = [p for p in await kernel.processes() if p.state == "running"]
+    assert [p.devices for p in running] and all("turtlebot" in p.devices for p in running), running
+    assert await page.is_visible(bar)
+    assert (await page.inner_text(bar)).strip()  # a percentage or a message, e.g. "turned 90°"
+    task = await page.inner_text(f"#processes tr:has(button[data-terminate='{running[0].id}']) .cell-task")
+    assert task == "Turtlebot, look around for someone." and "rosaos-plan" not in task
+    await page.wait_for_timeout(1000)
+    await page.screenshot(path=str(ARTIFACTS / "search-progress.png"), full_page=True)
+    for process in running:
+        await kernel.terminate(process.id)
+    assert page.errors == []  # type: ignore[attr-defined]

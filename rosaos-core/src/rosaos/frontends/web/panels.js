@@ -3,6 +3,7 @@
 import { renderCardView, showValue } from "./cards.js";
 import { drawMap } from "./map.js";
 import { $, api, errorText, setBadge, setStatus, SignedOut, timeOf } from "./session.js";
+import { taskTitle } from "./timeline.js";
 
 export function renderProcesses(processes) {
   const root = $("#processes");
@@ -27,7 +28,8 @@ export function renderProcesses(processes) {
       row.insertCell().append(button);
     }
     row.cells[0].textContent = process.id;
-    row.cells[1].textContent = process.task;
+    row.cells[1].textContent = taskTitle(process.task);  // the plan block is for the worker, not people
+    row.cells[1].title = process.task || "";
     row.cells[2].textContent = (process.devices || []).join(", ") || "—";
     setBadge(row.cells[3], process.state);
     row.cells[4].textContent = process.started_at ? timeOf(process.started_at) : "";

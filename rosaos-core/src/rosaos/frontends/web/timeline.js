@@ -7,7 +7,7 @@ import { $, api, errorText, setBadge, setStatus, SignedOut, timeOf } from "./ses
 const MAX_PROCESSES = 30;
 const RESULT_CHARS = 160;
 
-const taskTitle = (task) => (task || "").split("\n\n")[0].trim() || "(no task)";
+export const taskTitle = (task) => (task || "").split("\n\n")[0].trim() || "(no task)";
 
 function element(tag, className, text) {
   const node = document.createElement(tag);
