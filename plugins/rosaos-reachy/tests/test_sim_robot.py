@@ -115,6 +115,32 @@ async def test_speak_writes_espeak_audio_and_sets_last_spoken(robot: Robot) -> N
     assert state["speaking"] is True and state["speaking_until"] == report["speaking_until"]
 
 
+LONG_ANSWER = (
+    "Here is everything I know about the weather this week, day by day, starting with Monday, "
+    "which will be cloudy in the morning and sunny later."
+)
+
+
+async def test_stop_speaking_cuts_off_a_long_answer(robot: Robot) -> None:
+    report = await robot.call("speak", text=LONG_ANSWER)
+    assert report["seconds"] > 5 and (await robot.call("get_state"))["speaking"] is True
+    stopped = await robot.call("stop_speaking")
+    assert stopped == {"stopped": True, "cut_off": LONG_ANSWER}
+    state = await robot.call("get_state")
+    assert state["speaking"] is False and state["speaking_until"] is None
+    assert (await robot.call("stop_speaking"))["stopped"] is False  # nothing left to stop
+
+
+async def test_speak_with_interrupt_replaces_the_sentence_being_spoken(robot: Robot) -> None:
+    await robot.call("speak", text=LONG_ANSWER)
+    report = await robot.call("speak", text="Sorry, go ahead.", interrupt=True)
+    assert report["cut_off"] == LONG_ANSWER and report["interrupted"] is False
+    assert report["speaking_until"] == pytest.approx(time.time() + report["seconds"], abs=1.0)
+    state = await robot.call("get_state")
+    assert state["last_spoken"] == "Sorry, go ahead." and state["speaking"] is True
+    await robot.call("stop_speaking")
+
+
 async def face_forward(robot: Robot) -> None:
     """Body and head facing forward: the sim camera then sees the photo centred."""
     await robot.call("rotate_body", degrees=0)
@@ -172,7 +198,7 @@ async def test_a_picture_outside_the_images_directory_is_refused(robot: Robot) -
 
 
 TOOLS = {
-    "get_state", "speak", "look", "look_at_point", "reset_head", "rotate_body", "move_antennas",
+    "get_state", "speak", "stop_speaking", "look", "look_at_point", "reset_head", "rotate_body", "move_antennas",
     "play_emotion", "list_emotions", "dance", "stop_motion", "wake_up", "sleep", "take_picture",
     "describe_image", "detect_faces", "remember_face", "forget_face", "analyze_face", "look_at_face",
 }  # fmt: skip

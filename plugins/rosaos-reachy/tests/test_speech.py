@@ -110,3 +110,53 @@ async def test_a_second_sentence_follows_the_first_instead_of_cutting_it(tmp_pat
     second = await talker.say("And the music is playing.")
     assert second.speaking_until == pytest.approx(first.speaking_until + second.seconds, abs=0.01)
     assert talker.last_spoken == "And the music is playing."
+
+
+class SilentCard:
+    """A sound card that plays nothing: the edge we do not own (PortAudio and a device)."""
+
+    def __init__(self) -> None:
+        self.played = 0
+        self.stopped = 0
+
+    def play(self, data: bytes) -> None:
+        self.played += 1
+
+    def stop(self) -> None:
+        self.stopped += 1
+
+
+def speaker_with_card(tmp_path: Path) -> tuple[Speaker, SilentCard]:
+    config = ReachySettings.model_validate({"audio_output": "host"})
+    speech = Speaker(build_engines(config), tmp_path / "speech", tmp_path, None, config.audio_output)
+    card = SilentCard()
+    speech._host, speech._host_checked = card, True  # type: ignore[assignment]
+    return speech, card
+
+
+async def test_a_stop_cuts_the_sentence_and_drops_the_one_waiting_its_turn(tmp_path: Path) -> None:
+    import asyncio
+
+    speech, card = speaker_with_card(tmp_path)
+    await speech.say("This is a rather long answer that goes on for a while.")
+    waiting = asyncio.create_task(speech.say("And this one waits its turn."))
+    for _ in range(500):  # until the second is synthesized (its file written) and waits its turn
+        if len(list((tmp_path / "speech").glob("*.wav"))) == 2:
+            break
+        await asyncio.sleep(0.01)
+    await asyncio.sleep(0.05)
+    stopped = await speech.stop()
+    report = await asyncio.wait_for(waiting, 2.0)
+    assert stopped.stopped and stopped.cut_off == "This is a rather long answer that goes on for a while."
+    assert report.interrupted is True and card.played == 1 and card.stopped == 1
+    assert speech.speaking is False and speech.last_spoken.startswith("This is a rather long")
+
+
+async def test_interrupt_says_the_new_sentence_at_once(tmp_path: Path) -> None:
+    speech, card = speaker_with_card(tmp_path)
+    first = await speech.say("This is a rather long answer that goes on for a while.")
+    began = time.monotonic()
+    second = await speech.say("Stop.", interrupt=True)
+    assert time.monotonic() - began < first.seconds / 2  # it did not wait for the first to end
+    assert second.cut_off == first.spoken and not second.interrupted and card.played == 2
+    assert speech.last_spoken == "Stop."

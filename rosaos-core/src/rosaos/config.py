@@ -177,6 +177,12 @@ class VoiceConfig(BaseModel):
     """Spoken language (the local engine is English-only)."""
     speak_replies: bool = True
     """Say the kernel's replies to what was heard through the Reachy Mini's ``speak`` (when served)."""
+    barge_in: bool = True
+    """Let the user talk over the robot: it stops speaking and listens (a live source only)."""
+    barge_in_margin_db: float = Field(default=10.0, ge=0, le=40)
+    """How much louder than the robot's own voice at the microphones the user must be to barge in."""
+    barge_in_min_seconds: float = Field(default=0.1, ge=0.03, le=1)
+    """Speech over the robot for this long stops it (shorter is a cough)."""
 
 
 def default_data_dir() -> Path:

@@ -13,16 +13,21 @@ from fastmcp import FastMCP
 from pydantic import Field
 
 from rosaos.drivers import DeviceContext
-from rosaos_reachy.annotations import ACT, READ_ONLY
+from rosaos_reachy.annotations import ACT, READ_ONLY, SET
 from rosaos_reachy.backend import ReachyBackend
 from rosaos_reachy.motion_tools import register_motion_tools
-from rosaos_reachy.speech import SpeechReport
+from rosaos_reachy.speech import SpeechReport, StopReport
 from rosaos_reachy.state import ReachyState
 from rosaos_reachy.vision_tools import register_vision_tools
 
 SpokenText = Annotated[
     str,
     Field(min_length=1, max_length=1000, description="What to say, as plain text in the user's language."),
+]
+
+Interrupt = Annotated[
+    bool,
+    Field(description="Cut off whatever the robot is saying (and sentences waiting) and say this now."),
 ]
 
 
@@ -41,14 +46,20 @@ def build_server(ctx: DeviceContext, backend: ReachyBackend) -> FastMCP:
         return backend.state()
 
     @mcp.tool(annotations=ACT)
-    async def speak(text: SpokenText) -> SpeechReport:
+    async def speak(text: SpokenText, interrupt: Interrupt = False) -> SpeechReport:
         """Say ``text`` out loud to the user. Returns once the robot has started speaking, with the
         duration; it keeps talking while you go on. A sentence said while another is still being
-        spoken follows it.
+        spoken follows it, unless ``interrupt`` cuts that one off (and any waiting their turn).
 
         This is how to answer the user: keep it short and conversational.
         """
-        return await backend.speaker.say(text)
+        return await backend.speaker.say(text, interrupt=interrupt)
+
+    @mcp.tool(annotations=SET)
+    async def stop_speaking() -> StopReport:
+        """Stop talking at once: cut off the sentence being spoken and drop any waiting their turn.
+        The voice front end calls it when the user talks over the robot."""
+        return await backend.speaker.stop()
 
     register_motion_tools(mcp, backend)
     register_vision_tools(mcp, backend)

@@ -5,6 +5,10 @@ device, else nowhere but the WAV file (always written, under ``<data>/drivers/re
 :meth:`Speaker.say` returns as soon as playback has started, with the duration, so a process is
 never blocked for the length of a sentence; ``speaking_until`` tells the voice front end when to
 listen again (it ignores the robot's own voice until then).
+
+A sentence can be cut off: :meth:`Speaker.stop` (the ``stop_speaking`` tool, the voice front
+end when the user talks over the robot, the emergency stop) ends the one being played and drops
+those waiting their turn; ``say(..., interrupt=True)`` does the same, then says its own.
 """
 
 from __future__ import annotations
@@ -49,6 +53,19 @@ class SpeechReport(BaseModel):
     """Wall-clock time (epoch seconds) when the robot will have finished speaking."""
     skipped: list[str] = []
     """Engines tried before, and why each was not used."""
+    interrupted: bool = False
+    """True when the sentence was cut off before it was played (a stop came while it waited)."""
+    cut_off: str | None = None
+    """With ``interrupt``: the sentence this one cut off, if one was being spoken."""
+
+
+class StopReport(BaseModel):
+    """What ``stop_speaking`` returns."""
+
+    stopped: bool
+    """True if the robot was speaking (or had sentences waiting) and now is silent."""
+    cut_off: str | None = None
+    """The sentence that was cut off."""
 
 
 @dataclass
@@ -102,6 +119,10 @@ class Speaker:
         self._host_checked = False
         self._lock = asyncio.Lock()
         self._count = 0
+        self._generation = 0
+        """Bumped by every stop: a sentence queued before it is not said."""
+        self._stopped = asyncio.Event()
+        self._waiting = 0
 
     def output(self) -> Output:
         """Where speech plays now (see the module docstring)."""
@@ -125,49 +146,71 @@ class Speaker:
     def speaking(self) -> bool:
         return time.time() < self.speaking_until
 
-    async def say(self, text: str) -> SpeechReport:
+    async def say(self, text: str, interrupt: bool = False) -> SpeechReport:
         """Synthesize ``text``, start playing it, and return at once with its duration.
 
         Two processes may answer at once: a sentence waits for the one being spoken to end
-        rather than cutting it off (only :meth:`stop` cuts). With no audio output there is
-        nothing to hear, so it does not wait; ``speaking_until`` still adds up.
+        rather than cutting it off, unless ``interrupt`` (then it cuts off the one being
+        spoken, and drops those waiting). With no audio output there is nothing to hear, so it
+        does not wait; ``speaking_until`` still adds up.
         """
-        async with self._lock:
-            data, engine, skipped = await self._synthesize(text)
-            seconds = wav_duration(data)
-            path = await asyncio.to_thread(self._write, data)
-            output = self.output()
-            if output != "file" and self.speaking:
-                await asyncio.sleep(min(MAX_QUEUE_WAIT_S, self.speaking_until - time.time()))
-            starts = max(time.time(), self.speaking_until)
-            if output == "robot":
-                assert self.robot is not None
-                await asyncio.to_thread(self.robot.play_sound, str(path))
-            elif output == "host":
-                assert self._host is not None
-                await asyncio.to_thread(self._host.play, data)
-            self.last_spoken = text
-            self.speaking_until = starts + seconds
-            return SpeechReport(
-                spoken=text,
-                engine=engine,
-                seconds=round(seconds, 2),
-                output=output,
-                file=str(path.relative_to(self.data_dir)),
-                speaking_until=round(self.speaking_until, 3),
-                skipped=skipped,
-            )
+        cut_off = (await self.stop()).cut_off if interrupt else None
+        generation = self._generation
+        self._waiting += 1
+        try:
+            async with self._lock:
+                data, engine, skipped = await self._synthesize(text)
+                seconds = wav_duration(data)
+                path = await asyncio.to_thread(self._write, data)
+                output = self.output()
+                if output != "file" and self.speaking and generation == self._generation:
+                    await self._wait_turn(generation)
+                report = SpeechReport(
+                    spoken=text,
+                    engine=engine,
+                    seconds=round(seconds, 2),
+                    output=output,
+                    file=str(path.relative_to(self.data_dir)),
+                    speaking_until=round(self.speaking_until, 3),
+                    skipped=skipped,
+                    cut_off=cut_off,
+                )
+                if generation != self._generation:  # stopped while it waited or was synthesized
+                    return report.model_copy(update={"interrupted": True})
+                starts = max(time.time(), self.speaking_until)
+                if output == "robot":
+                    assert self.robot is not None
+                    await asyncio.to_thread(self.robot.play_sound, str(path))
+                elif output == "host":
+                    assert self._host is not None
+                    await asyncio.to_thread(self._host.play, data)
+                self.last_spoken = text
+                self.speaking_until = starts + seconds
+                return report.model_copy(update={"speaking_until": round(self.speaking_until, 3)})
+        finally:
+            self._waiting -= 1
 
-    async def stop(self) -> None:
-        """Cut the sentence being played, if any."""
-        if not self.speaking:
-            return
+    async def _wait_turn(self, generation: int) -> None:
+        """Wait for the sentence being spoken to end, or for a stop, whichever comes first."""
+        self._stopped.clear()
+        wait = min(MAX_QUEUE_WAIT_S, self.speaking_until - time.time())
+        with contextlib.suppress(TimeoutError):
+            await asyncio.wait_for(self._stopped.wait(), max(0.0, wait))
+
+    async def stop(self) -> StopReport:
+        """Cut off the sentence being played, if any, and drop the sentences waiting their turn."""
+        speaking, waiting = self.speaking, self._waiting > 0
+        self._generation += 1
+        self._stopped.set()
+        if not speaking:
+            return StopReport(stopped=waiting)
         self.speaking_until = time.time()
         with contextlib.suppress(Exception):
             if self.robot is not None and self.robot.has_speaker:
                 await asyncio.to_thread(self.robot.stop_sound)
             if self._host is not None:
                 self._host.stop()
+        return StopReport(stopped=True, cut_off=self.last_spoken)
 
     async def _synthesize(self, text: str) -> tuple[bytes, str, list[str]]:
         skipped: list[str] = []

@@ -150,3 +150,29 @@ async def test_saying_a_reply_calls_speak_and_stops_listening_until_it_is_said()
 
 async def test_a_reply_the_robot_cannot_say_is_reported_not_raised() -> None:
     assert await ReachyLink(DeviceClient.in_process(FastMCP("r"))).say("hello") is False
+
+
+async def test_a_barge_in_listens_again_at_once_and_stops_the_robot() -> None:
+    mcp = FastMCP("reachy")
+    stops: list[bool] = []
+
+    @mcp.tool
+    def speak(text: str) -> dict[str, Any]:
+        return {"spoken": text, "seconds": 20.0, "speaking_until": 9e9}
+
+    @mcp.tool
+    def stop_speaking() -> dict[str, Any]:
+        stops.append(True)
+        return {"stopped": True, "cut_off": "a long answer"}
+
+    link = ReachyLink(DeviceClient.in_process(mcp))
+    await link.say("a long answer")
+    assert link.muted(1e9)
+    link.unmute()
+    assert not link.muted(1e9)
+    assert await link.stop_speaking() is True and stops == [True]
+
+
+async def test_stopping_a_robot_without_the_tool_is_reported_not_raised() -> None:
+    assert await ReachyLink(DeviceClient.in_process(FastMCP("r"))).stop_speaking() is False
+    assert await NoRobot().stop_speaking() is False

@@ -19,6 +19,7 @@ from typing import Any, Literal
 from rosaos.auth import token_path
 from rosaos.config import ConfigError, RosaosConfig, VoiceConfig, load_config
 from rosaos.frontends.console import console as terminal
+from rosaos.frontends.voice.bargein import BargeIn, BargeInSettings
 from rosaos.frontends.voice.pipeline import Heard, KernelHandoff, PipelineStats, VoicePipeline
 from rosaos.frontends.voice.replies import ReplyFollower
 from rosaos.frontends.voice.robot import find_reachy
@@ -86,14 +87,15 @@ async def _run(
             robot = await find_reachy(client, token)
             report = _printer(json_output)
             replies = ReplyFollower(client, robot, _reply_reporter(report)) if voice.speak_replies else None
+            segmenter = Segmenter(
+                _classifier(voice),
+                silence_seconds=voice.silence_seconds,
+                min_speech_seconds=voice.min_speech_seconds,
+                max_utterance_seconds=voice.max_utterance_seconds,
+            )
             pipeline = VoicePipeline(
                 source,
-                Segmenter(
-                    _classifier(voice),
-                    silence_seconds=voice.silence_seconds,
-                    min_speech_seconds=voice.min_speech_seconds,
-                    max_utterance_seconds=voice.max_utterance_seconds,
-                ),
+                segmenter,
                 stt,
                 _gate(voice, camera is not None),
                 KernelHandoff(client),
@@ -103,6 +105,7 @@ async def _run(
                 camera=camera,
                 eye_contact=EyeContact(HaarFaceDetector(), voice.eye_contact_frames) if camera else None,
                 replies=replies,
+                barge_in=_barge_in(voice, segmenter),
             )
             pipeline.report(
                 Heard("ready", _describe(voice, source, pipeline, client), {"kernel": client.base_url})
@@ -158,6 +161,16 @@ def _classifier(voice: VoiceConfig) -> FrameClassifier:
     if voice.vad == "energy":
         return EnergyClassifier(voice.energy_threshold_db)
     return SileroClassifier(voice.vad_threshold)
+
+
+def _barge_in(voice: VoiceConfig, segmenter: Segmenter) -> BargeIn | None:
+    """Barge-in shares the segmenter's VAD: one listens while the robot speaks, the other otherwise."""
+    if not voice.barge_in:
+        return None
+    settings = BargeInSettings(
+        margin_db=voice.barge_in_margin_db, min_speech_seconds=voice.barge_in_min_seconds
+    )
+    return BargeIn(segmenter.classifier, settings)
 
 
 def _gate(voice: VoiceConfig, has_camera: bool) -> WakeGate:
@@ -218,7 +231,7 @@ def _line(heard: Heard) -> str | None:
         return f"  {heard.kind}: {data.get('reason', '')}"
     if heard.kind == "error":
         return f"  error: {heard.text}"
-    if heard.kind in ("muted", "notice"):
+    if heard.kind in ("muted", "notice", "barge_in"):
         return f"  {heard.text}"
     if heard.kind == "done":
         return f"done: {heard.text}"

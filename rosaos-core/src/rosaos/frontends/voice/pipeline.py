@@ -3,6 +3,11 @@
 Reading audio and understanding it run as two tasks joined by a queue, so a slow transcription
 never makes the microphone drop audio; utterances are still handled one at a time, in order,
 because the follow-up window depends on what came before.
+
+While the robot speaks, a live source's audio goes to :class:`~rosaos.frontends.voice.bargein.BargeIn`
+instead of the segmenter: when the user talks over the robot, the robot stops speaking, listening
+resumes at once (with the audio since just before the user began), and what they say is a new
+utterance like any other, within the follow-up window.
 """
 
 from __future__ import annotations
@@ -14,9 +19,16 @@ from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol
 
+from rosaos.frontends.voice.bargein import BargeIn
 from rosaos.frontends.voice.replies import ReplyFollower
 from rosaos.frontends.voice.robot import NoRobot, RobotLink
-from rosaos.frontends.voice.sources import SAMPLE_RATE, AudioSource, FrameSource, VoiceError
+from rosaos.frontends.voice.sources import (
+    SAMPLE_RATE,
+    AudioChunk,
+    AudioSource,
+    FrameSource,
+    VoiceError,
+)
 from rosaos.frontends.voice.stt import SpeechToText
 from rosaos.frontends.voice.vad import Segmenter, SpeechSegment
 from rosaos.frontends.voice.wake import EyeContact, WakeGate, is_noise
@@ -32,6 +44,7 @@ HeardKind = Literal[
     "ignored",
     "dropped",
     "muted",
+    "barge_in",
     "notice",
     "error",
     "done",
@@ -106,6 +119,8 @@ class PipelineStats:
     """Commands the kernel could not be given (after retries)."""
     errors: int = 0
     """Utterances that could not be transcribed."""
+    interruptions: int = 0
+    """Times the user talked over the robot and it stopped to listen (barge-in)."""
 
 
 class VoicePipeline:
@@ -126,6 +141,7 @@ class VoicePipeline:
         eye_contact: EyeContact | None = None,
         replies: ReplyFollower | None = None,
         reply_wait_seconds: float = 60.0,
+        barge_in: BargeIn | None = None,
     ) -> None:
         self.source = source
         self.segmenter = segmenter
@@ -139,6 +155,7 @@ class VoicePipeline:
         self.eye_contact = eye_contact
         self.replies = replies
         self.reply_wait_seconds = reply_wait_seconds
+        self.barge_in = barge_in
         self.stats = PipelineStats()
         self._background: set[asyncio.Task[Any]] = set()
         self._t0 = time.monotonic()
@@ -199,13 +216,38 @@ class VoicePipeline:
                 if not muted:  # the robot's own voice: drop it, and whatever was half-heard
                     muted = True
                     self.segmenter.reset()
+                    if self.barge_in is not None:
+                        self.barge_in.start()
                     self.report(Heard("muted", "the robot is speaking; not listening"))
+                if self.barge_in is None or not self.barge_in.feed(chunk):
+                    continue
+                muted = False
+                for segment in self._barged_in(self.barge_in, chunk):
+                    yield self._announce(segment)
                 continue
             muted = False
             for segment in self.segmenter.feed(chunk):
                 yield self._announce(segment)
         for segment in self.segmenter.flush():
             yield self._announce(segment)
+
+    def _barged_in(self, barge_in: BargeIn, chunk: AudioChunk) -> list[SpeechSegment]:
+        """The user talks over the robot: stop it, listen from just before they began."""
+        self.stats.interruptions += 1
+        self.robot.unmute()
+        self._in_background(self.robot.stop_speaking())
+        onset = barge_in.onset if barge_in.onset is not None else chunk.start
+        # Talking over the robot is talking to it: what they say needs no wake phrase.
+        self.gate.open(onset)
+        self.report(
+            Heard(
+                "barge_in",
+                "the user spoke over the robot; it stops to listen",
+                {"onset": round(onset, 3), "at": round(chunk.start + chunk.samples.size / SAMPLE_RATE, 3)},
+            )
+        )
+        self.segmenter.reset()
+        return [segment for kept in barge_in.take() for segment in self.segmenter.feed(kept)]
 
     def _announce(self, segment: SpeechSegment) -> SpeechSegment:
         self.stats.utterances += 1

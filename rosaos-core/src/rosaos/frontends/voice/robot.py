@@ -6,7 +6,9 @@ a served reachy instance there is nothing to move; that is logged once and liste
 
 While the robot speaks, its own voice reaches the microphones. :meth:`ReachyLink.muted` says when
 to ignore audio: until ``speaking_until`` (epoch seconds) if ``get_state`` gives it, while
-``speaking`` is true, or else for an estimate of how long the newest ``last_spoken`` takes to say.
+``speaking`` is true, or else for an estimate of how long the newest ``last_spoken`` takes to say. When the user talks over the robot
+(barge-in, :mod:`rosaos.frontends.voice.bargein`), :meth:`ReachyLink.unmute` listens again at once
+and :meth:`ReachyLink.stop_speaking` cuts the sentence off with the driver's ``stop_speaking``.
 """
 
 from __future__ import annotations
@@ -53,6 +55,14 @@ class RobotLink(Protocol):
         """Keep track of whether the robot is speaking, until cancelled."""
         ...
 
+    def unmute(self) -> None:
+        """Listen again now: the user is talking over the robot."""
+        ...
+
+    async def stop_speaking(self) -> bool:
+        """Cut off what the robot is saying; True if it was speaking."""
+        ...
+
 
 class NoRobot:
     """No reachy instance is served: nothing to move, nothing to ignore."""
@@ -68,6 +78,12 @@ class NoRobot:
 
     async def follow(self) -> None:
         return None
+
+    def unmute(self) -> None:
+        return None
+
+    async def stop_speaking(self) -> bool:
+        return False
 
 
 def doa_to_yaw(doa: float) -> float:
@@ -87,6 +103,8 @@ class ReachyLink:
         self.muted_until = 0.0
         self._last_spoken: str | None = None
         self._failed: set[str] = set()
+        self._unmuted_at = 0.0
+        """Wall time of the last barge-in: a ``get_state`` asked before it is stale."""
 
     async def woke(self, doa: float | None) -> None:
         if doa is not None:
@@ -116,9 +134,25 @@ class ReachyLink:
 
     async def follow(self) -> None:
         while True:
+            asked = time.time()
             with contextlib.suppress(DeviceError):
-                self.observe(await self.device.get_state(), time.time())
+                state = await self.device.get_state()
+                if asked >= self._unmuted_at:  # else it may still show the sentence just cut off
+                    self.observe(state, time.time())
             await asyncio.sleep(POLL_SECONDS)
+
+    def unmute(self) -> None:
+        self._unmuted_at = time.time()
+        self.muted_until = 0.0
+
+    async def stop_speaking(self) -> bool:
+        try:
+            report = await self.device.call("stop_speaking", {})
+        except DeviceError as error:
+            log.warning("reachy could not stop speaking: %s", error)
+            return False
+        stopped = report.get("stopped") if isinstance(report, dict) else getattr(report, "stopped", False)
+        return bool(stopped)
 
     def observe(self, state: dict[str, Any], now: float) -> None:
         """Update :attr:`muted_until` from one ``get_state`` reading taken at ``now``."""

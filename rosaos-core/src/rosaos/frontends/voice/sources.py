@@ -193,14 +193,17 @@ class Rechunker:
 
 
 class WavSource:
-    """A WAV file, for tests and demos. ``paced`` delivers it at real-time speed, like a microphone."""
+    """A WAV file, for tests and demos. ``paced`` delivers it at real-time speed, like a microphone.
 
-    live = False
+    ``live`` plays the file as if it were a microphone in the room (paced): the robot's own voice
+    is then ignored by time, and the user can talk over it (barge-in).
+    """
 
-    def __init__(self, path: Path, paced: bool = False) -> None:
+    def __init__(self, path: Path, paced: bool = False, *, live: bool = False) -> None:
         self.path = path.resolve()
         self.name = f"wav:{self.path}"
-        self.paced = paced
+        self.live = live
+        self.paced = paced or live
         self.samples = read_wav(self.path)
         self.started_wall = time.time()
         self.began: float | None = None
@@ -208,6 +211,8 @@ class WavSource:
 
     async def chunks(self, chunk_samples: int) -> AsyncIterator[AudioChunk]:
         begun = self.began = time.monotonic()
+        if self.paced:  # its chunks' wall times are when they are "heard", as a microphone's are
+            self.started_wall = time.time()
         for offset in range(0, self.samples.size, chunk_samples):
             piece = self.samples[offset : offset + chunk_samples]
             start = offset / SAMPLE_RATE
