@@ -70,13 +70,48 @@ def memory_kib(pid: int) -> dict[str, int]:
 
 
 def host_instances(data_dir: Path) -> dict[int, str]:
-    """Device host pid → instance name, from the supervisor's ``run/devices.json``."""
-    path = data_dir / "run" / "devices.json"
+    """Device host pid → its instances' names, from the supervisor's ``run/devices.json``."""
+    names: dict[int, list[str]] = {}
+    for name, row in served(data_dir).items():
+        if row.get("pid"):
+            names.setdefault(row["pid"], []).append(name)
+    return {pid: ", ".join(sorted(instances)) for pid, instances in names.items()}
+
+
+def served(data_dir: Path) -> dict[str, Any]:
+    """The supervisor's ``run/devices.json``: instance → pid, status, url."""
     try:
-        devices = json.loads(path.read_text()).get("devices", {})
+        devices = json.loads((data_dir / "run" / "devices.json").read_text()).get("devices", {})
     except (OSError, ValueError):
         return {}
-    return {row["pid"]: name for name, row in devices.items() if row.get("pid")}
+    return devices if isinstance(devices, dict) else {}
+
+
+def cpu_seconds(pids: list[int]) -> float:
+    """User + system CPU time the processes have used so far (reaped children included).
+
+    Unlike wall time, this barely depends on what else the machine runs: on a busy machine it
+    says what start-up costs, where the wall time mostly says how long the queue for a core was.
+    """
+    ticks = os.sysconf("SC_CLK_TCK")
+    total = 0
+    for pid in pids:
+        try:
+            fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        total += sum(int(value) for value in fields[11:15])  # utime, stime, cutime, cstime
+    return total / ticks
+
+
+def wait_all_healthy(data_dir: Path, started: float) -> float | None:
+    """Seconds from the start until every served instance is healthy (the Reachy sim boots on)."""
+    while time.perf_counter() - started < START_LIMIT:
+        devices = served(data_dir)
+        if devices and all(row.get("status") == "healthy" for row in devices.values()):
+            return time.perf_counter() - started
+        time.sleep(0.1)
+    return None
 
 
 def role(pid: int, hosts: dict[int, str]) -> str:
@@ -86,7 +121,10 @@ def role(pid: int, hosts: dict[int, str]) -> str:
     if "rosaos.processes.worker" in line:
         return "worker"
     if "rosaos.processes.forkserver" in line:
-        return "fork server"
+        # Workers are forked from the fork server and keep its command line: tell them by parent.
+        parent = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1]
+        parent_line = Path(f"/proc/{parent}/cmdline").read_bytes().decode(errors="replace")
+        return "worker (forked)" if "rosaos.processes.forkserver" in parent_line else "fork server"
     if "rosaos.devices.host" in line:
         return f"device host {hosts.get(pid, '?')}"
     if "reachy" in line.lower() and "daemon" in line.lower():
@@ -117,6 +155,9 @@ def one_run(idle: float) -> dict[str, Any]:
             else:
                 raise RuntimeError("rosaos up exited before its banner:\n" + "\n".join(lines[-20:]))
             start_seconds = time.perf_counter() - started
+            start_cpu = cpu_seconds([up.pid, *children(up.pid)])
+            statuses = {name: row.get("status") for name, row in served(Path(home) / "data").items()}
+            all_healthy = wait_all_healthy(Path(home) / "data", started)
             time.sleep(idle)
             processes = []
             hosts = host_instances(Path(home) / "data")
@@ -136,6 +177,9 @@ def one_run(idle: float) -> dict[str, Any]:
     daemon = sum(p.get("pss", 0) for p in processes if p["role"] == "reachy daemon")
     return {
         "start_seconds": round(start_seconds, 2),
+        "start_cpu_seconds": round(start_cpu, 2),
+        "statuses_at_banner": statuses,
+        "all_devices_healthy_seconds": None if all_healthy is None else round(all_healthy, 2),
         "processes": processes,
         "pss_total_mib": round(total / 1024, 1),
         "pss_without_reachy_daemon_mib": round((total - daemon) / 1024, 1),
@@ -163,6 +207,8 @@ def main() -> None:
         summary.add_column(column, justify="right" if column != "figure" else "left")
     for label, values in (
         ("start to banner (s)", starts),
+        ("CPU time of the tree until the banner (s)", [run["start_cpu_seconds"] for run in runs]),
+        ("start to every device healthy (s)", [run["all_devices_healthy_seconds"] or -1 for run in runs]),
         ("PSS, whole tree (MiB)", [run["pss_total_mib"] for run in runs]),
         ("PSS without Reachy daemon (MiB)", [run["pss_without_reachy_daemon_mib"] for run in runs]),
         ("processes", [len(run["processes"]) for run in runs]),
@@ -178,6 +224,7 @@ def main() -> None:
             process["role"], f"{process.get('pss', 0) / 1024:.1f}", f"{process.get('rss', 0) / 1024:.1f}"
         )
     console.print(last)
+    console.print(f"statuses at the banner (last run): {runs[-1]['statuses_at_banner']}")
     report = {
         "machine": {"cpus": os.cpu_count(), "platform": platform.platform(), "load": os.getloadavg()},
         "runs": runs,

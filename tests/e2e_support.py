@@ -38,6 +38,8 @@ async def running_kernel(home: Path, world: str, **options: Any) -> AsyncIterato
     kernel = Kernel(config, build_world(config, load_drivers()), **options)
     await kernel.start(port=0)
     try:
+        # "Up" does not wait for background devices (the Reachy simulator); these tests use them.
+        await kernel.devices_settled()
         yield kernel
     finally:
         await kernel.stop()

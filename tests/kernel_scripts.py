@@ -6,7 +6,9 @@ this folder on ``PYTHONPATH``.
 Kernel script: user text ``DEVICES: TASK; DEVICES: TASK`` launches one process per clause
 (``kitchen_light,living_room_lamp: call turn_off {}``); ``slow SECONDS`` sleeps and answers;
 ``turn on the kitchen light`` is the one natural sentence it knows. A worker callback gets the
-reply ``process N: STATUS``.
+reply ``process N: STATUS``. Timers, as an LLM would use the tools: ``timer SECONDS: DEVICES:
+TASK`` calls ``set_timer`` with the rest as its action, ``list timers`` and ``cancel timer``
+call ``list_timers`` and ``cancel_timer``; a ``[Timer fired]`` event runs its action line as above.
 
 Worker script (the task): lines ``call TOOL {json args}``, ``sleep SECONDS``, run in order.
 """
@@ -67,6 +69,15 @@ def kernel_model() -> FunctionModel:
             head = body.splitlines()[0]
             fields = dict(item.split("=", 1) for item in head.split() if "=" in item)
             return ModelResponse(parts=[TextPart(f"process {fields['worker']}: {fields['status']}")])
+        if tag == "[Timer fired":
+            body = body.split("\naction: ", 1)[1]
+        if body.startswith("timer "):
+            seconds, _, action = body.removeprefix("timer ").partition(": ")
+            return ModelResponse(
+                parts=[ToolCallPart("set_timer", {"action": action, "in_seconds": float(seconds)})]
+            )
+        if body.strip() in ("list timers", "cancel timer"):
+            return ModelResponse(parts=[ToolCallPart(body.strip().replace(" ", "_"), {})])
         body = SENTENCES.get(body.strip().lower(), body)
         if body.startswith("slow "):
             await asyncio.sleep(float(body.split()[1]))

@@ -7,6 +7,8 @@ driver on its rosbridge simulator: "move the turtlebot forward half a meter" pau
 
 from __future__ import annotations
 
+import asyncio
+import io
 from collections.abc import AsyncIterator
 from typing import Any
 
@@ -14,7 +16,10 @@ import httpx
 import pytest
 import pytest_asyncio
 from e2e_support import device_state, eventually, kernel_api, running_kernel
+from rich.console import Console
 
+from rosaos.frontends.chat import send_and_wait
+from rosaos.kernel.client import KernelClient
 from rosaos.kernel.runtime import Kernel
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
@@ -123,3 +128,20 @@ async def test_the_web_buttons_answer_through_the_api(api: httpx.AsyncClient) ->
     assert again.status_code == 409 and "already yes" in again.text
     assert (await api.post("/confirmations/9999", json={"answer": "yes"})).status_code == 404
     assert (await ended(api, question["process_id"]))["state"] == "ok"
+
+
+async def test_rosaos_chat_wait_shows_the_question_it_waits_on(
+    api: httpx.AsyncClient, kernel: Kernel
+) -> None:
+    """`rosaos chat -m ... --wait` prints the confirmation its process asks, so the user knows to answer."""
+    shown = io.StringIO()
+    async with KernelClient(kernel.url, kernel.token, timeout=30) as client:
+        waiting = asyncio.create_task(send_and_wait(client, ORDER, 30, Console(file=shown, width=200)))
+        question = await pending_question(api)
+        await chat(api, "yes")
+        code, conversation = await waiting
+    assert code == 0, conversation.summary()
+    assert (
+        f"confirm {question['id']}: The turtlebot will move distance (meters 0.5). Go ahead?"
+        in shown.getvalue()
+    )

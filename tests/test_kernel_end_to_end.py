@@ -22,6 +22,7 @@ from e2e_support import device_state, eventually, kernel_api, running_kernel
 from playwright.async_api import async_playwright
 
 from rosaos.kernel.runtime import Kernel, KernelError, _bind_or_explain
+from rosaos.kernel.timer_tools import TIMER_TOOL_NAMES
 from rosaos.kernel.tools import KERNEL_TOOL_NAMES
 from rosaos.models.select import ModelSpec
 
@@ -111,14 +112,14 @@ async def test_chat_turns_on_the_kitchen_light_through_a_process(
     assert any(u["kind"] == "process_ended" and u["data"]["worker_id"] == process_id for u in updates)
 
 
-async def test_the_kernel_is_offered_its_four_tools_and_no_device_tool(
+async def test_the_kernel_is_offered_its_process_and_timer_tools_and_no_device_tool(
     kernel: Kernel, api: httpx.AsyncClient
 ) -> None:
     from kernel_scripts import KERNEL_TOOLS_SEEN
 
     await chat(api, "slow 0")
     await eventually(lambda: settled(api))
-    assert set(KERNEL_TOOL_NAMES) == KERNEL_TOOLS_SEEN
+    assert set(KERNEL_TOOL_NAMES) | set(TIMER_TOOL_NAMES) == KERNEL_TOOLS_SEEN
 
 
 async def test_a_second_kernel_on_the_same_port_says_what_is_running(kernel: Kernel) -> None:
@@ -216,7 +217,8 @@ async def test_the_web_page_chats_with_the_kernel_and_shows_the_device_change(
     if CHROMIUM is None:
         pytest.skip("Chromium is not installed: ./scripts/test installs Debian's chromium package")
     await eventually(lambda: settled(api))
-    brightness = '.device-card[data-device="living_room_lamp"] [data-key="brightness"]'
+    # The lamp's card is its declared swatch: the colour's name and the brightness, as text.
+    swatch = '.device-card[data-device="living_room_lamp"] .swatch-name'
     async with async_playwright() as playwright:
         browser = await playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
         try:
@@ -225,13 +227,13 @@ async def test_the_web_page_chats_with_the_kernel_and_shows_the_device_change(
             page.on("pageerror", lambda error: errors.append(str(error)))
             await page.goto(kernel.login_link())
             await page.wait_for_selector("#app", state="visible")
-            before = await (await page.wait_for_selector(brightness)).inner_text()
-            assert before != "10"
+            before = await (await page.wait_for_selector(swatch)).inner_text()
+            assert not before.endswith(", 10 %"), before  # earlier tests of this module set it
 
             await page.fill("#chat-input", 'living_room_lamp: call set_brightness {"brightness": 10}')
             await page.press("#chat-input", "Enter")
 
-            await page.wait_for_selector(f"{brightness}:text-is('10')", timeout=30_000)
+            await page.wait_for_selector(f"{swatch}:has-text(', 10 %')", timeout=30_000)
             await page.wait_for_selector("#chat-log .msg-kernel", timeout=30_000)
             await page.screenshot(path=str(tmp_path / "web-page.png"), full_page=True)
 

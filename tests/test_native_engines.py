@@ -47,6 +47,11 @@ ENGINES = {
         "assert not cascade.empty(); cascade.detectMultiScale(cv2.cvtColor(image, cv2.COLOR_BGR2GRAY))\n"
         "assert cv2.imencode('.jpg', image)[0]\n"
     ),
+    "OpenCV people detector (the ROS driver's detect_people)": (
+        "from rosaos_ros.perception import find_people\n"
+        "from rosaos_ros.sim.images import render\n"
+        "assert len(find_people(render(0, 1, 0, [(3.0, 1.0)]))) == 1\n"
+    ),
 }
 
 

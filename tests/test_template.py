@@ -109,9 +109,9 @@ def test_the_rendered_tests_pass_in_a_fresh_venv(venv: Path, rendered: Path, tmp
         XDG_DATA_HOME=str(tmp_path / "data"),
     )
     summary = result.stdout.strip().splitlines()[-1]
-    # 18 kit checks, the behaviour test and 4 intents tests; nothing skipped: the template covers
-    # every check.
-    assert summary.startswith("23 passed"), result.stdout
+    # 21 kit checks, the behaviour test and 4 intents tests; nothing skipped: the template covers
+    # every check (its card and its notices included).
+    assert summary.startswith("26 passed"), result.stdout
 
 
 def test_the_driver_is_in_the_demo_world_of_the_fresh_venv(venv: Path, tmp_path: Path) -> None:
@@ -125,3 +125,29 @@ def test_the_driver_is_in_the_demo_world_of_the_fresh_venv(venv: Path, tmp_path:
     assert list(rows) == ["acme_plug"]  # only rosaos and this driver are installed there
     assert rows["acme_plug"]["health"].startswith("healthy"), rows["acme_plug"]
     assert rows["acme_plug"]["state"] == {"on": False, "level": 50}
+
+
+CARD_PROBE = """
+import asyncio, json
+from rosaos.plugins import load_drivers
+spec = load_drivers().drivers["acme_plug"].spec
+from rosaos_acme_plug.plugin import sim_backend
+from rosaos.drivers import DeviceContext
+backend = spec.backends["sim"](DeviceContext("acme_plug", "", spec.settings(), "sim", {"on": True, "level": 70}))
+state = asyncio.run(backend.state()).model_dump()
+print(json.dumps({"card": spec.card.view() if spec.card else None, "state": state}))
+"""
+
+
+def test_the_generated_driver_gets_a_card_from_its_declaration(venv: Path, tmp_path: Path) -> None:
+    """A third-party driver declares its card in its own plugin; the kernel hands it to the page.
+
+    The view printed here is what ``GET /devices`` carries under ``card``; the page draws each
+    widget kind (rosaos-core/tests/kernel/test_web_cards.py checks the drawing in Chromium).
+    """
+    result = run([str(venv / "bin" / "python"), "-c", CARD_PROBE], cwd=tmp_path)
+    probe = json.loads(result.stdout)
+    widgets = probe["card"]["widgets"]
+    assert [(w["kind"], w["key"]) for w in widgets] == [("flag", "on"), ("gauge", "level")]
+    assert widgets[1]["unit"] == "%"
+    assert all(w["key"] in probe["state"] for w in widgets)  # what the conformance kit also checks

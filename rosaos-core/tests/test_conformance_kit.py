@@ -24,10 +24,11 @@ from pathlib import Path
 from typing import Annotated, Any
 
 from fastmcp import FastMCP
-from pydantic import Field
+from pydantic import BaseModel, Field
 
 from rosaos import hookimpl
-from rosaos.drivers import DeviceBackend, DeviceError, DeviceSettings, DemoInstance, DriverSpec
+from rosaos.cards import Card, flag, gauge
+from rosaos.drivers import DeviceBackend, DeviceError, DeviceSettings, DemoInstance, DriverSpec, NoticeSpec
 from rosaos.testing import DriverConformance
 
 
@@ -75,11 +76,19 @@ def sloppy_server(ctx, backend):
     return mcp
 
 
+class Heat(BaseModel):
+    celsius: float
+
+
+BROKEN_NOTICES = {"overheated": NoticeSpec(description="Too hot", data=Heat, example={"celsius": "very"})}
+
+
 def spec(**overrides):
     fields = dict(
         name="fake", title="Fake", description="A fake device.", concurrency="exclusive",
         prompt="You control a fake device.", server=good_server, backends={"sim": Backend},
         demo={"fake_one": DemoInstance(description="Fake one", sim={"level": 20})},
+        card=Card.of(flag("on"), gauge("level", unit="%")),
     )
     return DriverSpec(**(fields | overrides))
 
@@ -103,9 +112,10 @@ ASKING_INTENTS.write_text(
 @hookimpl
 def register_drivers(register):
     register(spec())
-    register(spec(name="sloppy", server=sloppy_server))
+    register(spec(name="sloppy", server=sloppy_server, notices=BROKEN_NOTICES, card=None))
     register(spec(name="placeholder", implemented=False))
     register(spec(name="asks", intents=ASKING_INTENTS))
+    register(spec(name="miscarded", card=Card.of(gauge("level"), gauge("brightness"))))
 
 
 class Kit(DriverConformance):
@@ -146,6 +156,10 @@ class TestMissing(Kit):
 
 class TestAsksWithATool(Kit):
     driver = "asks"
+
+
+class TestMiscarded(Kit):
+    driver = "miscarded"
 """
 
 
@@ -205,7 +219,7 @@ INTENTS_SKIPPED = {"test_intents_file_parses": "skipped", "test_intents_name_exi
 
 
 def test_a_good_driver_passes_every_check_that_applies(report: Report) -> None:
-    assert len(report["TestGood"]) == 18
+    assert len(report["TestGood"]) == 21
     assert not_passed(report, "TestGood") == INTENTS_SKIPPED
     assert "the driver ships no intents file" in report["TestGood"]["test_intents_file_parses"].message
 
@@ -219,6 +233,7 @@ def test_each_defect_of_a_sloppy_driver_fails_its_own_check(report: Report) -> N
         "test_get_state_is_read_only",
         "test_get_state_returns_a_json_object",
         "test_out_of_range_argument_is_a_tool_error",
+        "test_declared_notices_validate",
     }
 
 
@@ -234,11 +249,24 @@ def test_failure_messages_name_the_tool_and_the_fix(report: Report) -> None:
     )
 
 
+def test_a_notice_whose_example_breaks_its_model_fails(report: Report) -> None:
+    message = report["TestSloppy"]["test_declared_notices_validate"].message
+    assert "notice 'overheated': its example does not validate" in message
+
+
 def test_a_question_intent_that_calls_an_acting_tool_fails(report: Report) -> None:
     assert not_passed(report, "TestAsksWithATool") == {"test_intents_name_existing_tools": "failed"}
     message = report["TestAsksWithATool"]["test_intents_name_existing_tools"].message
     assert "LevelUp: a question (answer/reply) must call a read-only tool" in message
     assert "Level:" not in message  # the get_state question is fine
+
+
+def test_a_card_that_reads_a_key_get_state_lacks_fails(report: Report) -> None:
+    assert not_passed(report, "TestMiscarded") == INTENTS_SKIPPED | {
+        "test_card_reads_keys_of_get_state": "failed"
+    }
+    message = report["TestMiscarded"]["test_card_reads_keys_of_get_state"].message
+    assert "reads brightness, which get_state does not return (it returns: on, level)" in message
 
 
 def test_an_explicit_out_of_range_call_is_used(report: Report) -> None:
@@ -261,6 +289,7 @@ def test_a_placeholder_driver_runs_the_declaration_checks_and_skips_the_server_o
         "test_concurrency_is_declared",
         "test_sim_backend_exists",
         "test_settings_do_not_shadow_instance_keys",
+        "test_declared_notices_validate",
     }
     assert (
         "driver not implemented yet: placeholder is a placeholder"

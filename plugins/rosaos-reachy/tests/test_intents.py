@@ -29,7 +29,7 @@ def intents_file(probe: IntentProbe) -> IntentsFile:
     [
         # The Reachy tasks of the bench (../shared/bench/tasks/robots.yaml).
         ("Reachy, look to your left", ("look", {"direction": "left"})),
-        ("Say good morning to everyone", ("speak", {"text": "good morning to everyone"})),
+        ("Say good morning to everyone", ("speak", {"text": "good morning"})),
         # Other phrasings.
         ("look right", ("look", {"direction": "right"})),
         ("reachy turn your head up", ("look", {"direction": "up"})),

@@ -178,10 +178,18 @@ async def test_a_remembered_face_is_recognised_and_can_be_forgotten(robot: Robot
     assert (await robot.call("detect_faces"))["faces"][0]["looks_like"] is None
 
 
-async def test_describe_image_without_a_model_says_none_is_configured(robot: Robot) -> None:
+async def test_describe_image_without_a_model_describes_locally_and_says_a_model_would_say_more(
+    robot: Robot,
+) -> None:
+    await face_forward(robot)
     picture = await robot.call("take_picture")
-    message = await robot.error("describe_image", path=picture["path"])
-    assert "no vision model configured" in message and "GROQ_API_KEY" in message
+    answer = await robot.call("describe_image", path=picture["path"])
+    faces = (await robot.call("detect_faces", path=picture["path"]))["count"]
+    assert faces >= 1, "the simulated camera faces the photo of a person"
+    seen = f"{faces} face{'s' if faces != 1 else ''}"
+    assert answer.startswith(f"Described on this computer, without a vision model: I see {seen}")
+    assert "Main colours:" in answer and "brightness" in answer
+    assert "A vision model would say more" in answer and "GROQ_API_KEY" in answer
 
 
 async def test_a_picture_outside_the_images_directory_is_refused(robot: Robot) -> None:

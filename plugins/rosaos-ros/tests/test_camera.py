@@ -21,7 +21,7 @@ async def test_capture_image_saves_a_jpeg_from_the_compressed_topic(open_robot: 
     assert result["image"].startswith("turtlebot-") and result["image"].endswith(".jpg")
     assert result["topic"] == "/oakd/rgb/preview/image_raw/compressed"
     with Image.open(saved) as image:
-        assert (image.format, image.size) == ("JPEG", (160, 120))
+        assert (image.format, image.size) == ("JPEG", (320, 240))
 
 
 async def test_capture_image_decodes_a_raw_topic_too(open_robot: Any, tmp_path: Path) -> None:

@@ -58,6 +58,13 @@ def intents_file(probe: IntentProbe) -> IntentsFile:
         ("bring the turtlebot home", ("turtlebot", "dock", {})),
         ("turtlebot, go back to the dock", ("turtlebot", "dock", {})),
         ("spin the turtlebot around", ("turtlebot", "rotate", {"degrees": 360})),
+        # Searches (a long task) and looking.
+        ("make the turtlebot search the room for a person", ("turtlebot", "search", {"target": "person"})),
+        ("turtlebot, look around for someone", ("turtlebot", "search", {"target": "person"})),
+        ("have the turtlebot look for people in the lab", ("turtlebot", "search", {"target": "person"})),
+        ("search the house for anybody with the turtlebot", ("turtlebot", "search", {"target": "person"})),
+        ("send the turtlebot to find someone", ("turtlebot", "search", {"target": "person"})),
+        ("does the turtlebot see anyone", ("turtlebot", "detect_people", {})),
     ],
 )
 def test_sentence_maps_to_tool_call(
@@ -72,6 +79,14 @@ def test_sentence_maps_to_tool_call(
 )
 def test_other_devices_and_requests_do_not_match(probe: IntentProbe, sentence: str) -> None:
     assert probe.match(sentence) is None
+
+
+@pytest.mark.parametrize(
+    "sentence", ["search the environment for a person", "look for someone", "look around for a person"]
+)
+def test_a_search_needs_no_robot_named_when_only_one_can_search(sentence: str) -> None:
+    probe = IntentProbe(SPEC, devices={"turtlebot": "turtlebot"})
+    assert probe.match(sentence) == ("turtlebot", "search", {"target": "person"})
 
 
 def test_left_and_right_number_words_keep_their_signs_in_any_order(probe: IntentProbe) -> None:

@@ -79,11 +79,14 @@ def test_color_list_holds_exactly_the_named_colours(intents_file: IntentsFile) -
     assert values == list(NAMED_COLORS)
 
 
-def test_every_intent_template_uses_the_device_slot(intents_file: IntentsFile) -> None:
+def test_every_intent_template_names_its_target(intents_file: IntentsFile) -> None:
+    # A bulb is never "the only one" by default: a template names the device, its area, or all.
     for name, intent in intents_file.hassil["intents"].items():
+        every = intents_file.actions[name].every
         for data in intent["data"]:
             for sentence in data["sentences"]:
-                assert "{device}" in sentence, f"{name}: {sentence!r} names no device"
+                named = "{device}" in sentence or "{area}" in sentence or (every and "{every}" in sentence)
+                assert named, f"{name}: {sentence!r} names no device"
 
 
 # The homeassistant: table — Home Assistant's multilingual intents mapped onto the bulb's tools

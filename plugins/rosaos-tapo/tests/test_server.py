@@ -17,6 +17,7 @@ TOOLS = {
     "set_brightness",
     "adjust_brightness",
     "set_color_temp",
+    "adjust_color_temp",
     "set_color",
     "set_color_name",
 }
@@ -56,7 +57,7 @@ async def test_relative_tools_are_not_idempotent(open_bulb: Any) -> None:
     repeated_changes = {
         tool.name for tool in tools if tool.annotations and not tool.annotations.idempotent_hint
     }
-    assert repeated_changes == {"toggle", "adjust_brightness"}
+    assert repeated_changes == {"toggle", "adjust_brightness", "adjust_color_temp"}
 
 
 # get_state and the simulator's initial state
@@ -156,6 +157,24 @@ async def test_adjust_brightness_never_goes_above_100(open_bulb: Any) -> None:
 
 
 # Colour temperature
+
+
+async def test_adjust_color_temp_warms_from_the_current_temperature(open_bulb: Any) -> None:
+    async with open_bulb(on=True, brightness=100, hue=0, saturation=0, color_temp=4000) as bulb:
+        state = await bulb.call("adjust_color_temp", change=-700)
+    assert state == {"on": True, "brightness": 100, "hue": 0, "saturation": 0, "color_temp": 3300}
+
+
+async def test_adjust_color_temp_stays_within_what_the_bulb_can_do(open_bulb: Any) -> None:
+    async with open_bulb(on=False, color_temp=6000) as bulb:
+        state = await bulb.call("adjust_color_temp", change=2000)
+    assert (state["on"], state["color_temp"]) == (True, 6500)
+
+
+async def test_adjust_color_temp_from_a_colour_starts_at_neutral_white(open_bulb: Any) -> None:
+    async with open_bulb(on=True, hue=240, saturation=100, color_temp=0) as bulb:
+        state = await bulb.call("adjust_color_temp", change=-700)
+    assert state["color_temp"] == 3300
 
 
 async def test_set_color_temp_sets_white_and_keeps_brightness_and_colour(open_bulb: Any) -> None:

@@ -311,8 +311,16 @@ def ps(
     url: UrlOption = None,
     json_output: JsonOption = False,
     all_processes: Annotated[bool, typer.Option("--all", "-a", help="Include ended processes.")] = False,
+    timers: Annotated[
+        bool,
+        typer.Option("--timers", "-t", help="List the timers instead (with --all, fired and cancelled too)."),
+    ] = False,
 ) -> None:
-    """List the kernel's processes: id, state, devices held, age, task."""
+    """List the kernel's processes: id, state, devices held, age, task. --timers: its timers."""
+    if timers:
+        from rosaos.kernel.timer_command import timers_command
+
+        raise typer.Exit(timers_command(config, url, json_output, all_processes))
     from rosaos.kernel.commands import ps_command
 
     raise typer.Exit(ps_command(config, url, json_output, all_processes))
@@ -338,14 +346,36 @@ def log(
     raise typer.Exit(log_command(config, url, device, process, since, limit, json_output))
 
 
+@app.command("open")
+def open_page(
+    config: ConfigOption = None,
+    url: UrlOption = None,
+    json_output: JsonOption = False,
+    browser: Annotated[
+        bool, typer.Option("--browser", "-b", help="Also open the link in a web browser.")
+    ] = False,
+) -> None:
+    """Print a fresh one-time login link for the web page of the running kernel."""
+    from rosaos.kernel.open_command import open_command
+
+    raise typer.Exit(open_command(config, url, browser, json_output))
+
+
 @app.command("kill")
 def kill(
     process_id: Annotated[int, typer.Argument(help="Process id, as `rosaos ps` shows it.", min=1)],
     config: ConfigOption = None,
     url: UrlOption = None,
     json_output: JsonOption = False,
+    timer: Annotated[
+        bool, typer.Option("--timer", help="The id is a timer's (`rosaos ps --timers`): cancel it.")
+    ] = False,
 ) -> None:
-    """Terminate a process; its device leases are released."""
+    """Terminate a process; its device leases are released. --timer: cancel a timer instead."""
+    if timer:
+        from rosaos.kernel.timer_command import cancel_timer_command
+
+        raise typer.Exit(cancel_timer_command(config, url, process_id, json_output))
     from rosaos.kernel.commands import kill_command
 
     raise typer.Exit(kill_command(config, url, process_id, json_output))

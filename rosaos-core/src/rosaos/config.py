@@ -86,7 +86,7 @@ class KernelConfig(BaseModel):
     fork_server: bool = True
     """Fork one-off workers from a pre-imported fork server (milliseconds instead of seconds);
     it costs one more process of about a warm worker's memory. Off: one-offs start a new Python."""
-    job_timeout: float = Field(default=120.0, gt=0, le=3600)
+    job_timeout: float = Field(default=300.0, gt=0, le=3600)
     confirm_timeout: float = Field(default=30.0, gt=0, le=600)
     """Seconds a confirmation question waits for a yes; silence is a no."""
     """Seconds a process agent may run before it is killed and its leases released."""

@@ -19,10 +19,20 @@ import re
 from collections.abc import Awaitable, Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Generic, Literal, TypeVar
 
 from fastmcp import FastMCP
+from mcp.types import ToolAnnotations
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+from rosaos.cards import Card
+
+# Re-exported: notices are part of the driver contract.
+from rosaos.device_notices import Notice as Notice
+from rosaos.device_notices import NoticeBoard as NoticeBoard
+from rosaos.device_notices import NoticeError as NoticeError
+from rosaos.device_notices import NoticeImportance as NoticeImportance
+from rosaos.device_notices import NoticeSpec as NoticeSpec
 
 Concurrency = Literal["exclusive", "shared"]
 """How many live processes may hold one instance: ``exclusive`` means one, ``shared`` any."""
@@ -78,12 +88,35 @@ class DeviceContext:
     data_dir: Path = Path(".")
     """The rosaOS data directory; per-driver caches go in ``data_dir / "drivers" / <driver>``."""
 
+    notices: NoticeBoard = field(default_factory=NoticeBoard, compare=False, repr=False)
+    """Where :meth:`notify` posts; the hosting layer serves it to the kernel at ``GET /notices``."""
+
     @property
     def images_dir(self) -> Path:
         """Shared directory for images (camera captures) that tools return by relative path."""
         return self.data_dir / "images"
 
+    def notify(
+        self,
+        name: str,
+        data: Mapping[str, Any] | None = None,
+        *,
+        message: str | None = None,
+        importance: NoticeImportance | None = None,
+    ) -> Notice:
+        """Tell the kernel something happened on this device: it becomes a ``[Device notice]`` event.
 
+        ``name`` must be declared in ``DriverSpec.notices`` and ``data`` must validate against
+        its model (else :class:`NoticeError`). ``message`` is one sentence a person can hear
+        (default "<instance>: <name>"); ``importance`` overrides the declared default. Safe to
+        call from any thread; returns at once (the kernel fetches notices, rate-limited and
+        deduplicated).
+        """
+        return self.notices.post(name, data, message=message, importance=importance)
+
+
+BackendT = TypeVar("BackendT", bound=DeviceBackend)
+"""A driver's backend class: what its factories build and its server and ``safe_stop`` receive."""
 BackendFactory = Callable[[DeviceContext], DeviceBackend]
 ServerFactory = Callable[[DeviceContext, Any], FastMCP]
 SafeStop = Callable[[Any], Awaitable[None]]
@@ -105,8 +138,13 @@ class DemoInstance(BaseModel):
     area: str | None = None
 
 
-class DriverSpec(BaseModel):
-    """The declaration a driver plugin hands to ``register`` in :func:`register_drivers`."""
+class DriverSpec(BaseModel, Generic[BackendT]):
+    """The declaration a driver plugin hands to ``register`` in :func:`register_drivers`.
+
+    Generic in the driver's backend class, so a type checker sees that ``server`` and
+    ``safe_stop`` receive what ``backends`` build (``DriverSpec(server=build_server, ...)``
+    infers it; a plain ``DriverSpec`` annotation means any backend).
+    """
 
     model_config = ConfigDict(arbitrary_types_allowed=True, frozen=True)
 
@@ -123,11 +161,12 @@ class DriverSpec(BaseModel):
     prompt: str
     """The device prompt appended to a process agent's system prompt when it holds the device."""
     settings: type[BaseModel] = DeviceSettings
-    server: ServerFactory
-    backends: Mapping[BackendName, BackendFactory]
+    server: Callable[[DeviceContext, BackendT], FastMCP]
+    """Builds the instance's FastMCP server from its context and its started backend."""
+    backends: Mapping[BackendName, Callable[[DeviceContext], BackendT]]
     intents: Path | None = None
     """Optional hassil-format ``intents.yaml`` mapping sentence templates to tool calls."""
-    safe_stop: SafeStop = no_safe_stop
+    safe_stop: Callable[[BackendT], Awaitable[None]] = no_safe_stop
     """Awaitable called with the backend on an emergency stop: stop motion, cancel goals."""
     confirm_on_real: bool = False
     """Ask a person before destructive tools of a ``real`` instance unless config says otherwise."""
@@ -135,10 +174,22 @@ class DriverSpec(BaseModel):
     """Instances this driver adds to the demo world; defaults to one instance named after it."""
     implemented: bool = True
     """False for a placeholder driver: listed, never served. Not an error."""
+    notices: Mapping[str, NoticeSpec] = Field(default_factory=dict)
+    """The notices this driver may post with :meth:`DeviceContext.notify`, by name
+    (``battery_low``, ``docked``, ``person_seen``). The conformance kit validates them."""
+    own_process: bool = False
+    """Serve each instance in a host process of its own. ``rosaos up`` otherwise hosts every
+    simulated instance of the drivers that do not ask for it in one shared process. Set it when a
+    backend runs a heavy daemon or native code whose crash must not take other devices along."""
+    background_start: bool = False
+    """``rosaos up`` does not wait for this device: it says "rosaOS is up" while the device is still
+    ``starting`` (a physics simulator that boots for seconds), and grants it once it answers."""
     login: Callable[[DeviceContext], int] | None = None
     """Interactive account login for ``rosaos devices login NAME`` (cloud services such as Spotify):
     called with the instance's context, talks to the user on stdin/stdout, keeps what it obtains
     under ``ctx.data_dir / "drivers" / <driver>``, and returns the exit code. None: no login needed."""
+    card: Card | None = None
+    """How the web page draws an instance's state (:mod:`rosaos.cards`); None: a plain key list."""
 
     @field_validator("name")
     @classmethod
@@ -172,3 +223,20 @@ class DriverSpec(BaseModel):
 def read_packaged_text(package_file: str, name: str) -> str:
     """Read a text file that ships next to ``package_file`` (pass ``__file__``)."""
     return (Path(package_file).parent / name).read_text(encoding="utf-8")
+
+
+# --- tool annotations --------------------------------------------------------------------------
+# Every device tool declares the MCP hints (the conformance kit checks): clients assume the worst
+# otherwise. These are the combinations drivers use; pass one as ``@mcp.tool(annotations=...)``,
+# or ``READ_ONLY.model_copy(update={...})`` for a variation.
+
+READ_ONLY = ToolAnnotations(readOnlyHint=True, destructiveHint=False, idempotentHint=True)
+"""Reads the device and changes nothing (``get_state``, a camera picture)."""
+SETS = ToolAnnotations(readOnlyHint=False, destructiveHint=False, idempotentHint=True)
+"""Sets a value: doing it twice is doing it once (``turn_on``, ``set_brightness``, ``safe_stop``)."""
+CHANGES = ToolAnnotations(readOnlyHint=False, destructiveHint=False, idempotentHint=False)
+"""A change relative to now, or a new event each time (``toggle``, ``next_track``, ``speak``)."""
+MOVES = ToolAnnotations(readOnlyHint=False, destructiveHint=True, idempotentHint=False)
+"""A robot moves, or anything may happen (raw publishes, service calls, goals)."""
+DELETES = ToolAnnotations(readOnlyHint=False, destructiveHint=True, idempotentHint=True)
+"""Removes what was stored (forgetting a face); doing it twice is doing it once."""

@@ -1,7 +1,7 @@
 """``rosaos bench`` end to end: a small task file through the real CLI, the kernel, workers and simulators.
 
 One run (module fixture) of a desk world (a Tapo lamp, Spotify, and a drone whose driver is not
-installed) with four tasks: two that must pass, one whose ``expect`` is wrong on purpose (it must
+installed) with five tasks: two that must pass, a conversation (two sentences, the second 1.5 s later), one whose ``expect`` is wrong on purpose (it must
 fail, and the run goes on), one that needs the drone (pending, not a failure). The tests read
 its JSON.
 """
@@ -54,6 +54,14 @@ tasks:
   - id: desk-wrong-expectation
     say: Turn on the lamp
     expect: {lamp: {on: true, brightness: 50}}
+  - id: desk-conversation
+    say:
+      - Turn on the lamp
+      - {after: 1.5, text: Play some jazz}
+    settle: 30
+    expect:
+      lamp: {on: true}
+      spotify: {is_playing: true, track: {contains: so what}}
   - id: desk-drone-up
     say: Tell the drone to take off
     expect: {drone: {altitude: {gt: 1}}}
@@ -115,6 +123,17 @@ def test_music_plays_from_the_task_files_catalog(run: dict[str, Any]) -> None:
     assert trial["status"] == "pass", trial
 
 
+def test_a_conversation_posts_each_item_after_its_delay_and_settles_after_the_last(
+    run: dict[str, Any],
+) -> None:
+    conversation = task(run, "desk-conversation")
+    [trial] = conversation["trials"]
+    assert trial["status"] == "pass", trial
+    assert trial["processes"] == 2
+    assert trial["latency_s"] >= 1.5  # measured from the first post: includes the wait
+    assert conversation["say"] == "Turn on the lamp / Play some jazz"
+
+
 def test_a_wrong_expectation_fails_with_the_differing_key(run: dict[str, Any]) -> None:
     [trial] = task(run, "desk-wrong-expectation")["trials"]
     assert trial["status"] == "fail"
@@ -132,10 +151,10 @@ def test_a_task_for_a_driver_that_is_not_installed_is_pending_not_failed(run: di
 
 def test_the_summary_leaves_pending_tasks_out(run: dict[str, Any]) -> None:
     summary = run["json"]["summary"]
-    assert (summary["tasks"], summary["passed"], summary["pending"]) == (3, 2, 1)
-    assert summary["success_rate"] == pytest.approx(2 / 3)
+    assert (summary["tasks"], summary["passed"], summary["pending"]) == (4, 3, 1)
+    assert summary["success_rate"] == pytest.approx(3 / 4)
     assert summary["latency_p50_s"] <= summary["latency_p95_s"]
-    assert summary["pass_hat_k"] == {"1": pytest.approx(2 / 3)}
+    assert summary["pass_hat_k"] == {"1": pytest.approx(3 / 4)}
 
 
 def test_out_writes_the_same_result(run: dict[str, Any]) -> None:
@@ -153,7 +172,7 @@ def test_the_table_shows_result_differences_and_pending(run: dict[str, Any]) -> 
     assert "desk-wrong-expectation │ fail" in text
     assert "lamp.brightness: 50 vs 100" in text
     assert "desk-drone-up          │ pending" in text
-    assert "Overall: 2/3 passed (66.7%) · 1 pending (not counted)" in text
+    assert "Overall: 3/4 passed (75.0%) · 1 pending (not counted)" in text
 
 
 # --- usage errors and the exit code (in-process: nothing runs) ----------------------------------

@@ -138,3 +138,26 @@ def test_tasks_are_selected_by_glob_on_their_id(tmp_path: Path) -> None:
     [selection] = select_tasks([load_task_file(path)], ["lamp-*"])
     assert [task.id for task in selection.tasks] == ["lamp-on"]
     assert select_tasks([load_task_file(path)], ["robot-*"]) == []
+
+
+def test_say_may_be_a_conversation_with_delays(tmp_path: Path) -> None:
+    tasks = "tasks:\n  - id: t1\n    say: [Lamp on, {after: 3, text: Play jazz}]\n    settle: 180\n    expect: {}\n"
+    [task] = load_task_file(write(tmp_path, WORLD + tasks)).tasks
+    assert [(item.text, item.after) for item in task.utterances] == [("Lamp on", 0.0), ("Play jazz", 3.0)]
+    assert (task.settle, task.said) == (180, "Lamp on / Play jazz")
+
+
+def test_settle_defaults_to_a_minute_and_stops_at_ten(tmp_path: Path) -> None:
+    [task] = load_task_file(write(tmp_path, WORLD + "tasks:\n  - {id: t1, say: Lamp on, expect: {}}\n")).tasks
+    assert task.settle == 60
+    path = write(tmp_path, WORLD + "tasks:\n  - {id: t1, say: Lamp on, settle: 601, expect: {}}\n")
+    assert f"{path}: tasks[0] (t1).settle: Input should be less than or equal to 600" in error_of(path)
+
+
+def test_a_blank_or_negative_item_is_an_error(tmp_path: Path) -> None:
+    blank = write(tmp_path, WORLD + "tasks:\n  - {id: t1, say: [Lamp on, '  '], expect: {}}\n")
+    assert "not blank" in error_of(blank)
+    early = write(tmp_path, WORLD + "tasks:\n  - {id: t1, say: [{after: -1, text: Lamp on}], expect: {}}\n")
+    assert "after: Input should be greater than or equal to 0" in error_of(early)
+    empty = write(tmp_path, WORLD + "tasks:\n  - {id: t1, say: [], expect: {}}\n")
+    assert "say" in error_of(empty)

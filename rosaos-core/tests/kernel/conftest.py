@@ -18,8 +18,10 @@ import pytest
 import uvicorn
 from fastapi import FastAPI
 
+from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api import create_app
 from rosaos.kernel.events import EventStore
+from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
 
 # Test modules import kernel_support from this folder (pytest's importlib mode does not put it
@@ -29,6 +31,7 @@ if HERE not in sys.path:
     sys.path.insert(0, HERE)
 
 from kernel_support import ORIGIN, TestRuntime, eventually, kitchen_light  # noqa: E402
+from web_support import page  # noqa: E402, F401  (the Chromium fixture of the web page tests)
 
 
 @pytest.fixture
@@ -44,13 +47,23 @@ async def updates(store: EventStore) -> UpdateStream:
 
 
 @pytest.fixture
-def runtime(store: EventStore, updates: UpdateStream) -> TestRuntime:
-    return TestRuntime(events=store, updates=updates, device_list=[kitchen_light()])
+async def runtime(store: EventStore, updates: UpdateStream) -> TestRuntime:
+    activity = await ActivityLog.open(store.database)
+    timers = await TimerBook.open(store)
+    return TestRuntime(
+        events=store, updates=updates, device_list=[kitchen_light()], activity=activity, timers=timers
+    )
 
 
 @pytest.fixture
-def app(runtime: TestRuntime) -> FastAPI:
-    return create_app(runtime)
+def images_dir(tmp_path: Path) -> Path:
+    """Where the app looks for camera frames (``<device>-<time>.jpg``)."""
+    return tmp_path / "images"
+
+
+@pytest.fixture
+def app(runtime: TestRuntime, images_dir: Path) -> FastAPI:
+    return create_app(runtime, images_dir=images_dir)
 
 
 @pytest.fixture

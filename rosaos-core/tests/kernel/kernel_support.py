@@ -12,8 +12,12 @@ from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from typing import Any
 
+from rosaos.kernel.activity import ActivityLog
+from rosaos.kernel.api_types import DeviceView, EmergencyStopReport, EmergencyStopState
+from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.events import EventStore
 from rosaos.kernel.login import LoginCodes
+from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
 from rosaos.processes.jobs import WorkerCallback
 
@@ -53,6 +57,11 @@ class TestRuntime:
     terminated: list[int] = field(default_factory=list)
     estop_reason: str | None = None
     estop_time: datetime | None = None
+    activity: ActivityLog | None = None
+    """Set by fixtures that need ``GET /activity`` (it shares the event store's database)."""
+    confirmations: ConfirmationDesk = field(default_factory=lambda: ConfirmationDesk(timeout=60))
+    timers: TimerBook | None = None
+    """Set by the ``runtime`` fixture (opening the table needs the event loop)."""
 
     async def processes(self, include_ended: bool = False) -> Sequence[Any]:
         return [p for p in self.process_list if include_ended or p.state == "running"]
@@ -65,23 +74,21 @@ class TestRuntime:
                 return process
         raise KeyError(f"no process {process_id}")
 
-    async def devices(self) -> Sequence[dict[str, Any]]:
-        return self.device_list
+    async def devices(self) -> Sequence[DeviceView]:
+        return [DeviceView.model_validate(device) for device in self.device_list]
 
-    async def emergency_stop(self, reason: str) -> dict[str, Any]:
+    async def emergency_stop(self, reason: str) -> EmergencyStopReport:
         self.estop_reason, self.estop_time = reason, datetime.now(UTC)
-        return self.emergency_stop_state()
+        return EmergencyStopReport(latched=True, reason=reason, time=self.estop_time)
 
-    async def reset_emergency_stop(self) -> dict[str, Any]:
+    async def reset_emergency_stop(self) -> EmergencyStopState:
         self.estop_reason = self.estop_time = None
         return self.emergency_stop_state()
 
-    def emergency_stop_state(self) -> dict[str, Any]:
-        return {
-            "latched": self.estop_reason is not None,
-            "reason": self.estop_reason,
-            "time": self.estop_time.isoformat() if self.estop_time else None,
-        }
+    def emergency_stop_state(self) -> EmergencyStopState:
+        return EmergencyStopState(
+            latched=self.estop_reason is not None, reason=self.estop_reason, time=self.estop_time
+        )
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         self.callbacks.append((event_id, callback))

@@ -78,3 +78,11 @@ def test_history_is_cut_at_a_user_turn_so_no_tool_return_is_orphaned() -> None:
     first = trimmed[0]
     assert isinstance(first, ModelRequest)
     assert isinstance(first.parts[0], UserPromptPart)
+
+
+def test_the_default_prompt_tells_the_model_about_every_timer_tool_and_timer_event() -> None:
+    from rosaos.kernel.timer_tools import TIMER_TOOL_NAMES
+
+    prompt = kernel_prompt([])
+    assert all(name in prompt for name in TIMER_TOOL_NAMES)
+    assert "[Timer fired]" in prompt and "late" in prompt

@@ -60,21 +60,18 @@ async def test_devices_show_status_and_live_state(client: httpx.AsyncClient, run
     assert device["description"] == "Ceiling light in the kitchen"
 
 
-async def test_devices_keep_extra_keys_the_runtime_adds(
+async def test_devices_say_which_processes_hold_them_and_the_schema_says_so(
     client: httpx.AsyncClient, runtime: TestRuntime
 ) -> None:
     runtime.device_list = [
-        {
-            "name": "vacuum",
-            "driver": "ros",
-            "concurrency": "exclusive",
-            "status": "unhealthy",
-            "error": "no answer",
-        }
+        {"name": "vacuum", "driver": "ros", "concurrency": "exclusive", "status": "healthy", "held_by": [7]}
     ]
     [device] = (await client.get("/devices", headers=AUTH)).json()
-    assert device["error"] == "no answer"
+    assert device["held_by"] == [7]
     assert device["state"] is None
+    schema = (await client.get("/openapi.json")).json()["components"]["schemas"]["DeviceView"]
+    assert "held_by" in schema["properties"]
+    assert schema.get("additionalProperties") is not True  # every key is declared
 
 
 async def test_ended_processes_are_listed_only_when_asked(
@@ -97,7 +94,9 @@ async def test_the_emergency_stop_latches_until_reset(
     assert (await client.get("/estop", headers=AUTH)).json() == unlatched
     stopped = (await client.post("/estop", json={"reason": "robot near the stairs"}, headers=AUTH)).json()
     assert (stopped["latched"], stopped["reason"]) == (True, "robot near the stairs")
-    assert (await client.get("/estop", headers=AUTH)).json() == stopped
+    assert (stopped["terminated"], stopped["devices"], stopped["saved"]) == ([], [], True)
+    latch = {key: stopped[key] for key in ("latched", "reason", "time")}
+    assert (await client.get("/estop", headers=AUTH)).json() == latch
     assert (await client.post("/estop/reset", headers=AUTH)).json() == unlatched
 
 

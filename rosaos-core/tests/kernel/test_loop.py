@@ -36,7 +36,10 @@ def test_a_failed_worker_callback_shows_the_error() -> None:
 
 def test_device_notices_and_errors_are_tagged() -> None:
     notice = DeviceNotice(device="turtlebot", message="battery low")
-    assert render_event(event("device_notice", notice)) == "[Device notice] device=turtlebot battery low"
+    assert (
+        render_event(event("device_notice", notice))
+        == "[Device notice] device=turtlebot importance=info battery low"
+    )
     assert render_event(event("error", ErrorReport(message="disk full"))) == "[Error] disk full"
 
 

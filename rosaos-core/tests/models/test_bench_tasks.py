@@ -42,9 +42,7 @@ from rosaos.processes.prompts import DEFAULT_PROCESS_PROMPT, process_system_prom
 
 READ_ONLY_TOOLS = {"get_state"}
 # Task files that no implementation can pass as written; reported to the bench's owner.
-TASK_FILE_ISSUES = {
-    "multi-undock-and-blue": "expect names hue but not saturation, which any blue must raise from 0",
-}
+TASK_FILE_ISSUES: dict[str, str] = {}
 REGISTRY = load_drivers()
 
 
@@ -110,12 +108,12 @@ def _match(world: TaskFile, task: BenchTask) -> Any:
     if (reason := _covered(world, task, REGISTRY)) is not None:
         pytest.skip(reason)
     devices, initial = _devices(world, task)
-    result = IntentMatcher(sources_from_config(devices, REGISTRY)).match(task.say)
+    result = IntentMatcher(sources_from_config(devices, REGISTRY)).match(task.said)
     planned = {step.tool for process in result.processes for step in process.plan.steps}
     if not task.expect and result.is_exact:
-        assert planned <= READ_ONLY_TOOLS, f"{task.say!r} must change nothing, but plans {sorted(planned)}"
+        assert planned <= READ_ONLY_TOOLS, f"{task.said!r} must change nothing, but plans {sorted(planned)}"
     if task.expect:
-        assert result.is_exact, f"{task.say!r} did not match: {result.reply}"
+        assert result.is_exact, f"{task.said!r} did not match: {result.reply}"
         assert {device for process in result.processes for device in process.devices} == set(task.expect)
     return result, devices, initial
 
@@ -136,6 +134,6 @@ async def test_bench_task_runs_on_simulators(world: TaskFile, task: BenchTask, t
         output, state = await _run(process.task, device, devices[device], tmp_path)
         replies.append(output)
         problems = device_differences(task.expect.get(device, {}), initial[device], state, device)
-        assert not problems, f"{task.say!r} on {device}: {[str(p) for p in problems]}"
+        assert not problems, f"{task.said!r} on {device}: {[str(p) for p in problems]}"
     if task.reply is not None:
         assert reply_matches(task.reply, replies), f"no reply matches {task.reply!r}: {replies}"

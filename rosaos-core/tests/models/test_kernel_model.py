@@ -145,11 +145,9 @@ async def test_a_failed_callback_without_a_plan_still_says_what_failed(kernel: K
     assert await kernel.say(event) == "Sorry, that didn't work (timeout): ran past its timeout"
 
 
-async def test_notices_and_errors_are_acknowledged_without_acting(kernel: Kernel) -> None:
-    assert (
-        await kernel.say("[Device notice] device=turtlebot battery low")
-        == "Noted: device=turtlebot battery low"
-    )
+async def test_info_notices_are_quiet_and_errors_acknowledged_without_acting(kernel: Kernel) -> None:
+    # A notice without importance=notify is not worth interrupting anyone (test_notice_plan.py).
+    assert (await kernel.say("[Device notice] device=turtlebot battery low")).strip() == ""
     assert await kernel.say("[Error] the web page lost its connection") == (
         "Something went wrong: the web page lost its connection"
     )
@@ -168,3 +166,14 @@ def test_handles_text_is_true_only_for_what_it_answers_exactly(model: LocalInten
     [process] = model.match("Turn on the kitchen light").processes
     assert model.handles_text(f"[Worker callback] worker=1 status=ok task={process.task!r}\noutput: Done.")
     assert not model.handles_text("[Worker callback] worker=1 status=ok task='free-form'\noutput: Done.")
+
+
+async def test_yes_to_did_you_mean_launches_the_suggested_command(kernel: Kernel) -> None:
+    asked = await kernel.say("[User said] could the kitchen light go off")
+    assert asked == "Did you mean: turn off the kitchen light?"
+    assert kernel.launched == []
+    await kernel.say("[User said] yes")
+    [(task, devices)] = kernel.launched
+    plan = decode_plan(task)
+    assert devices == ["kitchen_light"]
+    assert plan is not None and plan.steps[0].tool == "turn_off"

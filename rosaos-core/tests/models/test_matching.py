@@ -82,9 +82,9 @@ def test_an_ambiguous_device_gets_a_question_naming_the_candidates(
 
 
 def test_a_partial_name_asks_among_the_devices_it_fits(matcher: IntentMatcher) -> None:
-    result = matcher.match("Dim the light")  # only the bulb's own template, which needs a name
+    result = matcher.match("Dim the light")  # every light answers to its kind; a lamp is a light
     assert (result.kind, result.processes) == ("clarify", ())
-    assert result.reply == "Which one do you mean: kitchen light or bedroom light?"
+    assert result.reply == "Which one do you mean: kitchen light, living room lamp or bedroom light?"
 
 
 def test_an_unknown_device_of_a_known_kind_is_refused_naming_what_exists(matcher: IntentMatcher) -> None:

@@ -44,17 +44,30 @@ def _task(messages: list[ModelMessage]) -> str:
 
 
 def by_task() -> FunctionModel:
-    """Plays the part its task names: "sleep", "crash", else set every level to 42 (for manager tests)."""
-    level, sleep, crash = sets_level(), sleeps(), exits()
+    """Plays the part its task names: "sleep", "crash", "ramp", else set every level to 42 (for manager tests)."""
+    level, sleep, crash, ramp = sets_level(), sleeps(), exits(), ramps()
 
     async def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
         task = _task(messages)
-        chosen = sleep if "sleep" in task else crash if "crash" in task else level
+        chosen = sleep if "sleep" in task else crash if "crash" in task else ramp if "ramp" in task else level
         assert chosen.function is not None
         response = chosen.function(messages, info)
         return await response if isinstance(response, Awaitable) else response
 
     return FunctionModel(respond, model_name="by-task")
+
+
+def ramps() -> FunctionModel:
+    """Calls the ``ramp`` tool once (a long task that reports progress), then reports its result."""
+
+    def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        returns = _tool_returns(messages)
+        if returns:
+            return ModelResponse(parts=[TextPart(str(returns[0].content))])
+        tool = next(tool for tool in info.function_tools if tool.name.endswith("ramp"))
+        return ModelResponse(parts=[ToolCallPart(tool.name, {})])
+
+    return FunctionModel(respond, model_name="ramps")
 
 
 def sets_level() -> FunctionModel:

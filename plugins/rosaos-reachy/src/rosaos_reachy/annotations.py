@@ -7,15 +7,12 @@ or a picture is a new event each time.
 
 from __future__ import annotations
 
-from typing import Any
+from rosaos.drivers import CHANGES, DELETES, READ_ONLY, SETS
 
-READ_ONLY: dict[str, Any] = {"readOnlyHint": True, "destructiveHint": False, "idempotentHint": True}
-CLOUD_READ: dict[str, Any] = {
-    "readOnlyHint": True,
-    "destructiveHint": False,
-    "idempotentHint": False,
-    "openWorldHint": True,
-}
-SET: dict[str, Any] = {"readOnlyHint": False, "destructiveHint": False, "idempotentHint": True}
-ACT: dict[str, Any] = {"readOnlyHint": False, "destructiveHint": False, "idempotentHint": False}
-DELETE: dict[str, Any] = {"readOnlyHint": False, "destructiveHint": True, "idempotentHint": True}
+CLOUD_READ = READ_ONLY.model_copy(update={"idempotent_hint": False, "open_world_hint": True})
+"""Asks a cloud model about a picture: reads only, but the answer differs each time."""
+SET = SETS
+ACT = CHANGES
+DELETE = DELETES
+
+__all__ = ["ACT", "CLOUD_READ", "DELETE", "READ_ONLY", "SET"]

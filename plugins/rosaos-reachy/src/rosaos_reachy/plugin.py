@@ -12,6 +12,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from rosaos import hookimpl
+from rosaos.cards import Card, flag, head, image, text
 from rosaos.drivers import DemoInstance, DeviceContext, DeviceError, DriverSpec, read_packaged_text
 from rosaos_reachy.backend import ReachyBackend
 from rosaos_reachy.server import build_server
@@ -41,7 +42,7 @@ async def stop_moving_and_talking(backend: ReachyBackend) -> None:
     await backend.safe_stop()
 
 
-SPEC = DriverSpec(
+SPEC: DriverSpec[ReachyBackend] = DriverSpec(
     name="reachy",
     title="Pollen Robotics Reachy Mini",
     description=(
@@ -57,6 +58,15 @@ SPEC = DriverSpec(
     backends={"sim": sim_backend, "real": real_backend},
     intents=Path(__file__).parent / "intents.yaml",
     safe_stop=stop_moving_and_talking,
+    card=Card.of(
+        head(),
+        flag("speaking", label="Speaking"),
+        text("moving", label="Moving"),
+        image(),
+        text("mode", label="Mode"),
+    ),
+    own_process=True,  # the host runs the Reachy daemon (MuJoCo): hundreds of MB, native code
+    background_start=True,  # the simulator boots for seconds; everything else need not wait
     demo={
         "reachy": DemoInstance(
             description="Reachy Mini desktop robot, the user's companion on the desk",

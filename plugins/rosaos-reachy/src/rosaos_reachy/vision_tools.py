@@ -19,6 +19,7 @@ from rosaos_reachy.annotations import ACT, CLOUD_READ, DELETE, READ_ONLY
 from rosaos_reachy.backend import ReachyBackend
 from rosaos_reachy.camera import jpeg_for_model
 from rosaos_reachy.faces import Face, FaceAnalysis, face_from_box
+from rosaos_reachy.local_vision import describe_locally
 from rosaos_reachy.state import FacesReport, MotionReport, PictureReport
 from rosaos_reachy.vision import load_image
 
@@ -66,10 +67,19 @@ def register_vision_tools(mcp: FastMCP, backend: ReachyBackend) -> None:
     async def describe_image(path: ImagePath = None, question: Question = "Describe what you see.") -> str:
         """Ask the vision model about a picture ("who is there?", "is the window open?").
 
-        Needs a configured vision model (Groq's Llama 4 Scout, or an OpenAI-compatible endpoint);
-        without one it says so. Sends the picture to that service.
+        With a configured vision model (Groq's Llama 4 Scout, or an OpenAI-compatible endpoint)
+        the picture is sent to that service. Without one, a description made on this computer:
+        people and faces found, the main colours and the brightness, which cannot answer
+        ``question`` in detail.
         """
         _, image = await picture(path)
+        if not backend.vision.configured:
+            names = []
+            if backend.detector is not None:
+                for box in await asyncio.to_thread(backend.detector.detect, image):
+                    looks_like, _ = await asyncio.to_thread(backend.face_memory.match, image, box)
+                    names.append(looks_like)
+            return await asyncio.to_thread(describe_locally, image, names)
         return await backend.vision.describe(image, question)
 
     @mcp.tool(annotations=READ_ONLY)

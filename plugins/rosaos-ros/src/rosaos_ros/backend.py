@@ -15,6 +15,7 @@ import asyncio
 import contextlib
 import math
 import time
+from collections.abc import Awaitable, Callable
 from pathlib import Path
 from typing import Any
 
@@ -27,10 +28,13 @@ from rosaos_ros.deadman import DeadmanWatchdog
 from rosaos_ros.goals import FeedbackCallback, GoalTracker
 from rosaos_ros.messages import COMPRESSED_IMAGE, IMAGE, normalize_type, summarize, twist, twist_speeds
 from rosaos_ros.motion import MotionController, MotionResult
+from rosaos_ros.notices import Notify, RobotNotices
 from rosaos_ros.profiles import Profile
 from rosaos_ros.rosapi import Rosapi
 from rosaos_ros.safety import AccessPolicy, Refused, VelocityLimits
+from rosaos_ros.search import Progress, SearchRun
 from rosaos_ros.settings import RosSettings
+from rosaos_ros.sightings import Sightings
 from rosaos_ros.sim import SimulatorError, SimulatorThread
 from rosaos_ros.state import RobotStateCache
 
@@ -53,6 +57,7 @@ class RosBackend(DeviceBackend):
         profile: Profile,
         images_dir: Path,
         simulator: SimulatorThread | None = None,
+        notify: Notify | None = None,
     ) -> None:
         self.instance = instance
         self.settings = settings
@@ -79,6 +84,13 @@ class RosBackend(DeviceBackend):
             instance, self._send_twist, self.state, self.deadman, self.limits.angular / 2
         )
         self.bridge.on_disconnect(self.motion.abort)
+        self.sightings = Sightings(settings.camera_fov)
+        self.notices = RobotNotices(instance, notify)
+        self.state.on_field = self.notices.field_changed
+        self.last_image: str | None = None
+        self.search_run: SearchRun | None = None
+        """The running search, so the emergency stop can end it."""
+        """The latest picture's path, relative to the images directory (``get_state``'s ``last_image``)."""
 
     # Lifecycle
 
@@ -110,7 +122,9 @@ class RosBackend(DeviceBackend):
             await asyncio.to_thread(self.simulator.stop)
 
     async def safe_stop(self) -> dict[str, Any]:
-        """Emergency stop: zero velocity, end the running motion, cancel every running goal."""
+        """Emergency stop: zero velocity, end the running search and motion, cancel every running goal."""
+        if self.search_run is not None:
+            self.search_run.halted = "emergency stop or stop"
         cancelled = self.goals.cancel_all()
         await self.motion.stop("emergency stop")
         self._send_twist(0.0, 0.0)  # raises when unreachable: the caller must know the stop did not land
@@ -126,8 +140,11 @@ class RosBackend(DeviceBackend):
     # State and camera
 
     async def get_state(self) -> dict[str, Any]:
-        """Pose, velocities and the profile's state keys."""
-        return {**await self.state.snapshot(), "profile": self.profile.name}
+        """Pose, velocities and the profile's state keys; the last picture and the people seen, once any."""
+        state = {**await self.state.snapshot(), "profile": self.profile.name, **self.sightings.state()}
+        if self.last_image is not None:
+            state["last_image"] = self.last_image
+        return state
 
     async def capture_image(self, timeout: float) -> dict[str, Any]:
         """One camera frame saved as JPEG in the images directory; returns its relative path."""
@@ -160,8 +177,21 @@ class RosBackend(DeviceBackend):
             )
         image = await asyncio.to_thread(camera.decode, msg_type, frames[0])
         relative = await asyncio.to_thread(camera.save_jpeg, image, self.images_dir, self.instance)
-        report = {"image": relative.as_posix(), "width": image.width, "height": image.height, "topic": topic}
+        self.last_image = relative.as_posix()
+        report = {"image": self.last_image, "width": image.width, "height": image.height, "topic": topic}
         return report, image
+
+    async def detect_people(self, timeout: float) -> dict[str, Any]:
+        """Take a picture and find the people in it, placed in the world by the pose it was taken at."""
+        report, image = await self.capture_frame(timeout)
+        try:
+            odometry = self.state.latest_odometry()
+            pose: tuple[float, float, float] | None = (odometry.x, odometry.y, odometry.yaw)
+        except DeviceError:  # no odometry: bearing and distance only
+            pose = None
+        people = await self.sightings.detect(image, pose)
+        where = {"x": round(pose[0], 3), "y": round(pose[1], 3), "yaw": round(pose[2], 3)} if pose else None
+        return {"found": bool(people), "count": len(people), "people": people, **report, "pose": where}
 
     # Motion
 
@@ -188,6 +218,29 @@ class RosBackend(DeviceBackend):
         speed = self._speed(speed, self.profile.speeds.angular, "angular")
         await self._check_may_move()
         return await self.motion.rotate(math.radians(degrees), speed)
+
+    async def search(
+        self,
+        max_seconds: float,
+        max_distance: float,
+        progress: Progress,
+        alive: Callable[[], Awaitable[bool]],
+    ) -> dict[str, Any]:
+        """Look for a person: turn, take pictures, move to nearby spots (see :mod:`rosaos_ros.search`)."""
+        if self.profile.odom is None or (self.profile.camera is None and self.settings.camera_topic is None):
+            raise DeviceError(
+                f"{self.instance}: search needs odometry and a camera, and the {self.profile.name} profile "
+                "lacks one; use detect_people with drive or rotate instead"
+            )
+        if self.search_run is not None:
+            raise Refused(f"refused: {self.instance} is already searching; stop it first")
+        await self._check_may_move()
+        await self.state.wait_for_messages(sources={"odom"})
+        self.search_run = SearchRun(self, max_seconds, max_distance, progress, alive)
+        try:
+            return await self.search_run.run()
+        finally:
+            self.search_run = None
 
     async def stop(self) -> dict[str, Any]:
         """Stop moving now and cancel running goals."""

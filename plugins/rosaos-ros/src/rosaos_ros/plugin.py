@@ -9,8 +9,10 @@ from collections.abc import Callable
 from pathlib import Path
 
 from rosaos import hookimpl
+from rosaos.cards import Card, flag, gauge, image, pose
 from rosaos.drivers import DemoInstance, DeviceContext, DeviceError, DriverSpec, read_packaged_text
 from rosaos_ros.backend import RosBackend
+from rosaos_ros.notices import NOTICES
 from rosaos_ros.profiles import Profile, ProfileError, load_profile
 from rosaos_ros.server import build_server
 from rosaos_ros.settings import RosSettings
@@ -48,7 +50,7 @@ def _profile(ctx: DeviceContext, settings: RosSettings, sim_profile: str | None 
 def real_backend(ctx: DeviceContext) -> RosBackend:
     """The ``real`` backend: a robot running rosbridge at ``host:rosbridge_port``."""
     settings = _settings(ctx)
-    return RosBackend(ctx.instance, settings, _profile(ctx, settings), ctx.images_dir)
+    return RosBackend(ctx.instance, settings, _profile(ctx, settings), ctx.images_dir, notify=ctx.notify)
 
 
 def sim_backend(ctx: DeviceContext) -> RosBackend:
@@ -65,7 +67,14 @@ def sim_backend(ctx: DeviceContext) -> RosBackend:
     profile = _profile(ctx, settings, state.profile)
     token = settings.rosbridge_token.get_secret_value() if settings.rosbridge_token else None
     simulator = Simulator(profile, state, host="127.0.0.1", port=0, token=token)
-    return RosBackend(ctx.instance, settings, profile, ctx.images_dir, simulator=SimulatorThread(simulator))
+    return RosBackend(
+        ctx.instance,
+        settings,
+        profile,
+        ctx.images_dir,
+        simulator=SimulatorThread(simulator),
+        notify=ctx.notify,
+    )
 
 
 async def stop_robot(backend: RosBackend) -> None:
@@ -73,7 +82,7 @@ async def stop_robot(backend: RosBackend) -> None:
     await backend.safe_stop()
 
 
-SPEC = DriverSpec(
+SPEC: DriverSpec[RosBackend] = DriverSpec(
     name="ros",
     title="ROS 2 robot (via rosbridge)",
     description=(
@@ -89,6 +98,13 @@ SPEC = DriverSpec(
     backends={"sim": sim_backend, "real": real_backend},
     intents=Path(__file__).parent / "intents.yaml",
     safe_stop=stop_robot,
+    notices=NOTICES,
+    card=Card.of(
+        pose(),
+        flag("docked", label="Dock", on_text="docked", off_text="undocked"),
+        gauge("battery", label="Battery", unit="%", max=1.0),
+        image(),
+    ),
     confirm_on_real=True,  # a real robot moves only after a person's yes, unless config says otherwise
     demo={
         "turtlebot": DemoInstance(

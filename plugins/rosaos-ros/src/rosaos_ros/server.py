@@ -6,7 +6,7 @@ from fastmcp import FastMCP
 
 from rosaos.drivers import DeviceContext
 from rosaos_ros.backend import RosBackend
-from rosaos_ros.tools import actions, interfaces, motion, robot, services, topics
+from rosaos_ros.tools import actions, interfaces, motion, perception, robot, search, services, topics
 
 
 def build_server(ctx: DeviceContext, backend: RosBackend) -> FastMCP:
@@ -21,6 +21,8 @@ def build_server(ctx: DeviceContext, backend: RosBackend) -> FastMCP:
         ),
     )
     robot.register(mcp, backend)
+    perception.register(mcp, backend)
+    search.register(mcp, backend)
     motion.register(mcp, backend)
     topics.register(mcp, backend)
     services.register(mcp, backend)

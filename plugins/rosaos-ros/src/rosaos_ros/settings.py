@@ -71,6 +71,11 @@ class RosSettings(DeviceSettings):
         default=None,
         description="Camera topic for capture_image (Image or CompressedImage); default: the profile's.",
     )
+    camera_fov: Annotated[float, Field(ge=20, le=170)] = Field(
+        default=70.0,
+        description="The camera's horizontal field of view in degrees, for where detect_people places a person "
+        "(an OAK-D's colour camera: 69; the simulator's: 70).",
+    )
     connect_timeout: Annotated[float, Field(gt=0, le=120)] = Field(
         default=5.0, description="Seconds to wait for rosbridge at start before giving up."
     )

@@ -68,6 +68,8 @@ class RobotStateCache:
         """When each source (``odom`` and every state key) last sent a message, monotonic."""
         self._waiters: list[asyncio.Future[None]] = []
         self._unsubscribe: list[Callable[[], None]] = []
+        self.on_field: Callable[[str, Any], None] | None = None
+        """Called with (key, value) for every state message (the driver's notices watch it)."""
 
     def start(self) -> None:
         """Subscribe (roslibpy re-subscribes by itself after a reconnection)."""
@@ -99,6 +101,8 @@ class RobotStateCache:
                 value = value.get(part) if isinstance(value, dict) else None
             self.fields[key] = round(value, 4) if isinstance(value, float) else value
             self._saw(key)
+            if self.on_field is not None:
+                self.on_field(key, self.fields[key])
 
         return update
 

@@ -9,6 +9,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from rosaos import hookimpl
+from rosaos.cards import Card, flag, gauge, text
 from rosaos.drivers import DemoInstance, DeviceContext, DeviceError, DriverSpec, read_packaged_text
 from rosaos_spotify.backend import SpotifyBackend
 from rosaos_spotify.login import DASHBOARD, login_interactive
@@ -52,7 +53,7 @@ async def pause_music(backend: SpotifyBackend) -> None:
     await backend.pause()
 
 
-SPEC = DriverSpec(
+SPEC: DriverSpec[SpotifyBackend] = DriverSpec(
     name="spotify",
     title="Spotify playback",
     description=(
@@ -67,6 +68,14 @@ SPEC = DriverSpec(
     backends={"sim": sim_backend, "real": real_backend},
     intents=Path(__file__).parent / "intents.yaml",
     safe_stop=pause_music,
+    card=Card.of(
+        text("track", label="Track"),
+        text("artist", label="Artist"),
+        flag("is_playing", label="State", on_text="playing", off_text="paused"),
+        gauge("volume", label="Volume", unit="%"),
+        flag("shuffle", label="Shuffle", on_text="on", off_text="off"),
+        text("repeat", label="Repeat"),
+    ),
     demo={
         "spotify": DemoInstance(
             description="Music on the living room speaker", sim={"is_playing": False, "volume": 40}

@@ -7,20 +7,19 @@ query that finds nothing fails with a message listing what to try, and changes n
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Annotated
 
 from fastmcp import FastMCP
 from pydantic import Field
 
+from rosaos import drivers
 from rosaos.drivers import DeviceContext
 from rosaos_spotify.backend import PlayerReport, PlayerState, Repeat, SearchResults, SpotifyBackend
 from rosaos_spotify.catalog import SearchKind
 
 # Annotations, per MCP: nothing here is destructive (music can always be played again);
 # setting a value twice is the same as once, relative and "start over" actions are not.
-READ_ONLY: dict[str, Any] = {"readOnlyHint": True, "destructiveHint": False, "idempotentHint": True}
-SET: dict[str, Any] = {"readOnlyHint": False, "destructiveHint": False, "idempotentHint": True}
-CHANGE: dict[str, Any] = {"readOnlyHint": False, "destructiveHint": False, "idempotentHint": False}
+READ_ONLY, SET, CHANGE = drivers.READ_ONLY, drivers.SETS, drivers.CHANGES
 
 Query = Annotated[
     str,

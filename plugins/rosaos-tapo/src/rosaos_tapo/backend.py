@@ -43,6 +43,9 @@ from pydantic import BaseModel, Field
 from rosaos.drivers import DeviceBackend, DeviceError
 from rosaos_tapo.simulator import SimState, SimulatedL530, SimulatedL530Transport, simulated_config
 
+NEUTRAL_KELVIN = 4000
+"""Where "warmer"/"cooler" start from when the bulb shows a colour (no white temperature)."""
+
 Connection = Literal["klap", "discover"]
 """How the real backend finds out the bulb's protocol: assume KLAP (current firmware, plain TCP,
 works across subnets) or ask the bulb by UDP discovery (any firmware, same LAN only)."""
@@ -79,6 +82,9 @@ class TapoBackend(DeviceBackend):
         self._connect = connect
         self._device: Device | None = None
         self._lock = asyncio.Lock()
+        self.notify: Callable[..., object] | None = None
+        """``DeviceContext.notify``: set by the plugin, so losing the bulb and finding it again are notices."""
+        self._unreachable = False
 
     @classmethod
     def real(
@@ -234,6 +240,27 @@ class TapoBackend(DeviceBackend):
             )
         return await self._run(lambda: self.light.set_state(LightState(light_on=True, color_temp=kelvin)))
 
+    async def adjust_color_temp(self, change: int) -> BulbState:
+        """Make white light warmer (negative ``change``) or cooler by ``change`` kelvin, and turn on.
+
+        Starts from the current colour temperature, or from neutral white (4000 K) when the bulb
+        shows a colour; the result is kept within what the bulb can do.
+        """
+        if not self.has_color_temp:
+            raise DeviceError(
+                f"{self.instance} ({self.device.model}) cannot change its colour temperature; "
+                "use set_brightness"
+            )
+
+        async def command() -> None:
+            await self.device.update()
+            low, high = self.device.modules[Module.ColorTemperature].valid_temperature_range
+            current = self.light.color_temp or NEUTRAL_KELVIN
+            kelvin = min(high, max(low, current + change))
+            await self.light.set_state(LightState(light_on=True, color_temp=kelvin))
+
+        return await self._run(command)
+
     async def set_color(self, hue: int, saturation: int, brightness: int | None = None) -> BulbState:
         """Switch to colour mode at ``hue``/``saturation`` (and ``brightness``) and turn on."""
         if not self.has_color:
@@ -253,8 +280,25 @@ class TapoBackend(DeviceBackend):
                         await command()
                     await self.device.update()
             except (KasaException, TimeoutError) as error:
-                raise device_error(error, self.host, self.instance, self.timeout) from None
+                failure = device_error(error, self.host, self.instance, self.timeout)
+                if isinstance(error, TimeoutError | _ConnectionError):
+                    self._reachability(False, str(failure))
+                raise failure from None
+            self._reachability(True, "")
             return self._snapshot()
+
+    def _reachability(self, reachable: bool, reason: str) -> None:
+        """Post ``unreachable`` when the bulb stops answering, ``reachable`` when it answers again."""
+        if reachable == (not self._unreachable):
+            return
+        self._unreachable = not reachable
+        if self.notify is not None:
+            if reachable:
+                self.notify("reachable", None, message=f"{self.instance} answers again")
+            else:
+                self.notify(
+                    "unreachable", {"error": reason[:300]}, message=f"{self.instance} is not answering"
+                )
 
     def _snapshot(self) -> BulbState:
         device, light = self.device, self.light

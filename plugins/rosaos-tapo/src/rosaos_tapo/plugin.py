@@ -9,15 +9,17 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Annotated
 
-from pydantic import Field, SecretStr
+from pydantic import BaseModel, Field, SecretStr
 
 from rosaos import hookimpl
+from rosaos.cards import Card, swatch
 from rosaos.drivers import (
     DemoInstance,
     DeviceContext,
     DeviceError,
     DeviceSettings,
     DriverSpec,
+    NoticeSpec,
     read_packaged_text,
 )
 from rosaos_tapo.backend import Connection, TapoBackend
@@ -65,7 +67,7 @@ def real_backend(ctx: DeviceContext) -> TapoBackend:
             f"{where} needs username and password for the real backend: "
             "the email and password of your TP-Link cloud (Tapo app) account"
         )
-    return TapoBackend.real(
+    backend = TapoBackend.real(
         ctx.instance,
         settings.host,
         settings.username,
@@ -74,11 +76,32 @@ def real_backend(ctx: DeviceContext) -> TapoBackend:
         port=settings.bulb_port,
         connection=settings.connection,
     )
+    backend.notify = ctx.notify
+    return backend
 
 
 def sim_backend(ctx: DeviceContext) -> TapoBackend:
     """The ``sim`` backend: an in-process L530E that starts in the state ``ctx.sim`` gives."""
-    return TapoBackend.simulated_bulb(ctx.instance, SimState.from_sim(ctx.instance, dict(ctx.sim)))
+    backend = TapoBackend.simulated_bulb(ctx.instance, SimState.from_sim(ctx.instance, dict(ctx.sim)))
+    backend.notify = ctx.notify
+    return backend
+
+
+class UnreachableData(BaseModel):
+    """Why the bulb is taken for gone."""
+
+    error: str = Field(max_length=300)
+
+
+NOTICES = {
+    "unreachable": NoticeSpec(
+        description="The bulb stopped answering (unplugged, switched off at the wall, off the network)",
+        importance="notify",
+        data=UnreachableData,
+        example={"error": "cannot reach Tapo bulb at 192.168.1.20"},
+    ),
+    "reachable": NoticeSpec(description="The bulb answers again after being unreachable"),
+}
 
 
 async def leave_light_as_is(backend: TapoBackend) -> None:
@@ -89,7 +112,7 @@ async def leave_light_as_is(backend: TapoBackend) -> None:
     """
 
 
-SPEC = DriverSpec(
+SPEC: DriverSpec[TapoBackend] = DriverSpec(
     name="tapo",
     title="TP-Link Tapo smart bulb",
     description=(
@@ -104,6 +127,8 @@ SPEC = DriverSpec(
     backends={"sim": sim_backend, "real": real_backend},
     intents=Path(__file__).parent / "intents.yaml",
     safe_stop=leave_light_as_is,
+    notices=NOTICES,
+    card=Card.of(swatch()),  # the web page draws the bulb's real colour and brightness, named
     demo={
         "kitchen_light": DemoInstance(description="Ceiling light in the kitchen", sim={"on": False}),
         "living_room_lamp": DemoInstance(

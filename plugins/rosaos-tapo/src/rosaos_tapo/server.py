@@ -7,21 +7,20 @@ Anything that sets light output (brightness, colour, colour temperature) also tu
 
 from __future__ import annotations
 
-from typing import Annotated, Any
+from typing import Annotated
 
 from fastmcp import FastMCP
 from fastmcp.exceptions import ToolError
 from pydantic import Field
 
+from rosaos import drivers
 from rosaos.drivers import DeviceContext
 from rosaos_tapo.backend import BulbState, TapoBackend
 from rosaos_tapo.colors import UnknownColorError, White, lookup_color
 
 # Annotations, per MCP: every tool only changes a light (never destructive), and setting a
 # value twice is the same as once, except for relative changes (toggle, adjust_brightness).
-READ_ONLY: dict[str, Any] = {"readOnlyHint": True, "destructiveHint": False, "idempotentHint": True}
-SET: dict[str, Any] = {"readOnlyHint": False, "destructiveHint": False, "idempotentHint": True}
-CHANGE: dict[str, Any] = {"readOnlyHint": False, "destructiveHint": False, "idempotentHint": False}
+READ_ONLY, SET, CHANGE = drivers.READ_ONLY, drivers.SETS, drivers.CHANGES
 
 Brightness = Annotated[
     int, Field(ge=0, le=100, description="Brightness in percent, 1-100; 0 turns the light off.")
@@ -32,6 +31,9 @@ BrightnessChange = Annotated[
 ]
 Kelvin = Annotated[
     int, Field(ge=2500, le=6500, description="White colour temperature in kelvin: 2700 warm, 6500 cool.")
+]
+KelvinChange = Annotated[
+    int, Field(ge=-4000, le=4000, description="Kelvin to add; negative is warmer, positive cooler.")
 ]
 Hue = Annotated[
     int,
@@ -98,6 +100,15 @@ def build_server(ctx: DeviceContext, backend: TapoBackend) -> FastMCP:
         Brightness stays as it is.
         """
         return await backend.set_color_temp(kelvin)
+
+    @mcp.tool(annotations=CHANGE)
+    async def adjust_color_temp(change: KelvinChange) -> BulbState:
+        """Make white light warmer (negative kelvin) or cooler (positive), and turn the light on.
+
+        Use for "warmer" (e.g. -700) or "cooler" (e.g. +700) when no exact temperature is asked
+        for. From a colour, it starts at neutral white (4000 K); the result stays 2500-6500 K.
+        """
+        return await backend.adjust_color_temp(change)
 
     @mcp.tool(annotations=SET)
     async def set_color(hue: Hue, saturation: Saturation, brightness: OptionalBrightness = None) -> BulbState:

@@ -39,8 +39,6 @@ from rosaos.kernel.runtime import Kernel
 from rosaos.kernel.updates import Update
 from rosaos.plugins import DriverRegistry
 
-SETTLE_TIMEOUT = 60.0
-"""The README's limit: a task that has not settled after this many seconds fails."""
 IDLE_TIMEOUT = 30.0
 """How long a task waits for leftovers of the previous one (e.g. after a timeout) to finish."""
 POLL_INTERVAL = 0.01
@@ -158,7 +156,7 @@ async def run_file(
     """Run the selected tasks of one file, each ``repeat`` times, on one kernel."""
     task_file = selection.file
     world = bench_world(task_file, registry)
-    tasks: dict[str, TaskResult] = {t.id: TaskResult(id=t.id, say=t.say) for t in selection.tasks}
+    tasks: dict[str, TaskResult] = {t.id: TaskResult(id=t.id, say=t.said) for t in selection.tasks}
     runnable: list[BenchTask] = []
     for task in selection.tasks:
         named = [*task.expect, *task.setup]
@@ -231,7 +229,7 @@ async def _run_trial(
         if await _settle(kernel, IDLE_TIMEOUT) is None:
             return TrialResult(status="error", reason="the kernel was still busy with the previous task")
         kernel.loop.reset_conversation()
-        if kernel.emergency_stop_state()["latched"]:  # an earlier task's emergency stop must not leak
+        if kernel.emergency_stop_state().latched:  # an earlier task's emergency stop must not leak
             await kernel.reset_emergency_stop()
         initial = task_file.initial_state(task)
         await hosting.restart(
@@ -258,8 +256,8 @@ async def _run_trial(
         last_update = await kernel.updates.last_id()
         counter.reset()
         posted = time.monotonic()
-        await client.request("POST", "/stt", json={"text": task.say, "source": "bench"})
-        settled_at = await _settle(kernel, SETTLE_TIMEOUT)
+        await _say(client, task)
+        settled_at = await _settle(kernel, max(task.settle - (time.monotonic() - posted), 0.0))
         if settled_at is None:
             await _terminate_all(kernel)
         after, unreadable = await hosting.read_states()
@@ -279,7 +277,7 @@ async def _run_trial(
         problems.append(f"no reply matches {task.reply!r}")
     status = "pass"
     if settled_at is None:
-        status, problems = "error", [f"did not settle within {SETTLE_TIMEOUT:.0f} s", *problems]
+        status, problems = "error", [f"did not settle within {task.settle:g} s", *problems]
     elif problems:
         status = "fail"
     return TrialResult(
@@ -295,6 +293,14 @@ async def _run_trial(
         kernel_errors=activity.errors,
         unchecked=unchecked,
     )
+
+
+async def _say(client: KernelClient, task: BenchTask) -> None:
+    """Post each thing the task says as a ``[User said]`` event, waiting ``after`` seconds before it."""
+    for item in task.utterances:
+        if item.after:
+            await asyncio.sleep(item.after)
+        await client.request("POST", "/stt", json={"text": item.text, "source": "bench"})
 
 
 def _spoken(initial: Mapping[str, Mapping[str, Any]], after: Mapping[str, Mapping[str, Any]]) -> list[str]:

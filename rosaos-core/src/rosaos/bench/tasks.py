@@ -62,19 +62,57 @@ class WorldDevice(BaseModel):
     """Simulator-only settings (a music catalog, a ros ``profile``); never compared."""
 
 
+SETTLE_DEFAULT = 60.0
+"""Seconds a task may take to settle unless it says otherwise (``settle``)."""
+SETTLE_MAX = 600.0
+
+
+class SayItem(BaseModel):
+    """One thing said in a conversation task: the text, and how long after the item before it."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    text: str = Field(min_length=1, max_length=4000)
+    after: float = Field(default=0.0, ge=0.0, le=SETTLE_MAX)
+    """Seconds after the item before it was accepted; 0 posts it at once."""
+
+
 class BenchTask(BaseModel):
-    """One sentence to say in the world, and the state it must leave behind."""
+    """One sentence (or a conversation) to say in the world, and the state it must leave behind."""
 
     model_config = ConfigDict(extra="forbid")
 
     id: str = Field(min_length=1, max_length=200)
-    say: str = Field(min_length=1, max_length=4000)
+    say: str | list[str | SayItem] = Field(min_length=1)
+    """A sentence, or a list of them posted one by one (an item may wait ``after`` seconds)."""
+    settle: float = Field(default=SETTLE_DEFAULT, gt=0, le=SETTLE_MAX)
+    """Seconds from the first post before an unsettled task fails."""
     setup: dict[str, dict[str, Any]] = Field(default_factory=dict)
     """Per-task overrides of the initial state: ``{device: {key: value}}``."""
     expect: dict[str, dict[str, Any]]
     """The state after settling; ``{}`` means "change nothing"."""
     reply: str | None = None
     """A regex that some reply to the user must match."""
+
+    @field_validator("say")
+    @classmethod
+    def _sentences(cls, value: str | list[str | SayItem]) -> str | list[str | SayItem]:
+        for item in [value] if isinstance(value, str) else value:
+            text = item if isinstance(item, str) else item.text
+            if not text.strip() or len(text) > 4000:
+                raise ValueError("each thing said must be 1 to 4000 characters, not blank")
+        return value
+
+    @property
+    def utterances(self) -> list[SayItem]:
+        """What is said, in order, each with its delay."""
+        items = [self.say] if isinstance(self.say, str) else self.say
+        return [SayItem(text=item) if isinstance(item, str) else item for item in items]
+
+    @property
+    def said(self) -> str:
+        """Everything said, on one line (for reports)."""
+        return " / ".join(item.text for item in self.utterances)
 
     @field_validator("reply")
     @classmethod

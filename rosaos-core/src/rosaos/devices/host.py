@@ -1,7 +1,8 @@
 """One device host: the subprocess that serves a single local instance (``python -m rosaos.devices.host``).
 
-This module holds both sides of that process: :func:`main` runs inside it, and
-:class:`HostProcess` is the handle the supervisor spawns and stops it with.
+This module is the inside of that process (:func:`main`);
+:class:`~rosaos.devices.host_process.HostProcess` is the handle the supervisor spawns and stops it
+with, and :mod:`rosaos.devices.host_batch` serves several instances in one host.
 
 The supervisor starts one host per local instance and writes a :class:`HostJob` as one JSON line
 to its stdin (a job can also be given as the first argument, for debugging by hand). The host
@@ -28,7 +29,7 @@ from pydantic import BaseModel, ConfigDict, Field, SecretBytes, SecretStr, Valid
 from pydantic_core import to_jsonable_python
 
 from rosaos.config import format_validation_error
-from rosaos.devices.host_logging import configure_host_logging, open_rotated_log
+from rosaos.devices.host_logging import configure_host_logging
 from rosaos.devices.serve import ServedDevice, open_device, serve_http
 from rosaos.devices.world import DeviceInstance
 from rosaos.drivers import BackendName, DeviceError
@@ -169,7 +170,7 @@ def install_stop_signals(stop: asyncio.Event) -> None:
         loop.add_signal_handler(sig, stop.set)
 
 
-async def _stop_on_stdin_eof(stop: asyncio.Event) -> None:
+async def stop_on_stdin_eof(stop: asyncio.Event) -> None:
     """Set ``stop`` when stdin closes: the supervisor died or let go, so no orphan host lingers."""
     loop = asyncio.get_running_loop()
     reader = asyncio.StreamReader()
@@ -186,7 +187,7 @@ class Handshake:
     """The one line a host owes its supervisor on stdout: ready (url, pid) or the error."""
 
     def __init__(self, stream: TextIO) -> None:
-        self._stream = stream
+        self.stream = stream
         self.sent = False
 
     def send(self, message: dict[str, Any]) -> None:
@@ -195,15 +196,15 @@ class Handshake:
             log.error("%s", message.get("error", message))
             return
         self.sent = True
-        self._stream.write(json.dumps(message) + "\n")
-        self._stream.flush()
+        self.stream.write(json.dumps(message) + "\n")
+        self.stream.flush()
 
 
 async def run_job(job: HostJob, handshake: Handshake, watch_stdin: bool) -> int:
     """Serve ``job``, reporting readiness through ``handshake``; return the exit code."""
     stop = asyncio.Event()
     install_stop_signals(stop)
-    watcher = asyncio.create_task(_stop_on_stdin_eof(stop)) if watch_stdin else None
+    watcher = asyncio.create_task(stop_on_stdin_eof(stop)) if watch_stdin else None
 
     def ready(served: ServedDevice) -> None:
         handshake.send({"url": served.url, "pid": os.getpid()})
@@ -230,116 +231,6 @@ async def run_job(job: HostJob, handshake: Handshake, watch_stdin: bool) -> int:
     return 0
 
 
-class HostProcess:
-    """A running device host, seen from the supervisor: spawn it, read its handshake, stop it."""
-
-    def __init__(self, process: asyncio.subprocess.Process, log_file: Path) -> None:
-        self.process = process
-        self.log_file = log_file
-        """The host's stderr: driver output, uvicorn warnings, tracebacks."""
-        self.url = ""
-
-    @classmethod
-    async def spawn(
-        cls, job: HostJob, log_file: Path, start_timeout: float, stop_grace: float
-    ) -> HostProcess:
-        """Start a host for ``job`` and wait for its ready line; DeviceError says why it did not come up."""
-        log_handle = await asyncio.to_thread(open_rotated_log, log_file)
-        try:
-            process = await asyncio.create_subprocess_exec(
-                sys.executable,
-                "-P",  # the working directory must not shadow a module (a stray h2.py)
-                "-m",
-                "rosaos.devices.host",
-                stdin=asyncio.subprocess.PIPE,
-                stdout=asyncio.subprocess.PIPE,
-                stderr=log_handle,
-                # Its own process group: Ctrl-C in the terminal reaches the supervisor only, which
-                # then stops hosts in order; killpg also reaches anything a driver spawned.
-                start_new_session=True,
-            )
-        finally:
-            log_handle.close()
-        host = cls(process, log_file)
-        try:
-            reply = await host._handshake(job, start_timeout)
-        except BaseException:  # including cancellation: never leave a half-started host behind
-            await host.stop(stop_grace)
-            raise
-        if "url" not in reply:
-            await host.stop(stop_grace)
-            reason = reply.get("error") or await asyncio.to_thread(_tail, log_file)
-            raise DeviceError(f"{reason} (log: {log_file})")
-        host.url = str(reply["url"])
-        return host
-
-    async def _handshake(self, job: HostJob, start_timeout: float) -> dict[str, Any]:
-        stdin, stdout = self.process.stdin, self.process.stdout
-        assert stdin is not None
-        assert stdout is not None
-        # The job goes over stdin, which then stays open: the host exits when it sees EOF, so a
-        # supervisor that dies hard leaves no orphan hosts behind.
-        stdin.write(job.model_dump_json().encode() + b"\n")
-        await stdin.drain()
-        try:
-            async with asyncio.timeout(start_timeout):
-                line = await stdout.readline()
-        except TimeoutError:
-            raise DeviceError(
-                f"the host did not become ready within {start_timeout:g} s; see {self.log_file}"
-            ) from None
-        if not line.strip():
-            return {}
-        try:
-            reply = json.loads(line)
-        except ValueError:
-            return {"error": f"unexpected output from the host: {line[:200]!r}"}
-        return reply if isinstance(reply, dict) else {}
-
-    @property
-    def pid(self) -> int:
-        return self.process.pid
-
-    async def wait(self) -> int:
-        """Wait for the host to exit; its return code (negative: killed by that signal)."""
-        return await self.process.wait()
-
-    async def exit_reason(self) -> str:
-        """Why the host exited, for the status: the signal, or the code and the log's last lines."""
-        code = self.process.returncode
-        if code is not None and code < 0:
-            return f"host was killed by {signal.Signals(-code).name}"
-        tail = await asyncio.to_thread(_tail, self.log_file)
-        return f"host exited with code {code}" + (f": {tail}" if tail else "")
-
-    async def stop(self, grace: float) -> None:
-        """SIGTERM the host's process group, SIGKILL it after ``grace`` seconds; reap the host."""
-        if self.process.returncode is None:
-            _signal_group(self.pid, signal.SIGTERM)
-            try:
-                async with asyncio.timeout(grace):
-                    await self.process.wait()
-            except TimeoutError:
-                log.warning("host %s did not stop within %g s; killing it", self.pid, grace)
-        # Whatever the host left in its group (a simulator it spawned) goes too.
-        _signal_group(self.pid, signal.SIGKILL)
-        await self.process.wait()
-
-
-def _tail(path: Path, lines: int = 3) -> str:
-    """The last lines of a host's log: usually the reason it died."""
-    try:
-        text = path.read_text(encoding="utf-8", errors="replace")
-    except OSError:
-        return ""
-    return " | ".join(line.strip() for line in text.strip().splitlines()[-lines:])
-
-
-def _signal_group(pid: int, sig: signal.Signals) -> None:
-    with contextlib.suppress(ProcessLookupError, PermissionError):
-        os.killpg(pid, sig)
-
-
 def main(argv: list[str] | None = None) -> int:
     """Entry point: read the job (argv[1] or one stdin line), serve it, return the exit code."""
     argv = sys.argv if argv is None else argv
@@ -350,6 +241,15 @@ def main(argv: list[str] | None = None) -> int:
     os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
     from_stdin = len(argv) < 2
     raw = sys.stdin.readline() if from_stdin else argv[1]
+    if raw.lstrip().startswith('{"jobs"'):  # several instances: rosaos.devices.host_batch
+        from rosaos.devices.host_batch import BatchHandshake, HostBatch, run_batch
+
+        try:
+            batch = HostBatch.model_validate_json(raw)
+        except ValidationError as error:
+            reply.send({"error": f"invalid host job: {format_validation_error('job', error)}"})
+            return 2
+        return asyncio.run(run_batch(batch, BatchHandshake(reply.stream), watch_stdin=from_stdin))
     try:
         job = HostJob.model_validate_json(raw)
     except ValidationError as error:

@@ -11,6 +11,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import socket
+import weakref
 from collections.abc import AsyncIterator, Iterable
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,11 +22,13 @@ from fastmcp import FastMCP
 from starlette.types import ASGIApp
 
 from rosaos.auth import BearerAuthMiddleware, HostOriginGuard, bound_hosts
+from rosaos.device_notices import NoticeBoard, notice_endpoint
 from rosaos.devices.world import DeviceInstance
-from rosaos.drivers import DeviceBackend, DeviceError
+from rosaos.drivers import SETS, DeviceBackend, DeviceError
 
 MCP_PATH = "/mcp"
 HEALTH_PATH = "/health"
+NOTICES_PATH = "/notices"
 
 
 @dataclass
@@ -57,6 +60,7 @@ async def open_device(instance: DeviceInstance, data_dir: Path) -> AsyncIterator
         # Tool arguments are typed at the boundary: `true` is not a brightness, "50" is not 50.
         server.strict_input_validation = True
         _add_safe_stop(server, instance, backend)
+        add_notice_route(server, ctx.notices)
         yield OpenDevice(instance, backend, server)
     finally:
         await backend.close()
@@ -74,8 +78,18 @@ def _add_safe_stop(server: FastMCP, instance: DeviceInstance, backend: DeviceBac
     server.tool(
         safe_stop,
         name="safe_stop",
-        annotations={"readOnlyHint": False, "destructiveHint": False, "idempotentHint": True},
+        annotations=SETS,
     )
+
+
+_BOARDS: weakref.WeakKeyDictionary[FastMCP, NoticeBoard] = weakref.WeakKeyDictionary()
+
+
+def add_notice_route(server: FastMCP, board: NoticeBoard) -> None:
+    """Every device server gets ``GET /notices`` (behind its token): the kernel long-polls it for the
+    notices the driver posts with ``ctx.notify`` (:mod:`rosaos.device_notices`)."""
+    server.custom_route(NOTICES_PATH, methods=["GET"])(notice_endpoint(board))
+    _BOARDS[server] = board  # so serve_http can end its long polls before stopping
 
 
 def device_http_app(server: FastMCP, token: str, allowed_hosts: Iterable[str] = ()) -> ASGIApp:
@@ -134,8 +148,11 @@ class ServedDevice:
     url: str
     server: uvicorn.Server
     task: asyncio.Task[None]
+    notices: NoticeBoard | None = None
 
     async def stop(self) -> None:
+        if self.notices is not None:
+            self.notices.release_waiters()
         self.server.should_exit = True
         with contextlib.suppress(asyncio.CancelledError):
             await self.task
@@ -153,7 +170,7 @@ async def serve_http(
     config = uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=2)
     uv_server = uvicorn.Server(config)
     task = asyncio.create_task(uv_server.serve(sockets=[sock]))
-    served = ServedDevice(url_for(sock), uv_server, task)
+    served = ServedDevice(url_for(sock), uv_server, task, _BOARDS.get(server))
     try:
         while not uv_server.started:
             if task.done():

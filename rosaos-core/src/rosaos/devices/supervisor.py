@@ -1,10 +1,18 @@
-"""Serve every local instance of a world in its own host process, keep them healthy, and say where they are.
+"""Serve the local instances of a world in host processes, keep them healthy, and say where they are.
 
-:class:`DeviceSupervisor` is what ``rosaos up`` runs. Each local instance gets a device host
-subprocess (:mod:`rosaos.devices.host`); every few seconds the supervisor calls its ``get_state``
-over HTTP, and restarts a host that died or stopped answering, backing off exponentially. A host
-that cannot start is reported (log, status, runtime file) and retried, never fatal. Placeholder
+:class:`DeviceSupervisor` is what ``rosaos up`` runs. Every simulated instance of a driver that
+does not ask for a process of its own (``DriverSpec.own_process``) is served by one shared device
+host (:mod:`rosaos.devices.host_batch`); every other local instance (a real device, the Reachy
+daemon) gets a host subprocess of its own (:mod:`rosaos.devices.host`). Every few seconds the
+supervisor calls each instance's ``get_state`` over HTTP, and restarts a host that died or stopped
+answering, backing off exponentially: a crash restarts the instances of that host, and no other.
+An instance that cannot start in the shared host is retried in a host of its own. A host that
+cannot start is reported (log, status, runtime file) and retried, never fatal. Placeholder
 drivers are listed as ``not implemented``; remote instances are only probed.
+
+:meth:`DeviceSupervisor.start` returns once every instance has had its first start attempt,
+except those whose driver starts in the background (``DriverSpec.background_start``): they stay
+``starting`` until they answer, and :meth:`DeviceSupervisor.settle` waits for them.
 
 The runtime file ``<data_dir>/run/devices.json`` tells other commands (``rosaos devices list``,
 ``rosaos devices check``) which instances are being served, and where.
@@ -16,7 +24,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import os
-from collections.abc import Callable
+from collections.abc import Callable, Coroutine, Iterable
 from dataclasses import dataclass, field
 from datetime import datetime
 from pathlib import Path
@@ -24,11 +32,11 @@ from types import TracebackType
 from typing import Any
 from urllib.parse import urlsplit
 
-from pydantic import BaseModel
-
 from rosaos.auth import token_path
 from rosaos.devices.client import DeviceClient
-from rosaos.devices.host import START_TIMEOUT, HostJob, HostProcess
+from rosaos.devices.directory import DirectoryEntry, SafeStopOutcome, safe_stop_entry
+from rosaos.devices.host import START_TIMEOUT, HostJob
+from rosaos.devices.host_process import HostProcess
 from rosaos.devices.runtime import (
     DeviceStatus,
     RuntimeEntry,
@@ -41,34 +49,23 @@ from rosaos.devices.runtime import (
 from rosaos.devices.world import DeviceInstance, World
 from rosaos.drivers import DeviceError
 
+__all__ = [
+    "SHARED_HOST",
+    "DeviceSupervisor",
+    "DirectoryEntry",
+    "SafeStopOutcome",
+    "StatusListener",
+    "safe_stop_entry",
+]
+
+SHARED_HOST = "shared-sims"
+"""Name of the shared host's log file (``logs/devices/shared-sims.log``)."""
+
 log = logging.getLogger("rosaos.devices.supervisor")
-
-
-class DirectoryEntry(BaseModel):
-    """How to reach one instance: what the kernel hands to a worker that is granted it."""
-
-    name: str
-    driver: str
-    url: str | None
-    """None while the instance is not being served (placeholder, failed, restarting)."""
-    token: str | None
-    status: DeviceStatus
-    remote: bool
-    error: str | None = None
-    restarts: int = 0
 
 
 StatusListener = Callable[[str, DeviceStatus, DeviceStatus, str | None], None]
 """``(instance, old status, new status, error)``."""
-
-
-@dataclass
-class SafeStopOutcome:
-    """The result of calling ``safe_stop`` on one instance."""
-
-    instance: str
-    ok: bool
-    detail: str
 
 
 @dataclass
@@ -85,6 +82,12 @@ class _Hosted:
     restarts: int = 0
     settled: asyncio.Event = field(default_factory=asyncio.Event)
     """Set after the first start attempt (or first probe, for remote instances)."""
+
+    @property
+    def shares_host(self) -> bool:
+        """Served with other simulators in the shared host (see the module docstring)."""
+        spec = self.instance.spec
+        return self.instance.backend == "sim" and not spec.own_process and not self.instance.is_remote
 
 
 class DeviceSupervisor:
@@ -108,8 +111,14 @@ class DeviceSupervisor:
         backoff_cap: float = 30.0,
         start_timeout: float = START_TIMEOUT,
         stop_grace: float = 5.0,
+        defer_background: bool = False,
     ) -> None:
         self.world = world
+        self._background_go = asyncio.Event()
+        """Background-start instances wait for this: at once, or :meth:`release_background` when
+        ``defer_background`` (``rosaos up`` lets the other devices and the workers boot first)."""
+        if not defer_background:
+            self._background_go.set()
         self.data_dir = data_dir
         self.token = token
         self.host = host
@@ -160,21 +169,45 @@ class DeviceSupervisor:
             )
         self._owns_runtime_file = True
         await asyncio.to_thread(self._prepare_files)
+        shared: list[_Hosted] = []
         for instance in self.world:
             if not instance.spec.implemented:
                 self._devices[instance.name] = _Hosted(instance, "not implemented")
                 continue
             hosted = _Hosted(instance, "starting", port=instance.port)
             self._devices[instance.name] = hosted
-            runner = self._watch_remote(hosted) if instance.is_remote else self._keep_serving(hosted)
-            self._tasks.append(asyncio.create_task(runner, name=f"device {instance.name}"))
+            if instance.is_remote:
+                self._run(self._watch_remote(hosted), instance.name)
+            elif hosted.shares_host:
+                shared.append(hosted)
+            elif instance.spec.background_start:
+                self._run(self._keep_serving([hosted], wait_for=self._background_go), instance.name)
+            else:
+                self._run(self._keep_serving([hosted]), instance.name)
+        if len(shared) == 1:
+            self._run(self._keep_serving(shared), shared[0].instance.name)
+        elif shared:
+            self._run(self._keep_serving(shared), SHARED_HOST)
         # Record "starting" at once: `devices list` and `devices check` then wait for these
         # instances instead of starting second copies while their hosts boot.
         await self._save()
-        await asyncio.gather(
-            *(d.settled.wait() for d in self._devices.values() if d.status != "not implemented")
+        await self.settle(
+            name
+            for name, d in self._devices.items()
+            if d.status != "not implemented" and not d.instance.spec.background_start
         )
         await self._save()
+
+    def release_background(self) -> None:
+        """Let the background-start instances begin (see ``defer_background``)."""
+        self._background_go.set()
+
+    async def settle(self, names: Iterable[str]) -> None:
+        """Wait until each named instance has had its first start attempt (unknown names: skipped)."""
+        await asyncio.gather(*(self._devices[name].settled.wait() for name in names if name in self._devices))
+
+    def _run(self, runner: Coroutine[Any, Any, None], name: str) -> None:
+        self._tasks.append(asyncio.create_task(runner, name=f"device {name}"))
 
     def _prepare_files(self) -> None:
         # Hosts read the token from a file, never from argv (visible in ps) or the environment.
@@ -191,7 +224,7 @@ class DeviceSupervisor:
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)
         self._tasks.clear()
-        await asyncio.gather(*(self._terminate(d) for d in self._devices.values()))
+        await self._terminate_group(list(self._devices.values()))
         for hosted in self._devices.values():
             if hosted.status != "not implemented" and not hosted.instance.is_remote:
                 self._set(hosted, "stopped", url=None)
@@ -227,75 +260,118 @@ class DeviceSupervisor:
         ]
         return outcomes
 
-    # --- one local instance ----------------------------------------------------------------------
+    # --- local instances: one host process each, or several in the shared one ------------------
 
-    async def _keep_serving(self, hosted: _Hosted) -> None:
-        """Start the host; when it dies or stops answering, start it again after a backoff."""
+    async def _keep_serving(
+        self, group: list[_Hosted], delay: float = 0.0, wait_for: asyncio.Event | None = None
+    ) -> None:
+        """Start the group's host; when it dies or stops answering, start it again after a backoff."""
         failures = 0
+        if wait_for is not None:
+            await wait_for.wait()
+        await asyncio.sleep(delay)
         while True:
             started = asyncio.get_running_loop().time()
             try:
-                await self._launch(hosted)
-                hosted.settled.set()
-                await self._watch_local(hosted)
+                await self._launch(group)
+                for hosted in group:
+                    hosted.settled.set()
+                await self._watch_local(group)
             except DeviceError as error:
-                log.warning("%s: cannot start: %s", hosted.instance.name, error)
-                self._set(hosted, "failed", url=None, error=str(error))
+                for hosted in group:
+                    log.warning("%s: cannot start: %s", hosted.instance.name, error)
+                    self._set(hosted, "failed", url=None, error=str(error))
             except Exception as error:  # one device's trouble must never take the supervisor down
-                log.exception("%s: unexpected error while hosting it", hosted.instance.name)
-                self._set(hosted, "failed", url=None, error=f"{type(error).__name__}: {error}")
-            await self._terminate(hosted)
-            hosted.settled.set()
+                log.exception("%s: unexpected error while hosting it", _names(group))
+                for hosted in group:
+                    self._set(hosted, "failed", url=None, error=f"{type(error).__name__}: {error}")
+            await self._terminate_group(group)
+            for hosted in group:
+                hosted.settled.set()
             await self._save()
+            if len(group) > 1 and all(hosted.status == "failed" for hosted in group):
+                # The shared host does not start at all: each instance on its own finds the culprit.
+                for hosted in group:
+                    self._run(self._keep_serving([hosted], self.backoff_base), hosted.instance.name)
+                return
             lived = asyncio.get_running_loop().time() - started
             # A host that ran for a while earned a fresh start; a crash loop backs off to the cap.
             failures = 1 if lived >= self.backoff_cap else failures + 1
             delay = min(self.backoff_cap, self.backoff_base * 2 ** (failures - 1))
-            if hosted.status != "failed":
-                self._set(hosted, "restarting", url=None)
-                await self._save()
-            log.info("%s: restarting in %.1f s", hosted.instance.name, delay)
+            for hosted in group:
+                if hosted.status != "failed":
+                    self._set(hosted, "restarting", url=None)
+            await self._save()
+            log.info("%s: restarting in %.1f s", _names(group), delay)
             await asyncio.sleep(delay)
-            hosted.restarts += 1
+            for hosted in group:
+                hosted.restarts += 1
 
-    async def _launch(self, hosted: _Hosted) -> None:
-        """Start a host process and wait for its ready line and a first answer to get_state."""
-        name = hosted.instance.name
-        if hosted.status != "failed":  # a retry of a failed start stays "failed" until it works
-            self._set(hosted, "starting", error=hosted.error)
-        job = HostJob.for_instance(
-            hosted.instance,
-            self.data_dir,
-            self._token_file,
-            self.world.source,
-            host=self.host,
-            port=hosted.instance.port or 0,
-            preferred_port=None if hosted.instance.port else hosted.port,
-        )
-        host = await HostProcess.spawn(job, self.log_file(name), self.start_timeout, self.stop_grace)
-        hosted.host, hosted.url = host, host.url
-        hosted.port = urlsplit(host.url).port
-        log.info("%s: serving at %s (pid %s)", name, host.url, host.pid)
-        await self._probe(hosted)
+    async def _launch(self, group: list[_Hosted]) -> None:
+        """Start the group's host process; wait for its ready lines and a first answer to get_state.
 
-    async def _watch_local(self, hosted: _Hosted) -> None:
-        """Probe until the host dies, or fails ``unhealthy_after`` checks in a row (then stop it)."""
-        host = hosted.host
+        An instance of a shared host that could not start leaves the group for a host of its own.
+        """
+        for hosted in group:
+            if hosted.status != "failed":  # a retry of a failed start stays "failed" until it works
+                self._set(hosted, "starting", error=hosted.error)
+        jobs = [
+            HostJob.for_instance(
+                hosted.instance,
+                self.data_dir,
+                self._token_file,
+                self.world.source,
+                host=self.host,
+                port=hosted.instance.port or 0,
+                preferred_port=None if hosted.instance.port else hosted.port,
+            )
+            for hosted in group
+        ]
+        if len(group) == 1:
+            log_file = self.log_file(group[0].instance.name)
+            host = await HostProcess.spawn(jobs[0], log_file, self.start_timeout, self.stop_grace)
+            host.urls[group[0].instance.name] = host.url
+        else:
+            log_file = self.log_file(SHARED_HOST)
+            host = await HostProcess.spawn_batch(jobs, log_file, self.start_timeout, self.stop_grace)
+        for hosted in list(group):
+            name = hosted.instance.name
+            if name in host.errors:
+                log.warning("%s: cannot start in the shared host: %s", name, host.errors[name])
+                self._set(hosted, "failed", url=None, error=f"{host.errors[name]} (log: {log_file})")
+                hosted.settled.set()
+                group.remove(hosted)
+                self._run(self._keep_serving([hosted], self.backoff_base), name)
+                continue
+            hosted.host, hosted.url = host, host.urls[name]
+            hosted.port = urlsplit(hosted.url).port
+            log.info("%s: serving at %s (pid %s)", name, hosted.url, host.pid)
+        await asyncio.gather(*(self._probe(hosted) for hosted in group))
+
+    async def _watch_local(self, group: list[_Hosted]) -> None:
+        """Probe until the host dies, or one instance fails ``unhealthy_after`` checks in a row."""
+        host = group[0].host
         assert host is not None
         exited = asyncio.create_task(host.wait())
         try:
-            failures = 0 if hosted.status == "healthy" else 1
+            failures = {hosted.instance.name: 0 if hosted.status == "healthy" else 1 for hosted in group}
             while True:
                 await asyncio.wait({exited}, timeout=self.health_interval)
                 if exited.done():
                     error = await host.exit_reason()
-                    log.warning("%s: %s", hosted.instance.name, error)
-                    self._set(hosted, "restarting", url=None, error=error)
+                    log.warning("%s: %s", _names(group), error)
+                    for hosted in group:
+                        self._set(hosted, "restarting", url=None, error=error)
                     return
-                failures = 0 if await self._probe(hosted) else failures + 1
-                if failures >= self.unhealthy_after:
-                    log.warning("%s: unhealthy %d times in a row; restarting", hosted.instance.name, failures)
-                    return
+                answers = await asyncio.gather(*(self._probe(hosted) for hosted in group))
+                for hosted, answered in zip(group, answers, strict=True):
+                    name = hosted.instance.name
+                    failures[name] = 0 if answered else failures[name] + 1
+                    if failures[name] >= self.unhealthy_after:
+                        log.warning(
+                            "%s: unhealthy %d times in a row; restarting its host", name, failures[name]
+                        )
+                        return
         finally:
             exited.cancel()
 
@@ -322,10 +398,11 @@ class DeviceSupervisor:
             hosted.settled.set()
             await asyncio.sleep(self.health_interval)
 
-    async def _terminate(self, hosted: _Hosted) -> None:
-        host, hosted.host = hosted.host, None
-        if host is not None:
-            await host.stop(self.stop_grace)
+    async def _terminate_group(self, group: list[_Hosted]) -> None:
+        hosts = {id(hosted.host): hosted.host for hosted in group if hosted.host is not None}
+        for hosted in group:
+            hosted.host = None
+        await asyncio.gather(*(host.stop(self.stop_grace) for host in hosts.values()))
 
     # --- status and the runtime file -------------------------------------------------------------
 
@@ -364,12 +441,5 @@ class DeviceSupervisor:
             await asyncio.to_thread(write_atomic, self.runtime_file, runtime.model_dump_json(indent=2))
 
 
-async def safe_stop_entry(entry: DirectoryEntry, timeout: float = 5.0) -> SafeStopOutcome:
-    """Call one served instance's ``safe_stop`` tool; a failure is reported, not raised."""
-    if entry.url is None:
-        return SafeStopOutcome(entry.name, True, f"not served ({entry.status}): nothing to stop")
-    try:
-        detail = await DeviceClient(entry.url, entry.token, timeout, entry.name).call("safe_stop")
-    except DeviceError as error:
-        return SafeStopOutcome(entry.name, False, str(error))
-    return SafeStopOutcome(entry.name, True, str(detail))
+def _names(group: list[_Hosted]) -> str:
+    return ", ".join(hosted.instance.name for hosted in group)

@@ -10,7 +10,7 @@ from typing import Any
 from pydantic import BaseModel, ValidationError
 
 from rosaos.config import ConfigError, DeviceConfig, RosaosConfig, format_validation_error
-from rosaos.drivers import BackendName, DeviceContext, DriverSpec
+from rosaos.drivers import BackendName, DeviceContext, DriverSpec, NoticeBoard
 from rosaos.plugins import DriverInfo, DriverRegistry
 
 
@@ -48,6 +48,7 @@ class DeviceInstance:
             backend=self.backend,
             sim=self.sim,
             data_dir=data_dir,
+            notices=NoticeBoard(self.name, self.spec.name, self.spec.notices),
         )
 
 

@@ -87,6 +87,8 @@ class Conversation:
                 return True
             self.unclaimed[process_id] = (event_id, payload)
             return False
+        if kind == "notice" and data.get("process_id") in self.processes:
+            return True  # a question one of our processes asks (a confirmation) is ours to show
         ours = event_id == self.event_id or event_id in self.callback_events
         if not ours:
             return False

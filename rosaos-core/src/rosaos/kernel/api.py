@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterable, Mapping
+from pathlib import Path
 from typing import Any
 
 from fastapi import FastAPI, Request
@@ -21,7 +22,11 @@ from fastapi.staticfiles import StaticFiles
 
 import rosaos
 from rosaos.auth import BearerAuthMiddleware, HostOriginGuard
-from rosaos.kernel import confirmation_routes  # noqa: F401  (adds its routes to protected)
+from rosaos.kernel import (
+    confirmation_routes,  # noqa: F401  (adds its routes to protected)
+    frame_routes,  # noqa: F401  (adds its routes to protected)
+    timer_routes,  # noqa: F401  (adds its routes to protected)
+)
 from rosaos.kernel.api_routes import WEB_DIR, protected, public
 from rosaos.kernel.api_types import KernelRuntime
 
@@ -54,10 +59,15 @@ async def _internal_error(request: Request, error: Exception) -> JSONResponse:
 
 
 def create_app(
-    runtime: KernelRuntime, *, allowed_origins: Iterable[str] = (), allowed_hosts: Iterable[str] = ()
+    runtime: KernelRuntime,
+    *,
+    allowed_origins: Iterable[str] = (),
+    allowed_hosts: Iterable[str] = (),
+    images_dir: Path | None = None,
 ) -> FastAPI:
     """The kernel's FastAPI app. ``allowed_origins`` adds browser origins besides the server's own;
-    ``allowed_hosts`` adds ``Host`` names besides loopback."""
+    ``allowed_hosts`` adds ``Host`` names besides loopback; ``images_dir`` is where drivers save
+    camera frames (the web page shows the newest of each device)."""
     app = FastAPI(
         title="rosaOS kernel",
         version=rosaos.__version__,
@@ -66,6 +76,7 @@ def create_app(
     )
     app.state.runtime = runtime
     app.state.started = time.monotonic()
+    app.state.images_dir = images_dir
     app.include_router(public)
     app.include_router(protected)
     app.mount("/static", StaticFiles(directory=WEB_DIR), name="static")

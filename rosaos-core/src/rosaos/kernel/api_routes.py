@@ -31,7 +31,9 @@ from rosaos.kernel.api_types import (
     PROTECTED_ERRORS,
     Accepted,
     DeviceView,
+    EmergencyStopReport,
     EmergencyStopRequest,
+    EmergencyStopState,
     Health,
     KernelRuntime,
     LoginLink,
@@ -61,7 +63,7 @@ SSE_SEND_TIMEOUT = 30.0
 SSE_RETRY_MS = 2000
 
 
-def _runtime(request: Request) -> KernelRuntime:
+async def _runtime(request: Request) -> KernelRuntime:  # async: no thread hop per request
     runtime: KernelRuntime = request.app.state.runtime
     return runtime
 
@@ -100,7 +102,8 @@ async def login(body: LoginRequest, runtime: Runtime, response: Response) -> Log
         raise HTTPException(
             401,
             "this login link is unknown, expired or already used: "
-            "open the newest link printed by `rosaos up`, or mint one with POST /login-codes",
+            "run `rosaos open` on the machine where rosaOS runs for a fresh link "
+            "(`rosaos open --browser` opens it)",
         )
     return LoginToken(token=runtime.token)
 
@@ -232,20 +235,20 @@ async def list_processes(
 
 
 @protected.get("/estop")
-async def emergency_stop_state(runtime: Runtime) -> dict[str, Any]:
+async def emergency_stop_state(runtime: Runtime) -> EmergencyStopState:
     """Whether the emergency stop is latched, why, and since when (kept across kernel restarts)."""
     return runtime.emergency_stop_state()
 
 
 @protected.post("/estop")
-async def emergency_stop(runtime: Runtime, body: EmergencyStopRequest | None = None) -> dict[str, Any]:
+async def emergency_stop(runtime: Runtime, body: EmergencyStopRequest | None = None) -> EmergencyStopReport:
     """Emergency stop: terminate every process, put every device in its safe state, and refuse
     new processes until a person resets it (``POST /estop/reset``)."""
     return await runtime.emergency_stop((body or EmergencyStopRequest()).reason)
 
 
 @protected.post("/estop/reset")
-async def reset_emergency_stop(runtime: Runtime) -> dict[str, Any]:
+async def reset_emergency_stop(runtime: Runtime) -> EmergencyStopState:
     """Unlatch the emergency stop, on disk too: the next start is unlatched."""
     return await runtime.reset_emergency_stop()
 
@@ -277,7 +280,7 @@ async def web_page() -> FileResponse:
 PAGE_HEADERS = {
     "Cache-Control": "no-cache",
     "Content-Security-Policy": (
-        "default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' data:; "
+        "default-src 'none'; script-src 'self'; style-src 'self'; img-src 'self' data: blob:; "
         "connect-src 'self'; base-uri 'none'; form-action 'self'; frame-ancestors 'none'"
     ),
     "Referrer-Policy": "no-referrer",

@@ -7,7 +7,7 @@ and their names are the schema names in the OpenAPI document.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from datetime import datetime
 from typing import Any, Literal, Protocol
 
@@ -17,8 +17,10 @@ from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.events import EventStore, IdempotencyKey, Source
 from rosaos.kernel.login import LoginCodes
+from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import Update, UpdateStream
 from rosaos.processes.jobs import WorkerCallback
+from rosaos.processes.manager import ProcessInfo
 
 
 class KernelRuntime(Protocol):
@@ -41,6 +43,10 @@ class KernelRuntime(Protocol):
         """The activity log: every tool call of every process (same SQLite file)."""
 
     @property
+    def timers(self) -> TimerBook:
+        """The durable timers (same SQLite file)."""
+
+    @property
     def login_codes(self) -> LoginCodes:
         """Login codes; ``rosaos up`` mints the first one and prints its link."""
 
@@ -56,23 +62,23 @@ class KernelRuntime(Protocol):
     def model_notice(self) -> str | None:
         """Shown as a banner when no model is configured: how to set one. None otherwise."""
 
-    async def processes(self, include_ended: bool = False) -> Sequence[Any]:
-        """The processes to show: ``ProcessInfo`` models, or objects/dicts with the same fields."""
+    async def processes(self, include_ended: bool = False) -> Sequence[ProcessInfo]:
+        """The processes to show, running ones only unless ``include_ended``."""
 
-    async def terminate(self, process_id: int) -> Any:
-        """Terminate a process and return its ``ProcessInfo``; raise ``KeyError`` for an unknown id."""
+    async def terminate(self, process_id: int) -> ProcessInfo:
+        """Terminate a process and return it; raise ``KeyError`` for an unknown id."""
 
-    async def devices(self) -> Sequence[Mapping[str, Any]]:
-        """Every device with its live state: see :class:`DeviceView` for the keys."""
+    async def devices(self) -> Sequence[DeviceView]:
+        """Every device with its status, live state and the processes holding it."""
 
-    async def emergency_stop(self, reason: str) -> dict[str, Any]:
+    async def emergency_stop(self, reason: str) -> EmergencyStopReport:
         """Terminate every process, call every device's ``safe_stop``, latch until reset."""
 
-    async def reset_emergency_stop(self) -> dict[str, Any]:
+    async def reset_emergency_stop(self) -> EmergencyStopState:
         """Unlatch the emergency stop."""
 
-    def emergency_stop_state(self) -> dict[str, Any]:
-        """``{"latched": bool, "reason": str | None, "time": ISO 8601 str | None}``; survives a restart."""
+    def emergency_stop_state(self) -> EmergencyStopState:
+        """Whether the emergency stop is latched, why and since when; survives a restart."""
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         """Called once a ``worker_callback`` is committed (also for a duplicate), so leases are
@@ -101,6 +107,18 @@ class Accepted(BaseModel):
     duplicate: bool = Field(description="True when the idempotency key was seen: id is the first event's.")
 
 
+class ProgressView(BaseModel):
+    """What a running process's device tool last reported: ``progress`` of ``total`` (if given)."""
+
+    model_config = ConfigDict(from_attributes=True)
+
+    device: str
+    progress: float
+    total: float | None = None
+    message: str = ""
+    at: datetime
+
+
 class ProcessView(BaseModel):
     """One process agent and the devices it holds (its leases)."""
 
@@ -113,12 +131,14 @@ class ProcessView(BaseModel):
     started_at: datetime | None = None
     ended_at: datetime | None = None
     worker_pid: int | None = None
+    progress: ProgressView | None = None
+    """The latest progress of a long task (a robot's search), while it runs."""
 
 
 class DeviceView(BaseModel):
     """One device instance with its live state as its ``get_state`` tool returns it."""
 
-    model_config = ConfigDict(from_attributes=True, extra="allow")
+    model_config = ConfigDict(from_attributes=True)
 
     name: str
     driver: str
@@ -128,6 +148,36 @@ class DeviceView(BaseModel):
     url: str | None = None
     state: dict[str, Any] | None = None
     description: str = ""
+    card: dict[str, Any] | None = None
+    """How the web page draws the state (``rosaos.cards``): ``{"widgets": [...]}``; null for a key list."""
+    held_by: list[int] = Field(default_factory=list)
+    """Ids of the running processes that hold this device (their leases)."""
+
+
+class EmergencyStopState(BaseModel):
+    """``GET /estop``: whether the emergency stop is latched, why, and since when."""
+
+    latched: bool
+    reason: str | None = None
+    time: datetime | None = None
+    """When it was (last) pressed; None when not latched."""
+
+
+class DeviceSafeStop(BaseModel):
+    """What one device's ``safe_stop`` did during an emergency stop."""
+
+    name: str
+    ok: bool
+    detail: str
+
+
+class EmergencyStopReport(EmergencyStopState):
+    """``POST /estop``: the latch, the processes terminated and each device's ``safe_stop``."""
+
+    terminated: list[int] = Field(default_factory=list)
+    devices: list[DeviceSafeStop] = Field(default_factory=list)
+    saved: bool = True
+    """False when the latch could not be written to the event store: a restart would forget it."""
 
 
 class Health(BaseModel):

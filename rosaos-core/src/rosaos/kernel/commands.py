@@ -95,7 +95,8 @@ async def _serve(kernel: Kernel, console: Console, err: Console) -> int:
     loop = asyncio.get_running_loop()
     for signum in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(signum, stop.set)
-    console.print(f"Starting rosaOS with {len(kernel.world)} devices…", markup=False)
+    count = len(kernel.world)
+    console.print(f"Starting rosaOS with {count} device{'' if count == 1 else 's'}…", markup=False)
     try:
         url = await kernel.start()
     except (KernelError, DeviceError, ModelError) as error:
@@ -143,6 +144,15 @@ def _client(config_path: Path | None, url: str | None) -> KernelClient:
     return KernelClient.from_config(load_config(config_path), url=url)
 
 
+def progress_text(progress: dict[str, Any] | None) -> str:
+    """A process's latest progress for ``rosaos ps``: "42% looked 3 of 8 ways ...", or ""."""
+    if not progress:
+        return ""
+    total = progress.get("total")
+    percent = f"{round(100 * progress['progress'] / total)}% " if total else ""
+    return f"{percent}{progress.get('message', '')}"[:70]
+
+
 def ps_command(config_path: Path | None, url: str | None, json_output: bool, all_processes: bool) -> int:
     """Print the kernel's processes."""
 
@@ -163,7 +173,7 @@ def ps_command(config_path: Path | None, url: str | None, json_output: bool, all
     if not processes:
         print("no running processes" if not all_processes else "no processes")
         return 0
-    table = Table("id", "state", "devices", "age", "task")
+    table = Table("id", "state", "devices", "age", "task", "progress")
     now = datetime.now(UTC)
     for process in processes:
         started = datetime.fromisoformat(process["started_at"])
@@ -173,6 +183,7 @@ def ps_command(config_path: Path | None, url: str | None, json_output: bool, all
             ", ".join(process["devices"]),
             f"{(now - started).total_seconds():.0f}s",
             process["task"].splitlines()[0][:60],
+            progress_text(process.get("progress")),
         )
     terminal().print(table)
     return 0

@@ -36,7 +36,7 @@ from rosaos.processes.jobs import WorkerCallback
 
 T = TypeVar("T")
 
-EventKind = Literal["user_said", "user_typed", "worker_callback", "device_notice", "error"]
+EventKind = Literal["user_said", "user_typed", "worker_callback", "device_notice", "error", "timer_fired"]
 
 SOURCE_PATTERN = r"^[A-Za-z0-9_.:@/-]+$"
 IdempotencyKey = Annotated[str, Field(min_length=1, max_length=200)]
@@ -60,6 +60,12 @@ class DeviceNotice(BaseModel):
     message: str = Field(min_length=1, max_length=4000)
     data: dict[str, Any] = Field(default_factory=dict)
     """Any JSON, nested at most :data:`MAX_DATA_DEPTH` levels (deeper breaks JSON encoders)."""
+    name: str | None = Field(default=None, pattern=r"^[a-z][a-z0-9_]{0,63}$")
+    """What happened, as the driver declares it (``battery_low``, ``person_seen``); see
+    :mod:`rosaos.device_notices`. None for a free-form notice posted by hand."""
+    driver: str | None = Field(default=None, max_length=100)
+    importance: Literal["info", "notify"] = "info"
+    """``notify``: the kernel tells the user; ``info``: it notes it and stays quiet."""
 
     @field_validator("data")
     @classmethod
@@ -89,7 +95,19 @@ class ErrorReport(BaseModel):
     source_event: int | None = Field(default=None, ge=1)
 
 
-EventPayload = UserText | WorkerCallback | DeviceNotice | ErrorReport
+class TimerFired(BaseModel):
+    """A timer fell due (see :mod:`rosaos.kernel.timers`): the kernel does its action now."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    timer_id: int = Field(ge=1, le=2**63 - 1)
+    action: str = Field(min_length=1, max_length=4000)
+    due: datetime
+    late_seconds: float = Field(default=0.0, ge=0)
+    """How long after ``due`` it fired: more than a few seconds means the kernel was down."""
+
+
+EventPayload = UserText | WorkerCallback | DeviceNotice | ErrorReport | TimerFired
 
 
 class _NewEventBase(BaseModel):
@@ -136,8 +154,15 @@ class ErrorEvent(_NewEventBase):
     payload: ErrorReport
 
 
+class TimerFiredEvent(_NewEventBase):
+    """A timer fell due; the kernel's timer clock queues it, once per timer."""
+
+    kind: Literal["timer_fired"]
+    payload: TimerFired
+
+
 NewEvent = Annotated[
-    UserSaidEvent | UserTypedEvent | WorkerCallbackEvent | DeviceNoticeEvent | ErrorEvent,
+    UserSaidEvent | UserTypedEvent | WorkerCallbackEvent | DeviceNoticeEvent | ErrorEvent | TimerFiredEvent,
     Field(discriminator="kind"),
 ]
 """The body of ``POST /event``, told apart by ``kind``."""

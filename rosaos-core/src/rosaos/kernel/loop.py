@@ -20,6 +20,8 @@ from pydantic_ai.usage import UsageLimits
 
 from rosaos.kernel.agent import trim_history
 from rosaos.kernel.events import Event, EventStore
+from rosaos.kernel.notice_text import render_notice
+from rosaos.kernel.timer_text import render_timer_fired
 from rosaos.kernel.updates import UpdateKind, UpdateStream
 from rosaos.receipts import receipts_text
 
@@ -51,9 +53,11 @@ def render_event(event: Event) -> str:
                 body += "\n" + receipts_text(payload.receipts)
             return f"{head}\n{body}"
         case "device_notice":
-            return f"[Device notice] device={payload.device} {payload.message}"
+            return render_notice(payload)
         case "error":
             return f"[Error] {payload.message}"
+        case "timer_fired":
+            return render_timer_fired(payload)
     return f"[{event.kind}] {payload}"
 
 

@@ -35,14 +35,18 @@ from rosaos.drivers import DeviceError
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
 from rosaos.kernel.api import create_app
+from rosaos.kernel.api_types import DeviceSafeStop, DeviceView, EmergencyStopReport, EmergencyStopState
 from rosaos.kernel.client import kernel_file, running_kernel_url
 from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people
 from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
 from rosaos.kernel.device_status import DeviceStatusUpdates
-from rosaos.kernel.events import Event, EventStore, StoreClosedError, WorkerCallbackEvent
+from rosaos.kernel.events import DeviceNoticeEvent, Event, EventStore, StoreClosedError, WorkerCallbackEvent
 from rosaos.kernel.login import LoginCodes, login_url
 from rosaos.kernel.loop import KernelLoop
+from rosaos.kernel.notices import NoticeWatcher
 from rosaos.kernel.orphans import LiveProcesses, recover_orphans
+from rosaos.kernel.timer_tools import add_timer_tools
+from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.tools import build_kernel_tools
 from rosaos.kernel.updates import UpdateStream
 from rosaos.models.defaults import KernelModels, kernel_models
@@ -64,8 +68,8 @@ class KernelError(Exception):
 
 
 class DeviceHosting(Protocol):
-    """Where the kernel's devices come from. :class:`DeviceSupervisor` (one process per instance)
-    in ``rosaos up``; the task benchmark serves its simulators in-process instead."""
+    """Where the kernel's devices come from. :class:`DeviceSupervisor` (host processes) in
+    ``rosaos up``; the task benchmark serves its simulators in-process instead."""
 
     async def start(self) -> None: ...
 
@@ -135,25 +139,29 @@ class Kernel:
     async def terminate(self, process_id: int) -> ProcessInfo:
         return await self.manager.terminate(process_id)
 
-    async def devices(self) -> Sequence[Mapping[str, Any]]:
+    async def devices(self) -> Sequence[DeviceView]:
         await self.states.wanted()
-        views = []
-        for endpoint in self.endpoints().values():
-            instance = self.world.instances[endpoint.name]
-            views.append(
-                {
-                    "name": endpoint.name,
-                    "driver": endpoint.driver,
-                    "concurrency": endpoint.concurrency,
-                    "backend": instance.backend,
-                    "status": endpoint.status,
-                    "url": endpoint.url,
-                    "state": self.states.get(endpoint.name),
-                    "description": endpoint.description,
-                    "held_by": [p.id for p in self.manager.list() if endpoint.name in p.devices],
-                }
+        running = self.manager.list()
+        return [
+            DeviceView(
+                name=endpoint.name,
+                driver=endpoint.driver,
+                concurrency=endpoint.concurrency,
+                backend=self.world.instances[endpoint.name].backend,
+                status=endpoint.status,
+                url=endpoint.url,
+                state=self.states.get(endpoint.name),
+                description=endpoint.description,
+                held_by=[p.id for p in running if endpoint.name in p.devices],
+                card=self._card(endpoint.name),
             )
-        return views
+            for endpoint in self.endpoints().values()
+        ]
+
+    def _card(self, name: str) -> dict[str, Any] | None:
+        """The card its driver declares, as the web page reads it; None draws a key list."""
+        card = self.world.instances[name].spec.card
+        return card.view() if card else None
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         self.manager.record_callback(callback)
@@ -169,7 +177,7 @@ class Kernel:
             "process_ended", text, callback.model_dump(mode="json"), event_id=event_id
         )
 
-    async def emergency_stop(self, reason: str) -> dict[str, Any]:
+    async def emergency_stop(self, reason: str) -> EmergencyStopReport:
         """Terminate every process, call every device's safe_stop, and latch until reset.
 
         The latch is in memory at once, and saved in the event store while the devices stop: the
@@ -179,17 +187,18 @@ class Kernel:
         latch = self.manager.emergency_stop
         assert latch is not None
         outcomes, saved = await asyncio.gather(self.supervisor.safe_stop_all(), self._save_latch(latch))
-        report = {
-            "latched": True,
-            **latch.model_dump(mode="json"),
-            "terminated": [info.id for info in stopped],
-            "devices": [{"name": o.instance, "ok": o.ok, "detail": o.detail} for o in outcomes],
-            "saved": saved,
-        }
-        await self._updates.publish("error", f"EMERGENCY STOP: {reason}", report)
+        report = EmergencyStopReport(
+            latched=True,
+            reason=latch.reason,
+            time=latch.time,
+            terminated=[info.id for info in stopped],
+            devices=[DeviceSafeStop(name=o.instance, ok=o.ok, detail=o.detail) for o in outcomes],
+            saved=saved,
+        )
+        await self._updates.publish("error", f"EMERGENCY STOP: {reason}", report.model_dump(mode="json"))
         return report
 
-    async def reset_emergency_stop(self) -> dict[str, Any]:
+    async def reset_emergency_stop(self) -> EmergencyStopState:
         """Unlatch the emergency stop (a person decided it is safe).
 
         The latch is cleared on disk first: if that fails, the stop stays latched and this raises.
@@ -203,11 +212,11 @@ class Kernel:
             await self._updates.publish("notice", "emergency stop reset: processes may run again", {})
         return self.emergency_stop_state()
 
-    def emergency_stop_state(self) -> dict[str, Any]:
+    def emergency_stop_state(self) -> EmergencyStopState:
         latch = self.manager.emergency_stop
         if latch is None:
-            return {"latched": False, "reason": None, "time": None}
-        return {"latched": True, **latch.model_dump(mode="json")}
+            return EmergencyStopState(latched=False)
+        return EmergencyStopState(latched=True, reason=latch.reason, time=latch.time)
 
     async def _save_latch(self, latch: EmergencyStop) -> bool:
         """Save the latch for the next start; False (and a log entry) if the store failed."""
@@ -219,6 +228,14 @@ class Kernel:
         return True
 
     # --- devices -----------------------------------------------------------------------------------
+
+    async def devices_settled(self) -> None:
+        """Wait until every device, the background-start ones too, has had its first start attempt.
+
+        ``start`` returns without waiting for those (the Reachy simulator boots for seconds).
+        """
+        if isinstance(self.supervisor, DeviceSupervisor):
+            await self.supervisor.settle(self.world.instances)
 
     def endpoints(self) -> dict[str, DeviceEndpoint]:
         """The world's devices as the process manager grants them."""
@@ -272,7 +289,12 @@ class Kernel:
         )
         self._activity = await ActivityLog.open(self._store.database)
         self._live = LiveProcesses(self._store)
-        self.supervisor = self._hosting or DeviceSupervisor(self.world, self.data_dir, self._token)
+        self.timers = await TimerBook.open(self._store, self._updates.publish_event)
+        # A device that boots in the background (the Reachy simulator: seconds of CPU) waits until
+        # the other devices and the workers are up: on two cores it would otherwise delay them.
+        self.supervisor = self._hosting or DeviceSupervisor(
+            self.world, self.data_dir, self._token, defer_background=True
+        )
         if isinstance(self.supervisor, DeviceSupervisor):
             self.supervisor.on_status_change = DeviceStatusUpdates(self._updates).changed
         kernel = self.config.kernel
@@ -298,10 +320,15 @@ class Kernel:
                 group.create_task(self.manager.start(), name="start worker pool")
         except BaseExceptionGroup as failed:
             raise failed.exceptions[0] from None
-        # Before the loop can grant anything: devices a dead kernel's processes held get safe_stop.
+        # Before the loop can grant anything: devices a dead kernel's processes held get safe_stop,
+        # so one still starting in the background (the Reachy simulator) is waited for first.
+        if isinstance(self.supervisor, DeviceSupervisor):
+            self.supervisor.release_background()
+            await self.supervisor.settle({name for p in await self._live.left() for name in p.devices})
         await recover_orphans(self._live, self._store, self.supervisor.directory(), self._callback_committed)
         self.states = DeviceStateCache(self.endpoints)
         tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._launched)
+        add_timer_tools(tools, self.timers)
         agent = build_kernel_agent(self._models.kernel, tools)
         self.loop = KernelLoop(
             self._store,
@@ -312,7 +339,11 @@ class Kernel:
             history_budget=self.config.kernel.history_messages,
         )
         self.loop.before = lambda event: answer_from_chat(self.confirmations, event)
-        app = create_app(self, allowed_hosts=[*kernel.allow_hosts, *bound_hosts(sock.getsockname()[0])])
+        app = create_app(
+            self,
+            allowed_hosts=[*kernel.allow_hosts, *bound_hosts(sock.getsockname()[0])],
+            images_dir=self.data_dir / "images",
+        )
         config = uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=3)
         self._server = uvicorn.Server(config)
         self._tasks.append(asyncio.create_task(self._server.serve(sockets=[sock]), name="kernel api"))
@@ -322,7 +353,11 @@ class Kernel:
                 raise KernelError("the kernel API stopped during start-up")
             await asyncio.sleep(0.01)
         self._tasks.append(asyncio.create_task(self.states.run(), name="device states"))
+        self.notices = NoticeWatcher(self.endpoints, self._enqueue_notice)
+        self._tasks.append(asyncio.create_task(self.notices.run(), name="device notices"))
         self._tasks.append(asyncio.create_task(self._run_loop(), name="kernel loop"))
+        # Timers that fell due while the kernel was down fire now, once, and say they are late.
+        self._tasks.append(asyncio.create_task(self.timers.run(), name="timers"))
 
     def _model_for_event(self, event: Event) -> Model | None:
         return self._models.for_event(event)
@@ -379,6 +414,12 @@ class Kernel:
         """A callback the kernel wrote itself (for an orphan): on the updates stream, then recorded."""
         await self._updates.publish_event(event_id, event)
         await self.worker_callback_recorded(event_id, event.payload)
+
+    async def _enqueue_notice(self, event: DeviceNoticeEvent) -> None:
+        """A device notice the filter let through: into the queue, and onto the updates stream."""
+        appended = await self._store.append(event)
+        if not appended.duplicate:
+            await self._updates.publish_event(appended.id, event)
 
     async def _launched(self, info: ProcessInfo) -> None:
         """Keep ids unique across restarts, and remember the process until its end is recorded."""

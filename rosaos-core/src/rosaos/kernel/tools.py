@@ -14,11 +14,11 @@ from fastmcp.exceptions import ToolError
 from pydantic import Field
 
 from rosaos.devices.endpoints import DeviceEndpoint
+from rosaos.drivers import CHANGES, DELETES, READ_ONLY
+from rosaos.kernel.follow_ups import attach_follow_up
 from rosaos.processes.manager import LaunchRefused, ProcessInfo, ProcessManager
 
 KERNEL_TOOL_NAMES = ("launch_process", "terminate_process", "list_processes", "list_devices")
-
-_READ_ONLY = {"readOnlyHint": True, "destructiveHint": False, "idempotentHint": True}
 
 
 def build_kernel_tools(
@@ -33,7 +33,7 @@ def build_kernel_tools(
     """
     server = FastMCP("rosaos-kernel", instructions="Process management for the rosaOS kernel.")
 
-    @server.tool(annotations={"readOnlyHint": False, "destructiveHint": False, "idempotentHint": False})
+    @server.tool(annotations=CHANGES)
     async def launch_process(
         task: Annotated[
             str,
@@ -47,13 +47,27 @@ def build_kernel_tools(
             list[str],
             Field(max_length=16, description="Instance names of the devices it needs (see list_devices)."),
         ],
+        then: Annotated[
+            str | None,
+            Field(
+                max_length=2000,
+                description=(
+                    "Optional follow-up: what to launch when this process succeeds (e.g. 'turn the lamp "
+                    "green' after a search that finds someone). It is not done by this process; it comes "
+                    "back to you with the [Worker callback], so it survives a restart."
+                ),
+            ),
+        ] = None,
     ) -> dict[str, Any]:
         """Start a process agent on a task with the devices it needs; returns its id at once.
 
-        The result arrives later as a [Worker callback] event. An exclusive device held by
+        The result arrives later as a [Worker callback] event, with ``then`` (a follow-up to launch
+        only if this process succeeds) in its task. An exclusive device held by
         another process is refused with the holder named: wait for its callback, ask the user,
         or terminate_process(holder). The always-attached device is granted automatically.
         """
+        if then is not None and then.strip():
+            task = attach_follow_up(task, then)
         try:
             info = await manager.launch(task, list(devices))
         except LaunchRefused as refusal:
@@ -62,7 +76,7 @@ def build_kernel_tools(
             await on_launch(info)
         return {"process_id": info.id, "devices": info.devices, "state": info.state}
 
-    @server.tool(annotations={"readOnlyHint": False, "destructiveHint": True, "idempotentHint": True})
+    @server.tool(annotations=DELETES)
     async def terminate_process(
         process_id: Annotated[int, Field(ge=1, description="The id launch_process returned.")],
     ) -> dict[str, Any]:
@@ -73,12 +87,12 @@ def build_kernel_tools(
             raise ToolError(str(error.args[0]) if error.args else f"no process {process_id}") from None
         return _process_data(info)
 
-    @server.tool(annotations=_READ_ONLY)
+    @server.tool(annotations=READ_ONLY)
     async def list_processes() -> list[dict[str, Any]]:
         """List the running processes: id, task, devices held, state."""
         return [_process_data(info) for info in manager.list()]
 
-    @server.tool(annotations=_READ_ONLY)
+    @server.tool(annotations=READ_ONLY)
     async def list_devices() -> list[dict[str, Any]]:
         """List the devices of the world: name, driver, description, concurrency, availability, holder."""
         holders: dict[str, list[int]] = {}

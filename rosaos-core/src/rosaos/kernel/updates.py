@@ -27,6 +27,7 @@ from rosaos.kernel.events import (
     DeviceNotice,
     Event,
     NewEvent,
+    TimerFired,
     UserText,
     WorkerCallback,
     mark_handled_in,
@@ -84,6 +85,8 @@ def describe_event(event: Event | NewEvent) -> str:
         return "[Worker callback] " + " ".join(parts)
     if isinstance(payload, DeviceNotice):
         return f"[Device notice] {payload.device}: {payload.message}"
+    if isinstance(payload, TimerFired):
+        return f"[Timer fired] timer {payload.timer_id}: {payload.action}"
     cause = f" (event {payload.source_event})" if payload.source_event else ""
     return f"[Error]{cause} {payload.message}"
 

@@ -71,7 +71,8 @@ def kernel_models(config: RosaosConfig, world: World, override: Model | None = N
     process = process_spec(config)
     if override is not None:
         return KernelModels(override, process, override.model_name, None, lambda event: None)
-    local = LocalIntentModel(intent_sources(world), language=config.models.language)
+    speaker = next((i.name for i in world.instances.values() if i.spec.always_attached), None)
+    local = LocalIntentModel(intent_sources(world), language=config.models.language, speaker=speaker)
     if spec.model is None:
         return KernelModels(local, process, "offline local-intent engine", OFFLINE_NOTICE, lambda event: None)
     llm = build_model(spec)

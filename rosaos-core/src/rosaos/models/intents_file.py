@@ -20,7 +20,10 @@ arguments, in either of two places (both may be used in one file, not for the sa
         tool: set_brightness
         args: {brightness: "{brightness}"}
 
-An argument value written as ``"{slot}"`` is filled with the matched slot's value.
+An argument value written as ``"{slot}"`` is filled with the matched slot's value. Besides
+``{device}``, the engine fills ``{area}`` with the areas of the driver's instances ("it's too dark
+in {area}" means the one instance there), and ``every: true`` next to ``tool`` makes an intent
+act on every instance ("all the lights to 40%").
 
 A question ("is the turtlebot docked?", "what's playing?") calls a read-only tool, usually
 ``get_state``, and says what it found, with one of two more keys next to ``tool``::
@@ -59,7 +62,7 @@ from rosaos.models.ha_mapping import HomeAssistantMapping
 
 ROSAOS_KEY = "rosaos"
 HOMEASSISTANT_KEY = "homeassistant"
-ACTION_KEYS = ("tool", "args", "answer", "reply")
+ACTION_KEYS = ("tool", "args", "answer", "reply", "every")
 DEFAULT_LANGUAGE = "en"
 _SLOT_REFERENCE = re.compile(r"^\{(\w+)\}$")
 
@@ -109,6 +112,8 @@ class IntentAction(BaseModel):
     """For a yes/no question: the answer, from the returned state."""
     reply: str | None = Field(default=None, min_length=1)
     """For a question: the reply, with ``{device}`` and the returned state's ``{key}`` filled in."""
+    every: bool = False
+    """The template means every instance of the driver ("all the lights"), not one."""
 
     @model_validator(mode="after")
     def _one_kind_of_reply(self) -> IntentAction:

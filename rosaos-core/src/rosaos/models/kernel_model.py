@@ -12,7 +12,11 @@ handled (see :func:`rosaos.kernel.loop.render_event`) and answers:
   kitchen light."), or the refusal (an exclusive device held by another process) passed on.
 - ``[Worker callback]``: the process's output (its plan made it a user-facing sentence), or an
   apology with the error. No new process.
-- ``[Device notice]`` / ``[Error]``: acknowledged in one sentence.
+- ``[Device notice]``: ``notify`` ones are said through the Reachy Mini (one process that calls its
+  ``speak``); ``info`` ones get no reply (:mod:`rosaos.models.notice_plan`).
+- ``[Error]``: acknowledged in one sentence.
+- timers ("… in ten minutes", "what timers are set?", "cancel that timer") and ``[Timer fired]``:
+  :mod:`rosaos.models.timer_plan`, asked first.
 """
 
 from __future__ import annotations
@@ -41,10 +45,13 @@ from rosaos.models.conversation import (
     tool_outcomes,
     user_text,
 )
+from rosaos.models.followups import callback_response, plan_follow_up
 from rosaos.models.matching import IntentMatcher, MatchResult
+from rosaos.models.notice_plan import SILENCE, notice_response
 from rosaos.models.phrases import phrase
 from rosaos.models.plan import PlanError, decode_plan, has_plan
 from rosaos.models.sources import DeviceIntentSource
+from rosaos.models.timer_plan import is_timer_sentence, timer_turn
 
 LAUNCH_TOOL = "launch_process"
 USER_TAGS = frozenset({"User said", "User typed"})
@@ -59,10 +66,14 @@ class LocalIntentModel(Model):
     ``language`` is ``[models] language``. The hassil grammars are built here, once.
     """
 
-    def __init__(self, devices: Sequence[DeviceIntentSource], language: str = "en") -> None:
+    def __init__(
+        self, devices: Sequence[DeviceIntentSource], language: str = "en", speaker: str | None = None
+    ) -> None:
         super().__init__()
         self.language = language
         self.matcher = IntentMatcher(devices, language)
+        self.speaker = speaker
+        """The always-attached device that speaks to the user (the Reachy Mini), if any."""
 
     @property
     def model_name(self) -> str:
@@ -85,6 +96,8 @@ class LocalIntentModel(Model):
         A bare choice ("the kitchen light") is not: it may answer the LLM's "which light?".
         """
         event = parse_event(rendered_event)
+        if (event.tag in USER_TAGS or event.tag is None) and is_timer_sentence(event.body, self.match):
+            return True
         if event.tag in USER_TAGS or event.tag is None:
             return self.match(event.body).is_exact and not self.matcher.choice(event.body)
         if event.tag == CALLBACK_TAG:
@@ -115,17 +128,25 @@ class LocalIntentModel(Model):
 
     def respond(self, messages: Sequence[ModelMessage], tools: Sequence[str]) -> list[ModelResponsePart]:
         """The response parts for ``messages``, given the names of the tools the agent offers."""
+        timers = timer_turn(messages, tools, self.match, self._command, self._acknowledge)
+        if timers is not None:  # set/list/cancel timers, or a [Timer fired] event's action
+            return timers
         turn = current_turn(messages)
         outcomes = tool_outcomes(turn)
         if outcomes:
-            return [TextPart(self._acknowledge(outcomes))]
+            # A follow-up launched on a callback: say how the first process ended, then the ack.
+            started = parse_event(user_text(_first_request(turn)) or "")
+            before = self._callback_reply(started.body) + " " if started.tag == CALLBACK_TAG else ""
+            return [TextPart(before + self._acknowledge(outcomes))]
         event = parse_event(user_text(last_request(messages)) or "")
         if event.tag in USER_TAGS or event.tag is None:
             return self._command(event.body, tools, self._open_question(messages))
         if event.tag == CALLBACK_TAG:
-            return [TextPart(self._callback_reply(event.body))]
+            reply = self._callback_reply(event.body)
+            chained = callback_response(parse_callback(event.body), _launch_tool(tools), reply)
+            return chained or [TextPart(reply)]
         if event.tag == "Device notice":
-            return [TextPart(phrase(self.language, "device_notice", message=event.body))]
+            return notice_response(event.body, self.speaker, _launch_tool(tools))
         return [TextPart(phrase(self.language, "error", message=event.body))]
 
     def _open_question(self, messages: Sequence[ModelMessage]) -> str | None:
@@ -150,12 +171,11 @@ class LocalIntentModel(Model):
         # An answer to "which one?" ("the kitchen light") completes the question's sentence; on
         # its own it would read as "turn on the kitchen light".
         answered = self.matcher.follow_up(open_question, text) if open_question else None
-        result = answered or self.match(text)
+        literal = getattr(self.matcher, "_literal", None)  # the engine's reading as said, if it has one
+        result = answered or plan_follow_up(text, self.match, self.language, literal) or self.match(text)
         if not result.is_exact:
             return [TextPart(result.reply)]
-        launch = next((name for name in tools if name == LAUNCH_TOOL), None) or next(
-            (name for name in tools if name.endswith(LAUNCH_TOOL)), None
-        )
+        launch = _launch_tool(tools)
         if launch is None:  # misconfigured agent: say so rather than pretend
             return [
                 TextPart(
@@ -187,6 +207,8 @@ class LocalIntentModel(Model):
     def _callback_reply(self, body: str) -> str:
         callback = parse_callback(body)
         if callback.status == "ok":
+            if _quiet(callback.task):
+                return SILENCE
             output = (callback.output or "").strip()
             return output if output and output != NO_OUTPUT else phrase(self.language, "callback_done")
         error = callback.error or callback.output or callback.status
@@ -197,6 +219,21 @@ class LocalIntentModel(Model):
         if plan is not None:
             return plan.failure.replace("{error}", error)
         return phrase(self.language, "callback_failed", status=callback.status, error=error)
+
+
+def _quiet(task: str | None) -> bool:
+    """Whether the callback's plan asks for no reply (it only told the user something)."""
+    try:
+        plan = decode_plan(task or "")
+    except PlanError:
+        return False
+    return plan is not None and plan.quiet
+
+
+def _launch_tool(tools: Sequence[str]) -> str | None:
+    return next((name for name in tools if name == LAUNCH_TOOL), None) or next(
+        (name for name in tools if name.endswith(LAUNCH_TOOL)), None
+    )
 
 
 def _first_request(messages: Sequence[ModelMessage]) -> ModelRequest | None:

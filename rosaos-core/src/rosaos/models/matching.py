@@ -33,9 +33,11 @@ from hassil import Intents, recognize_all
 from hassil.intents import SlotList, TextSlotList
 from hassil.recognize import MISSING_ENTITY, RecognizeResult
 
+from rosaos.models.fuzzy import FuzzyMatcher
+from rosaos.models.generalize import understand
 from rosaos.models.ha_intents import NO_AREA, load_ha_intents
 from rosaos.models.intents_file import IntentsFile
-from rosaos.models.phrases import conjunctions, phrase, pronouns
+from rosaos.models.phrases import confirms, conjunctions, phrase, pronouns
 from rosaos.models.ranges import refuse_bad_number
 from rosaos.models.readings import (
     Reading,
@@ -72,6 +74,17 @@ class _DriverIntents:
     intents: Intents
     devices: list[str]
     device_list: TextSlotList
+    area_list: TextSlotList
+
+    @property
+    def device_list_names(self) -> list[str]:
+        """The spoken names ``{device}`` takes for this driver."""
+        return [str(value.value_out) for value in self.device_list.values]
+
+    @property
+    def lists(self) -> dict[str, SlotList]:
+        """The slot lists the engine fills for this driver's templates."""
+        return {"device": self.device_list, "area": self.area_list}
 
 
 class IntentMatcher:
@@ -109,6 +122,12 @@ class IntentMatcher:
         self._cache: dict[tuple[str, frozenset[str] | None], Reading | None] = {}
         self._focus: frozenset[str] | None = None
         self._unknown_cache: dict[str, Reading | None] = {}
+        self._fuzzy = FuzzyMatcher(
+            [(driver.intents, frozenset(driver.device_list_names)) for driver in self._drivers],
+            self.context.names,
+            self.context.areas,
+            language,
+        )
         with_intents = {name for driver in self._drivers for name in driver.devices} | set(
             self.context.mappings
         )
@@ -133,8 +152,12 @@ class IntentMatcher:
             device_list = TextSlotList.from_tuples(
                 [(name, name) for name in sorted(spoken)], allow_template=False
             )
+            areas = {area for device in devices for area in device.areas(self.language)}
+            area_list = TextSlotList.from_tuples(
+                [(area, area) for area in sorted(areas)], allow_template=False
+            )
             names = [device.name for device in devices]
-            drivers.append(_DriverIntents(driver, file, file.intents(), names, device_list))
+            drivers.append(_DriverIntents(driver, file, file.intents(), names, device_list, area_list))
         return drivers
 
     def clear_cache(self) -> None:
@@ -150,7 +173,12 @@ class IntentMatcher:
 
     def follow_up(self, question: str, answer: str) -> MatchResult | None:
         """``question`` (a sentence that got "which one?") again, limited to the devices ``answer``
-        picks. None when the answer is not a choice, or the question still does not resolve."""
+        picks, or the command "Did you mean …?" offered when ``answer`` is yes. None when the
+        answer is neither, or the question still does not resolve."""
+        if confirms(answer, self.language):  # "yes" to "Did you mean …?"
+            suggestion = self.match(question).suggestion
+            confirmed = self.match(suggestion) if suggestion else None
+            return confirmed if confirmed is not None and confirmed.is_exact else None
         focus = self.choice(answer)
         if not focus:
             return None
@@ -160,11 +188,23 @@ class IntentMatcher:
     def match(self, text: str, focus: frozenset[str] | None = None) -> MatchResult:
         """What ``text`` asks for in this world. Never raises on user input.
 
-        ``focus`` limits the targets to those devices (see :meth:`follow_up`).
+        ``focus`` limits the targets to those devices (see :meth:`follow_up`). The literal
+        reading comes first; everyday phrasings and close guesses after it
+        (:func:`rosaos.models.generalize.understand`).
         """
         text = " ".join(text.split())
         if not text:
             return no_match(self.context, text)
+        return understand(
+            text, focus, self._literal, self.context.names, self._fuzzy, self.language, self._whole
+        )
+
+    def _whole(self, text: str, focus: frozenset[str] | None = None) -> MatchResult:
+        self._focus = focus
+        return self._exact(text)
+
+    def _literal(self, text: str, focus: frozenset[str] | None = None) -> MatchResult:
+        """``text`` read against the templates as said: whole, split at conjunctions, or elided."""
         self._focus = focus
         whole = self._best(text)
         if whole is not None and whole.actionable and not self._hides_command(whole):
@@ -193,7 +233,7 @@ class IntentMatcher:
     def _readings(self, clause: str) -> list[Reading]:
         readings: list[Reading] = []
         for driver in self._drivers:
-            for result in self._recognize(clause, driver.intents, {"device": driver.device_list}):
+            for result in self._recognize(clause, driver.intents, driver.lists):
                 action = driver.file.actions[result.intent.name]
                 reading = driver_reading(self.context, clause, result, driver.devices, action, self._focus)
                 if reading is not None:
@@ -336,7 +376,9 @@ class IntentMatcher:
             candidates = [" ".join(name if word.lower() in refer else word for word in words)]
         else:
             last = min(MAX_ELIDED_POSITION, len(words))
-            candidates = [" ".join([*words[:at], name, *words[at:]]) for at in range(1, last + 1)]
+            # Position 0 last: "look around for a person" → "turtlebot, look around for a person".
+            positions = [*range(1, last + 1), 0]
+            candidates = [" ".join([*words[:at], name, *words[at:]]) for at in positions]
         found = self._exactly_for(device, candidates)
         return replace(found, clause=clause) if found is not None else None
 
@@ -385,8 +427,7 @@ class IntentMatcher:
             return None
         best: tuple[tuple[int, int], Reading] | None = None
         sources: list[tuple[Intents, dict[str, SlotList], bool, list[str] | None]] = [
-            (driver.intents, {"device": driver.device_list}, False, driver.devices)
-            for driver in self._drivers
+            (driver.intents, driver.lists, False, driver.devices) for driver in self._drivers
         ]
         if self._ha is not None:
             sources.append((self._ha, self._ha_lists, True, None))

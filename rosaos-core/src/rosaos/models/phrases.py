@@ -26,6 +26,8 @@ PHRASES: dict[str, dict[str, str]] = {
         "unsupported": "The {device} can't do that.",
         "bad_number": "I can't do that: {value} is not a value the {device} takes there. Nothing was changed.",
         "no_match": 'Sorry, I didn\'t understand "{text}". Devices I can control: {devices}.',
+        "did_you_mean": "Did you mean: {suggestion}?",
+        "negated": "All right, I won't {clause}. Nothing was changed.",
         "launch_refused": "I couldn't start that: {reason}",
         "callback_failed": "Sorry, that didn't work ({status}): {error}",
         "callback_done": "Done.",
@@ -50,6 +52,8 @@ PHRASES: dict[str, dict[str, str]] = {
         "unsupported": "{device} ne sait pas faire ça.",
         "bad_number": "Impossible : {device} n'accepte pas la valeur {value} ici. Rien n'a changé.",
         "no_match": "Désolé, je n'ai pas compris « {text} ». Appareils disponibles : {devices}.",
+        "did_you_mean": "Vouliez-vous dire : {suggestion} ?",
+        "negated": "D'accord, je ne le fais pas : {clause}. Rien n'a changé.",
         "launch_refused": "Impossible de lancer : {reason}",
         "callback_failed": "Désolé, ça n'a pas marché ({status}) : {error}",
         "callback_done": "C'est fait.",
@@ -93,6 +97,40 @@ ALL_WORDS: dict[str, frozenset[str]] = {
     "nl": frozenset({"alle", "elke"}),
     "pt": frozenset({"todos", "todas", "cada"}),
 }
+
+
+# Everyday words for a kind of device: a device whose kind is the key also answers to these
+# ("the pup" for a robot dog). One way only: a lamp is a light, but not every light is a lamp.
+KIND_SYNONYMS: dict[str, dict[str, tuple[str, ...]]] = {
+    "en": {
+        "dog": ("pup", "puppy", "doggy", "doggie"),
+        "robot dog": ("robodog", "robot puppy", "robot"),
+        "robot": ("bot",),
+        "lamp": ("light",),
+        "bulb": ("light",),
+        "speaker": ("music",),
+    },
+}
+
+
+# Answers that confirm a "Did you mean …?" question.
+YES_WORDS: dict[str, frozenset[str]] = {
+    "en": frozenset(
+        {"yes", "yeah", "yep", "yes please", "sure", "correct", "right", "exactly", "do it", "ok", "okay"}
+    ),
+    "fr": frozenset({"oui", "ouais", "oui merci", "exactement", "d'accord", "vas-y"}),
+}
+
+
+def confirms(text: str, language: str) -> bool:
+    """Whether ``text`` is a plain yes in ``language`` ("yes", "yes please", "sure.")."""
+    words = YES_WORDS.get(language.split("-")[0], YES_WORDS["en"])
+    return " ".join(text.lower().strip(" .!,").replace(",", " ").split()) in words
+
+
+def kind_synonyms(language: str, kind: str) -> tuple[str, ...]:
+    """Everyday synonyms of the device kind ``kind`` ("dog" → "pup") in ``language``."""
+    return KIND_SYNONYMS.get(language.split("-")[0], {}).get(kind, ())
 
 
 def says_all(text: str, language: str) -> bool:

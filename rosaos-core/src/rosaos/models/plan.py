@@ -74,11 +74,44 @@ class Plan(BaseModel):
     fills_state: bool = False
     """Whether ``{key}`` placeholders in the reply (or answer) name keys of the last step's
     result, to fill in ("Playing {track} by {artist}."): a driver's question template."""
+    quiet: bool = False
+    """The kernel says nothing when this process succeeds (it only told the user something)."""
+    then: FollowUp | None = None
+    """What the kernel launches when this process succeeds ("…, and when you find someone, turn
+    the lamp green"): the next step rides on the callback, so it survives in the event store."""
 
     @property
     def devices(self) -> list[str]:
         """The devices the steps touch, in order of first use."""
         return list(dict.fromkeys(step.device for step in self.steps))
+
+
+class FollowUpLaunch(BaseModel):
+    """One process of a follow-up: launched as ``encode_task(summary, plan)`` on ``devices``."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    devices: list[str] = Field(min_length=1)
+    summary: str = Field(min_length=1)
+    plan: Plan
+
+
+class FollowUp(BaseModel):
+    """The next step of a plan, launched by the kernel on the callback (see :mod:`rosaos.models.followups`)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    launches: list[FollowUpLaunch] = Field(min_length=1)
+    summary: str
+    """What the follow-up does, for replies ("turn the lamp green")."""
+    when: dict[str, Any] | None = None
+    """Result keys a step of this process must return for the follow-up to run (``{"found": true}``);
+    None: the process succeeding is enough ("…, then …")."""
+    unmet: str = ""
+    """The process's output when ``when`` does not hold: the kernel sees it and launches nothing."""
+
+
+Plan.model_rebuild()
 
 
 def encode_task(summary: str, plan: Plan) -> str:

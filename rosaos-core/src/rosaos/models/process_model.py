@@ -37,6 +37,7 @@ from rosaos.models.conversation import (
     responses_by,
     tool_outcomes,
 )
+from rosaos.models.followups import unmet_output
 from rosaos.models.phrases import phrase
 from rosaos.models.plan import Plan, PlanError, decode_plan, fill_state, render_result
 
@@ -123,7 +124,8 @@ class LocalPlanModel(Model):
         elif failed is not None:
             reply = plan.failure.replace("{error}", content_text(failed.content))
         else:
-            reply = final_reply(plan, outcomes[len(plan.steps) - 1].content)
+            results = [outcome.content for outcome in outcomes[: len(plan.steps)]]
+            reply = unmet_output(plan, results) or final_reply(plan, results[-1])
         return [TextPart(reply)]
 
 

@@ -31,5 +31,5 @@ def refuse_bad_number(
             if fixed.is_exact and fixed.processes:
                 device = display_name(fixed.processes[0].devices[0])
                 reply = phrase(language, "bad_number", value=found.group(0), device=device)
-                return MatchResult("no_match", text, reply=reply)
+                return MatchResult("no_match", text, reply=reply, refusal=True)
     return None

@@ -84,14 +84,18 @@ class ReadingContext:
         """Spoken name → devices answering to it (several means the name is ambiguous)."""
         self.areas: dict[str, list[str]] = {}
         self.mappings: dict[str, HomeAssistantMapping] = {}
+        given: dict[str, list[str]] = {}
         for device in devices.values():
             for name in device.spoken_names(language):
                 self.names.setdefault(name, []).append(device.name)
+            for name in device.own_names(language):
+                given.setdefault(name, []).append(device.name)
             for area in device.areas(language):
                 self.areas.setdefault(area, []).append(device.name)
             mapping_file = device.mapping_file()
             if mapping_file is not None and mapping_file.homeassistant is not None:
                 self.mappings[device.name] = mapping_file.homeassistant
+        self.names.update(given)  # a name given to a device beats the same word as another's kind
 
     def named_in(self, text: str) -> tuple[frozenset[str], list[str]]:
         """Devices ``text`` names (by name or area), and the words left over once names are removed.
@@ -140,12 +144,14 @@ def driver_reading(
     slots = slot_values(result)
     if "device" in slots:
         targets = [name for name in context.names.get(str(slots["device"]), []) if name in driver_devices]
+    elif "area" in slots:  # "it's too dark in the kitchen": this driver's instances there
+        targets = [name for name in context.areas.get(str(slots["area"]), []) if name in driver_devices]
     else:  # a template with no {device}: it means this driver's only instance, if it has one
         targets = list(driver_devices)
     if focus is not None:
         targets = [name for name in targets if name in focus]
     literal = result.text_chunks_matched
-    if len(targets) != 1:
+    if not targets or (len(targets) > 1 and not action.every):
         return context.clarify(clause, literal, RANK_DRIVER, targets) if targets else None
     references = action.slot_arguments()
     if not set(references.values()) <= slots.keys():
@@ -153,14 +159,16 @@ def driver_reading(
     args = {
         name: slots[references[name]] if name in references else value for name, value in action.args.items()
     }
-    device = targets[0]
     reading = Reading(
         clause,
         RANK_DRIVER,
         literal,
-        calls={device: [PlanStep(device=device, tool=action.tool, args=args)]},
+        calls={device: [PlanStep(device=device, tool=action.tool, args=args)] for device in targets},
         wildcards=wildcard_texts(result),
     )
+    if len(targets) > 1:
+        return reading
+    device = targets[0]
     display = context.devices[device].display_name
     if action.is_question:
         reading.fills_state.add(device)

@@ -40,6 +40,10 @@ class MatchResult:
     processes: tuple[ProcessPlan, ...] = ()
     reply: str = ""
     """The clarifying question, refusal or "not understood" text (kinds other than ``plans``)."""
+    suggestion: str = ""
+    """For "Did you mean …?": the exact command a "yes" confirms."""
+    refusal: bool = False
+    """A ``no_match`` that refuses what it understood (a bad number, a negation): never guessed at."""
 
     @property
     def is_exact(self) -> bool:

@@ -19,6 +19,7 @@ from pathlib import Path
 from rosaos.config import DeviceConfig
 from rosaos.devices.world import DeviceInstance
 from rosaos.models.intents_file import IntentsFile, load_intents_file
+from rosaos.models.phrases import kind_synonyms
 from rosaos.plugins import DriverRegistry
 
 # Leading articles people put before a name ("the lamp"); stripped so templates' own
@@ -37,6 +38,8 @@ _PLACED = re.compile(
     r"^(?:an? |the )?(?P<thing>[\w' -]+?) (?P<prep>in|on|at) (?:the |my |our )(?P<place>[\w' -]+)$"
 )
 _CLAUSE_END = re.compile(r"[,;.(]|\bwith\b|\band\b")
+_PLACE_PHRASE = re.compile(r"\s(?:in|on|at|by|near|next to|above|under)\s")
+MIN_KIND_LENGTH = 3
 MAX_NAME_WORDS = 3
 
 
@@ -97,12 +100,48 @@ class DeviceIntentSource:
         return thing, match.group("prep"), place
 
     def spoken_names(self, language: str) -> list[str]:
-        """Every name this device answers to, lowercased, without leading articles."""
+        """Every name this device answers to, lowercased, without leading articles.
+
+        Besides its own names, a device answers to its kind ("lamp" for ``living_room_lamp``,
+        "robot dog" and "dog" for "Hiwonder PuppyPi quadruped robot dog") and that kind's
+        everyday synonyms ("pup"). A kind several devices share is ambiguous, and the engine
+        asks which one; a kind only one device has names it.
+        """
+        names = list(self.own_names(language))
+        kinds = _unique(self._kinds())
+        names += kinds
+        names += [synonym for kind in kinds for synonym in kind_synonyms(language, kind)]
+        return _unique(strip_article(name, language) for name in names)
+
+    def own_names(self, language: str) -> list[str]:
+        """The names given to this device: its name, aliases and what its description calls it.
+
+        A name given to one device beats the same word heard as another device's kind: with an
+        alias "light" on the kitchen light, "light" is the kitchen light, even beside a lamp.
+        """
         names = [self.display_name, *self.aliases]
         if self._described is not None:
-            thing, _, place = self._described
+            thing, preposition, place = self._described
             names += [thing, f"{place} {thing.split()[-1]}"]
+            if preposition == "on" and len(place.split()) >= 2:
+                # "Music on the living room speaker": the thing it is on is a name of its own.
+                names += [place, place.split()[-1]]
         return _unique(strip_article(name, language) for name in names)
+
+    def _kinds(self) -> list[str]:
+        """The nouns that say what the device is: the last word of its name and of the head of
+        its description ("TurtleBot4 wheeled mobile robot with a camera" → "robot", "mobile robot")."""
+        kinds = [self.display_name.split()[-1]] if " " in self.display_name else []
+        for alias in self.aliases:
+            kinds += [alias.lower().split()[-1]] if " " in alias.strip() else []
+        head = _CLAUSE_END.split(self.description.strip().lower(), maxsplit=1)[0]
+        head = _PLACE_PHRASE.split(head, maxsplit=1)[0]
+        words = re.findall(r"[a-z][\w'-]*", head)
+        if words:
+            kinds.append(words[-1])
+        if len(words) >= 2:
+            kinds.append(" ".join(words[-2:]))
+        return [kind for kind in kinds if len(kind) >= MIN_KIND_LENGTH]
 
     def areas(self, language: str) -> list[str]:
         """Areas this device is in: the configured one, and the one its description names."""

@@ -15,9 +15,10 @@ deliver it itself, so no ending is lost.
 from __future__ import annotations
 
 import builtins
+import logging
 from collections.abc import Awaitable, Callable, Mapping
 from datetime import UTC, datetime
-from typing import Literal
+from typing import Any, Literal
 
 from pydantic import BaseModel
 
@@ -28,7 +29,26 @@ from rosaos.processes.jobs import GrantedDevice, WorkerCallback, WorkerJob
 from rosaos.processes.leases import LeaseRefused, LeaseTable
 from rosaos.processes.pool import PoolError, WorkerPool
 
+log = logging.getLogger("rosaos.processes.manager")
+
 ProcessState = Literal["running", "ok", "error", "crashed", "timeout", "terminated"]
+
+
+class ProcessProgress(BaseModel):
+    """The latest progress a process's device tool reported (a long task such as a search)."""
+
+    device: str
+    progress: float
+    total: float | None = None
+    message: str = ""
+    at: datetime
+
+    @property
+    def percent(self) -> int | None:
+        """0-100 when the tool gave a total, else None."""
+        if not self.total:
+            return None
+        return max(0, min(100, round(100 * self.progress / self.total)))
 
 
 class ProcessInfo(BaseModel):
@@ -41,6 +61,8 @@ class ProcessInfo(BaseModel):
     started_at: datetime
     ended_at: datetime | None = None
     worker_pid: int | None = None
+    progress: ProcessProgress | None = None
+    """The latest progress of a long task, while it runs."""
 
 
 class EmergencyStop(BaseModel):
@@ -90,6 +112,7 @@ class ProcessManager:
         """The latched emergency stop, or None. While latched every launch is refused. The kernel
         keeps it on disk and passes it in at start, so a restart does not unlatch it."""
         pool.on_ended = self._worker_ended
+        pool.on_progress = self.record_progress
         pool.preload.extend(preload_modules(model))
 
     @property
@@ -196,6 +219,22 @@ class ProcessManager:
     def get(self, process_id: int) -> ProcessInfo:
         """One process by id; ``KeyError`` with a readable message for an unknown id."""
         return self._get(process_id).model_copy()
+
+    def record_progress(self, process_id: int, line: dict[str, Any]) -> None:
+        """Keep a running process's latest progress line (from its worker); others are ignored."""
+        info = self._processes.get(process_id)
+        if info is None or info.state != "running":
+            return
+        try:
+            info.progress = ProcessProgress(
+                device=str(line.get("device", "")),
+                progress=float(line.get("progress", 0.0)),
+                total=float(line["total"]) if line.get("total") is not None else None,
+                message=str(line.get("message") or "")[:500],
+                at=datetime.now(UTC),
+            )
+        except (TypeError, ValueError):
+            log.warning("process %d: a progress line that does not read: %s", process_id, line)
 
     def record_callback(self, callback: WorkerCallback) -> None:
         """Mark the process ended as ``callback`` says and release its leases. Idempotent.

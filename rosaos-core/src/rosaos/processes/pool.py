@@ -1,10 +1,11 @@
 """The warm worker pool: long-lived worker subprocesses that run process agents, one job each at a time.
 
 Importing pydantic-ai and FastMCP takes seconds, so workers are started ahead of time and reused.
-When every warm worker is busy, a one-off worker is spawned for the job and retired after it. It
-is forked by the fork server (:mod:`rosaos.processes.forking`), which did those imports once, so
-it starts in milliseconds; when the fork server is off or not available, it is started as a new
-Python process like a warm worker. Either way the pool handles it the same.
+When every warm worker is busy, a one-off worker is spawned for the job and retired after it.
+Warm and one-off workers alike are forked by the fork server (:mod:`rosaos.processes.forking`),
+which did those imports once, so a worker starts in milliseconds and shares the server's memory;
+when the fork server is off or not available, a worker is started as a new Python process.
+Either way the pool handles it the same.
 
 This module holds the pool's public API and its scheduling: which worker gets a job, when a job
 overruns, how workers are started and replaced. Each worker runs in its own process group and is
@@ -25,7 +26,7 @@ import logging
 import os
 import signal
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -93,6 +94,8 @@ class WorkerPool:
         self.python = python
         self.on_ended = on_ended
         """Where job ends are reported; the process manager sets it."""
+        self.on_progress: Callable[[int, dict[str, Any]], None] | None = None
+        """Where a running job's progress lines go (``process_id``, the line); the manager sets it."""
         self.kill_grace = kill_grace
         self.start_timeout = start_timeout
         self._env = {**os.environ, **(env or {})}
@@ -102,7 +105,11 @@ class WorkerPool:
         self._workers: set[Worker] = set()
         self._spawning: set[asyncio.Task[Any]] = set()
         self._watcher = Watcher(
-            self._report, ready=self._worker_ready, gone=self._workers.discard, exited=self._worker_exited
+            self._report,
+            ready=self._worker_ready,
+            gone=self._workers.discard,
+            exited=self._worker_exited,
+            progress=self._progress,
         )
         self._stopping = False
         self._start_failures = 0
@@ -114,8 +121,13 @@ class WorkerPool:
         """
         self._stopping = False
         if self.fork_server is not None:
+            # The warm workers are forked from it too: one process pays the imports, the workers
+            # share its pages, and on a small machine three interpreters no longer import at once.
             self.fork_server.preload = self.preload
-            self.fork_server.start()  # it imports alongside the warm workers
+            self.fork_server.start()
+            with contextlib.suppress(TimeoutError):
+                async with asyncio.timeout(self.start_timeout):
+                    await self.fork_server.wait_ready()
         try:
             workers = [await self._spawn(one_off=False) for _ in range(self.size)]
         except PoolError:
@@ -132,12 +144,9 @@ class WorkerPool:
         if codes:
             await self.stop()
             raise PoolError(f"worker exited during start-up (exit code {', '.join(codes)}); {hint}")
-        if self.fork_server is not None:
-            with contextlib.suppress(TimeoutError):
-                async with asyncio.timeout(self.start_timeout):
-                    await self.fork_server.wait_ready()
-            if not self.fork_server.ready and self.fork_server.unusable is None:
-                log.warning("the fork server is not ready; one-off workers start the slow way until it is")
+        fork_server = self.fork_server
+        if fork_server is not None and not fork_server.ready and fork_server.unusable is None:
+            log.warning("the fork server is not ready; workers start the slow way until it is")
 
     async def run(self, job: WorkerJob) -> JobHandle:
         """Give ``job`` to an idle warm worker, or to a new one-off worker if all are busy."""
@@ -155,6 +164,10 @@ class WorkerPool:
             worker = await self._spawn(one_off=True, job=job)
         await self._send(worker, job)
         return JobHandle(job.process_id, worker.pid, worker.one_off)
+
+    def _progress(self, process_id: int, line: dict[str, Any]) -> None:
+        if self.on_progress is not None:
+            self.on_progress(process_id, line)
 
     async def terminate(self, process_id: int) -> bool:
         """Kill the worker running ``process_id`` and wait until its end is reported.
@@ -207,7 +220,7 @@ class WorkerPool:
     # -- workers ------------------------------------------------------------------------------
 
     async def _spawn(self, one_off: bool, job: WorkerJob | None = None) -> Worker:
-        proc = await self._fork() if one_off else None
+        proc = await self._fork()
         if proc is None:
             if self._stopping:
                 raise PoolError("the worker pool is stopped")
@@ -227,7 +240,7 @@ class WorkerPool:
         return worker
 
     async def _fork(self) -> WorkerProcess | None:
-        """A one-off worker from the fork server; None when it cannot give one (then spawn one)."""
+        """A worker from the fork server; None when it cannot give one (then spawn one)."""
         if self.fork_server is None or not self.fork_server.ready or self._stopping:
             return None
         try:

@@ -111,8 +111,10 @@ class Watcher:
         ready: Callable[[Worker], None],
         gone: Callable[[Worker], None],
         exited: Callable[[Worker, int], None],
+        progress: Callable[[int, dict[str, Any]], None] | None = None,
     ) -> None:
         self._report = report
+        self._progress = progress
         self._ready = ready
         self._gone = gone
         self._exited = exited
@@ -170,6 +172,10 @@ class Watcher:
             self._ready(worker)
         elif kind == "done":
             await self._on_done(worker, event)
+        elif kind == "progress" and self._progress is not None:
+            job = worker.job
+            if job is not None and event.get("process_id") == job.process_id:
+                self._progress(job.process_id, event)
         elif kind == "rejected" and worker.job is not None:
             job, worker.job = worker.job, None
             worker.cancel_deadline()

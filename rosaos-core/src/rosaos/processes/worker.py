@@ -7,7 +7,9 @@ happen once, at start-up. The protocol with the pool is one JSON object per line
 - stdout, worker to pool: ``{"event": "ready"}`` once the imports are done, then for each job
   ``{"event": "done", "process_id": N, "delivered": bool, "callback": {...}}`` after the
   callback was posted to the kernel (``delivered`` false means the pool must enqueue it), or
-  ``{"event": "rejected", "error": ...}`` for a line that is not a valid job.
+  ``{"event": "rejected", "error": ...}`` for a line that is not a valid job; while a job runs,
+  ``{"event": "progress", "process_id": N, "device", "progress", "total", "message"}`` for each
+  MCP progress notification a device tool sends (a long task such as a robot's search).
 
 stdout carries protocol lines only: the real stdout is kept for them and fd 1 is pointed at
 stderr, so a stray ``print`` in a library cannot corrupt the protocol. Logs go to stderr.
@@ -23,7 +25,7 @@ import json
 import logging
 import os
 import sys
-from collections.abc import Sequence
+from collections.abc import Awaitable, Callable, Sequence
 from typing import IO, Any
 
 import httpx
@@ -179,6 +181,38 @@ class DeviceSessions:
 SESSIONS = DeviceSessions()
 
 
+class ProgressRelay:
+    """Passes a device tool's MCP progress notifications to the pool as ``progress`` lines.
+
+    Device sessions outlive jobs, so the relay, not the session, knows which process runs now.
+    """
+
+    def __init__(self) -> None:
+        self.send: Callable[[dict[str, Any]], None] | None = None
+        self.process_id: int | None = None
+
+    def handler(self, device: str) -> Callable[[float, float | None, str | None], Awaitable[None]]:
+        """The ``progress_handler`` for ``device``'s client."""
+
+        async def relay(progress: float, total: float | None, message: str | None) -> None:
+            if self.send is not None and self.process_id is not None:
+                self.send(
+                    {
+                        "event": "progress",
+                        "process_id": self.process_id,
+                        "device": device,
+                        "progress": progress,
+                        "total": total,
+                        "message": (message or "")[:500],
+                    }
+                )
+
+        return relay
+
+
+PROGRESS = ProgressRelay()
+
+
 async def _run_agent(job: WorkerJob, calls: ToolCallLog, receipts: list[Receipt] | None = None) -> str:
     model = process_model(job)
     prefixed = len(job.devices) > 1
@@ -209,7 +243,12 @@ async def _run_agent(job: WorkerJob, calls: ToolCallLog, receipts: list[Receipt]
 async def _connect(device: GrantedDevice, images: int | None = None) -> MCPToolset[Any]:
     """Open the device's MCP session up front, so a dead device is reported by name, not as a stack."""
     transport = StreamableHttpTransport(device.url, headers=image_headers(images), auth=device.token)
-    client: Client[Any] = Client(transport, name=f"rosaos-{device.name}", init_timeout=CONNECT_TIMEOUT)
+    client: Client[Any] = Client(
+        transport,
+        name=f"rosaos-{device.name}",
+        init_timeout=CONNECT_TIMEOUT,
+        progress_handler=PROGRESS.handler(device.name),
+    )
     # 'failed': a device error (bulb offline, value refused) goes back to the model as a failed
     # tool result it can read and report, instead of ending the whole run.
     toolset: MCPToolset[Any] = MCPToolset(client, id=device.name, tool_error_behavior="failed")
@@ -356,6 +395,7 @@ async def serve(protocol: ProtocolWriter) -> None:
     """Announce readiness, then run each job read from stdin until stdin closes."""
     reader = await _stdin_reader()
     protocol.send({"event": "ready", "pid": os.getpid()})
+    PROGRESS.send = protocol.send
     while line := await reader.readline():
         if not line.strip():
             continue
@@ -366,7 +406,11 @@ async def serve(protocol: ProtocolWriter) -> None:
             protocol.send({"event": "rejected", "error": f"not a valid WorkerJob: {invalid}"})
             continue
         log.info("process %d: starting %r with %d device(s)", job.process_id, job.task, len(job.devices))
-        callback = await _run_while_owned(job, reader)
+        PROGRESS.process_id = job.process_id
+        try:
+            callback = await _run_while_owned(job, reader)
+        finally:
+            PROGRESS.process_id = None
         if callback is None:
             return  # the kernel is gone: nobody owns this process any more
         delivered = await deliver_callback(job, callback)

@@ -28,9 +28,12 @@ import httpx
 import mcp_types
 import pytest
 
+from rosaos.cards import card_keys_missing
 from rosaos.config import DeviceConfig
+from rosaos.device_notices import NoticeBatch, check_notice_specs
 from rosaos.devices.world import DeviceInstance
 from rosaos.drivers import DriverSpec
+from rosaos.kernel.notices import notices_url
 from rosaos.models.intents_file import IntentsFile, IntentsFileError, load_intents_file
 from rosaos.plugins import DriverInfo, DriverRegistry
 from rosaos.testing.device_runner import RunningDevice, build_instance, load_all_drivers, run_device
@@ -178,6 +181,24 @@ class DriverConformance:
         intents = _intents_file(rosaos_driver.spec)
         assert intents.actions, f"{intents.path}: declares no intent"
 
+    def test_declared_notices_validate(self, rosaos_driver: DriverInfo) -> None:
+        """Every notice in ``DriverSpec.notices`` has a valid name, a schema, and an example that validates."""
+        problems = check_notice_specs(rosaos_driver.spec.notices)
+        assert not problems, "; ".join(problems)
+
+    @pytest.mark.asyncio
+    async def test_notices_are_served_behind_the_token(self, shared_device: RunningDevice) -> None:
+        """``GET /notices`` (how the kernel reads ``ctx.notify``) answers with the token, 401 without."""
+        url = notices_url(shared_device.url)
+        async with httpx.AsyncClient(timeout=10) as http:
+            anonymous = await http.get(url)
+            answer = await http.get(url, headers={"Authorization": f"Bearer {shared_device.token}"})
+        assert anonymous.status_code == 401
+        assert answer.status_code == 200, answer.text
+        batch = NoticeBatch.model_validate_json(answer.content)
+        undeclared = {n.name for n in batch.notices} - set(shared_device.instance.spec.notices)
+        assert not undeclared, f"posted notices not declared in DriverSpec.notices: {sorted(undeclared)}"
+
     # The server, over HTTP
 
     def test_sim_backend_says_it_is_simulated(self, shared_device: RunningDevice) -> None:
@@ -227,6 +248,22 @@ class DriverConformance:
             result = await client.call_tool_mcp("get_state", {})
         assert not result.is_error, result_text(result)
         assert isinstance(result_object(result), dict)
+
+    @pytest.mark.asyncio
+    async def test_card_reads_keys_of_get_state(
+        self, rosaos_driver: DriverInfo, shared_device: RunningDevice
+    ) -> None:
+        """The web card the driver declares (``DriverSpec.card``) reads keys ``get_state`` has."""
+        card = rosaos_driver.spec.card
+        if card is None:
+            return  # no card declared: the page lists the state keys as they are
+        async with shared_device.client() as client:
+            state = result_object(await client.call_tool_mcp("get_state", {}))
+        missing = card_keys_missing(card, state)
+        assert not missing, (
+            f"the card of driver {rosaos_driver.spec.name!r} reads {', '.join(missing)}, "
+            f"which get_state does not return (it returns: {', '.join(state)})"
+        )
 
     @pytest.mark.asyncio
     async def test_out_of_range_argument_is_a_tool_error(

@@ -26,7 +26,7 @@ from typing import Any
 
 from fastmcp import Client
 
-from rosaos.drivers import DemoInstance, DeviceBackend, DeviceContext, DriverSpec
+from rosaos.drivers import DemoInstance, DeviceBackend, DeviceContext, DriverSpec, NoticeBoard
 from rosaos.testing.device_runner import validate_settings
 
 
@@ -91,6 +91,7 @@ async def open_sim_device(
             backend="sim",
             sim=dict(default.sim if sim is None else sim),
             data_dir=data_dir,
+            notices=NoticeBoard(name, spec.name, spec.notices),
         )
         backend = spec.backends["sim"](context)
         try:

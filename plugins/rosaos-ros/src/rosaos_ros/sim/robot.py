@@ -3,7 +3,7 @@
 The base node subscribes to the velocity topic and publishes odometry at 50 Hz; with the
 profile's ``sim.battery``/``sim.dock`` it also publishes the ``battery``/``docked`` state topics
 and serves the ``dock``/``undock`` actions (irobot_create_msgs shapes). Cameras render only while
-a client subscribes to them.
+a client subscribes to them, and show the world's people when they are in view.
 """
 
 from __future__ import annotations
@@ -174,7 +174,7 @@ class SimulatedRobot:
         wanted = [(t, e) for t, e in self.profile.sim.cameras.items() if self.graph.has_bridge_subscribers(t)]
         if not wanted:
             return
-        image = render(self.world.x, self.world.y, self.world.yaw)
+        image = render(self.world.x, self.world.y, self.world.yaw, self.world.people)
         for topic, encoding in wanted:
             make = compressed_image_message if encoding == "jpeg" else raw_image_message
             self.graph.publish(topic, make(image, "camera_link"))

@@ -37,11 +37,21 @@ class DockPose(BaseModel):
     yaw: float = 0.0
 
 
+class PersonSpot(BaseModel):
+    """Where a simulated person stands (metres, world frame); the camera shows them when in view."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    x: float
+    y: float
+
+
 class SimState(BaseModel):
     """The simulator's initial state: the ``sim`` table of an instance (keys as ``get_state`` has them).
 
     ``profile`` picks the simulated robot; ``dock`` places its dock (default: where a docked robot
-    starts, else the origin). Velocities must be 0: a simulated robot starts at rest.
+    starts, else the origin); ``people`` stand where the camera can see them. Velocities must be 0:
+    a simulated robot starts at rest.
     """
 
     model_config = ConfigDict(extra="forbid")
@@ -55,6 +65,7 @@ class SimState(BaseModel):
     docked: bool = False
     battery: Annotated[float, Field(ge=0, le=1)] = 0.9
     dock: DockPose | None = None
+    people: Annotated[list[PersonSpot], Field(max_length=50)] = Field(default_factory=list)
 
     @field_validator("linear", "angular")
     @classmethod
@@ -142,6 +153,8 @@ class DiffDriveWorld:
     """Why the base last came to rest: "zero twist", "cmd_vel timeout", "e_stop", "autopilot"."""
     commands: deque[tuple[float, float, float]] = field(default_factory=lambda: deque(maxlen=5000))
     """Every velocity command received: (monotonic time, linear, angular). For tests."""
+    people: list[tuple[float, float]] = field(default_factory=list)
+    """Where people stand (x, y), for the camera."""
     extra_messages: dict[str, dict[str, Any]] = field(default_factory=dict)
     """The last message on each extra topic (light ring, audio). For tests."""
 
@@ -157,6 +170,7 @@ class DiffDriveWorld:
             docked=state.docked,
             battery=state.battery,
             dock=dock,
+            people=[(person.x, person.y) for person in state.people],
         )
 
     def command(self, linear: float, angular: float, now: float) -> None:

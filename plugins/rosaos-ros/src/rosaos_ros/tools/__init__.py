@@ -13,16 +13,14 @@ from typing import Annotated, Any
 from fastmcp import Context
 from pydantic import Field
 
+from rosaos import drivers
 from rosaos_ros.goals import FeedbackCallback
 from rosaos_ros.messages import summarize
 
 # readOnlyHint/destructiveHint/idempotentHint, set on every tool: clients assume the worst otherwise.
-READ_ONLY: dict[str, Any] = {"readOnlyHint": True, "destructiveHint": False, "idempotentHint": True}
-MOVES: dict[str, Any] = {"readOnlyHint": False, "destructiveHint": True, "idempotentHint": False}
-"""The robot moves (or anything may happen: raw publishes, service calls, goals)."""
-SETS: dict[str, Any] = {"readOnlyHint": False, "destructiveHint": False, "idempotentHint": True}
-"""Changes a setting; doing it twice is doing it once."""
-STOPS: dict[str, Any] = {"readOnlyHint": False, "destructiveHint": False, "idempotentHint": True}
+# The shared constants of rosaos.drivers: MOVES (the robot moves, or anything may happen: raw
+# publishes, service calls, goals), SETS (a setting; doing it twice is doing it once), STOPS.
+READ_ONLY, MOVES, SETS, STOPS = drivers.READ_ONLY, drivers.MOVES, drivers.SETS, drivers.SETS
 
 ROS_NAME = r"^/[A-Za-z0-9_/~]*$"
 TopicName = Annotated[

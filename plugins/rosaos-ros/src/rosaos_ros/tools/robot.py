@@ -10,6 +10,7 @@ from fastmcp.tools.base import ToolResult
 from pydantic import Field
 
 from rosaos.devices.images import MAX_IMAGE_BYTES, image_budget, picture_result
+from rosaos.drivers import CHANGES
 from rosaos_ros import camera
 from rosaos_ros.backend import RosBackend
 from rosaos_ros.tools import READ_ONLY
@@ -32,7 +33,7 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
         annotations=READ_ONLY,
     )
 
-    @mcp.tool(annotations={"readOnlyHint": False, "destructiveHint": False, "idempotentHint": False})
+    @mcp.tool(annotations=CHANGES)
     async def capture_image(
         timeout: Annotated[float, Field(gt=0, le=30, description="Seconds to wait for a frame.")] = 5.0,
     ) -> dict[str, Any] | ToolResult:
@@ -44,8 +45,7 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
         max_px = image_budget()
         report, image = await backend.capture_frame(timeout)
         if max_px is None:
-            # A text-only model gets the path; a local description of the frame belongs here once
-            # the driver has a detector (the demo issue's detect_people).
+            # A text-only model gets the path; detect_people says who is in the picture.
             return report
         jpeg = await asyncio.to_thread(camera.jpeg_for_model, image, max_px, MAX_IMAGE_BYTES)
         return picture_result(report, jpeg)

@@ -87,7 +87,7 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
         """
         return await backend.set_param(name, value)
 
-    @mcp.tool(annotations={**SETS, "destructiveHint": True})
+    @mcp.tool(annotations=SETS.model_copy(update={"destructive_hint": True}))
     async def delete_param(name: ParamName) -> dict[str, Any]:
         """Delete (undeclare) an allowed parameter. Most nodes cannot get it back until restarted."""
         return await backend.delete_param(name)

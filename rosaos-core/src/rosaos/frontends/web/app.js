@@ -8,6 +8,9 @@ import {
 } from "./session.js";
 import { followUpdates } from "./stream.js";
 import { renderEmergencyStop, wireEmergencyStop } from "./estop.js";
+import { wireMap } from "./map.js";
+import { cancelTimer, detectTimers } from "./timers.js";
+import { answerConfirmation, renderConfirmations, timelineProcesses } from "./timeline.js";
 
 const POLL_MS = 1000;
 
@@ -84,6 +87,9 @@ function start() {
   $("#sign-out").hidden = false;
   followUpdates();
   pollForever("/processes", renderProcesses);
+  pollForever("/processes?all=true", timelineProcesses);
+  pollForever("/confirmations", renderConfirmations);
+  detectTimers();
   pollForever("/devices", renderDevices);
   pollForever("/estop", renderEmergencyStop);
 }
@@ -96,6 +102,9 @@ async function main() {
   });
   $("#sign-out").addEventListener("click", () => signOut("Signed out."));
   wireEmergencyStop();
+  wireMap();
+  $("#timeline").addEventListener("click", answerConfirmation);
+  $("#timers").addEventListener("click", cancelTimer);
   // A new login link pasted into this tab changes only the fragment, which does not reload the
   // page: start over so the new code is used.
   window.addEventListener("hashchange", () => {

@@ -1,6 +1,9 @@
 // The processes table and the device cards, redrawn in place from polled JSON.
 
+import { renderCardView, showValue } from "./cards.js";
+import { drawMap } from "./map.js";
 import { $, api, errorText, setBadge, setStatus, SignedOut, timeOf } from "./session.js";
+import { taskTitle } from "./timeline.js";
 
 export function renderProcesses(processes) {
   const root = $("#processes");
@@ -25,7 +28,8 @@ export function renderProcesses(processes) {
       row.insertCell().append(button);
     }
     row.cells[0].textContent = process.id;
-    row.cells[1].textContent = process.task;
+    row.cells[1].textContent = taskTitle(process.task);  // the plan block is for the worker, not people
+    row.cells[1].title = process.task || "";
     row.cells[2].textContent = (process.devices || []).join(", ") || "—";
     setBadge(row.cells[3], process.state);
     row.cells[4].textContent = process.started_at ? timeOf(process.started_at) : "";
@@ -48,13 +52,6 @@ export async function terminate(button) {
   }
 }
 
-function showValue(value) {
-  if (value === null || value === undefined) return "—";
-  if (typeof value === "number") return String(Number.isInteger(value) ? value : Math.round(value * 1000) / 1000);
-  if (typeof value === "object") return JSON.stringify(value);
-  return String(value);
-}
-
 export function renderDevices(devices) {
   const root = $("#devices");
   $(".empty", root)?.remove();
@@ -68,15 +65,23 @@ export function renderDevices(devices) {
       card.className = "device-card";
       card.dataset.device = device.name;
       card.innerHTML = '<header><h3></h3><span class="badge-slot"></span></header>' +
-        '<p class="meta"></p><p class="description"></p><dl></dl>';
+        '<p class="meta"></p><p class="description"></p><div class="card-view"></div>' +
+        '<details class="raw"><summary>Details</summary><dl></dl></details>';
       $("h3", card).textContent = device.name;
+      card.setAttribute("aria-label", `Device ${device.name}`);
       root.append(card);
     }
     setBadge($(".badge-slot", card), device.status);
     $(".meta", card).textContent = [device.driver, device.backend, device.concurrency].filter(Boolean).join(" · ");
     $(".description", card).textContent = device.description || "";
+    renderCardView($(".card-view", card), device);
+    // Without a declared card the raw state is the card: show it open.
+    const raw = $("details.raw", card);
+    if (!device.card && !raw.dataset.touched) raw.open = true;
+    raw.ontoggle ??= () => { raw.dataset.touched = "1"; };
     renderState($("dl", card), device.state || {});
   }
+  drawMap(devices);
 }
 
 function renderState(list, state) {

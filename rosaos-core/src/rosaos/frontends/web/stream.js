@@ -1,6 +1,8 @@
 // The updates stream: server-sent events over fetch, or polling, into the chat and event logs.
 
 import { $, api, errorText, page, setConnection, SignedOut, sleep, timeOf } from "./session.js";
+import { timelineUpdate } from "./timeline.js";
+import { timersUpdate } from "./timers.js";
 
 const POLL_MS = 1000;
 const MAX_LINES = 300; // keep the DOM small: older chat and event lines are dropped
@@ -80,6 +82,8 @@ function addUpdate(update) {
   // reset (a new data directory), so follow the new numbering instead of ignoring it.
   page.lastUpdateId = update.id;
   appendEventLine(update);
+  timelineUpdate(update);
+  timersUpdate(update);
   const chat = chatLine(update);
   if (chat) appendChatLine(update.id, chat);
 }

@@ -1,0 +1,97 @@
+"""Several device instances in one host process: what ``rosaos up`` does with simulators.
+
+A simulated Tapo bulb needs a few MB; a Python interpreter with FastMCP, uvicorn and pydantic
+needs about 75. So the supervisor hands one host process a :class:`HostBatch` of instances, and
+the host serves each on its own port, side by side on one event loop. Each instance keeps its own
+URL, backend and ``safe_stop``; what they share is the process, so a crash of that process
+restarts them together (and only them), and the supervisor reports each one going down and back.
+
+The handshake is one JSON line per instance, each naming it: ``{"instance", "url", "pid"}`` when
+it serves, or ``{"instance", "error"}`` when it could not start. An instance that cannot start
+does not stop the others; the supervisor retries it in a process of its own. An instance whose
+server stops after it was ready ends the whole process with code 1, so the supervisor notices at
+once and restarts the batch.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+import os
+from typing import Any, TextIO
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from rosaos.devices.host import HostJob, install_stop_signals, serve_until_stopped, stop_on_stdin_eof
+from rosaos.devices.serve import ServedDevice
+from rosaos.drivers import DeviceError
+
+log = logging.getLogger("rosaos.devices.host")
+
+
+class HostBatch(BaseModel):
+    """What one host process serves when it serves several instances."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    jobs: list[HostJob] = Field(min_length=1)
+
+
+class BatchHandshake:
+    """One line per instance on the host's stdout; each instance speaks once."""
+
+    def __init__(self, stream: TextIO) -> None:
+        self._stream = stream
+        self.sent: set[str] = set()
+
+    def send(self, instance: str, message: dict[str, Any]) -> None:
+        """Write the instance's line once; anything later goes to the log only."""
+        if instance in self.sent:
+            log.error("%s: %s", instance, message.get("error", message))
+            return
+        self.sent.add(instance)
+        self._stream.write(json.dumps({"instance": instance, **message}) + "\n")
+        self._stream.flush()
+
+
+async def run_batch(batch: HostBatch, handshake: BatchHandshake, watch_stdin: bool) -> int:
+    """Serve every job of ``batch`` until stopped; 1 when one of them broke after it was ready."""
+    stop = asyncio.Event()
+    install_stop_signals(stop)
+    watcher = asyncio.create_task(stop_on_stdin_eof(stop)) if watch_stdin else None
+    broke: list[str] = []
+
+    async def serve(job: HostJob) -> None:
+        def ready(served: ServedDevice) -> None:
+            handshake.send(job.instance, {"url": served.url, "pid": os.getpid()})
+            log.info("%s (%s, %s) serving at %s", job.instance, job.driver, job.backend, served.url)
+
+        try:
+            token = job.token_file.read_text(encoding="utf-8").strip()
+            if not token:
+                raise DeviceError(f"token file {job.token_file} is empty")
+            await serve_until_stopped(
+                job.resolve(), job.data_dir, token, job.host, job.port, ready, stop, job.preferred_port
+            )
+        except Exception as error:  # one instance's trouble is reported; the others keep serving
+            if job.instance in handshake.sent:
+                log.exception(
+                    "%s stopped serving; the host exits so the supervisor restarts it", job.instance
+                )
+                broke.append(job.instance)
+                stop.set()
+                return
+            if not isinstance(error, DeviceError | OSError):
+                log.exception("%s could not start", job.instance)
+            reason = (
+                str(error) if isinstance(error, DeviceError | OSError) else f"{type(error).__name__}: {error}"
+            )
+            handshake.send(job.instance, {"error": reason})
+
+    try:
+        await asyncio.gather(*(serve(job) for job in batch.jobs))
+    finally:
+        if watcher is not None:
+            watcher.cancel()
+    return 1 if broke or not handshake.sent else 0

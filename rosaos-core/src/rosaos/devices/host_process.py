@@ -1,0 +1,178 @@
+"""The supervisor's handle on a device host process: spawn it, read its handshake, stop it."""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+import os
+import signal
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from rosaos.devices.host import HostJob
+from rosaos.devices.host_logging import open_rotated_log
+from rosaos.drivers import DeviceError
+
+log = logging.getLogger("rosaos.devices.host")
+
+
+class HostProcess:
+    """A running device host, seen from the supervisor: spawn it, read its handshake, stop it."""
+
+    def __init__(self, process: asyncio.subprocess.Process, log_file: Path) -> None:
+        self.process = process
+        self.log_file = log_file
+        """The host's stderr: driver output, uvicorn warnings, tracebacks."""
+        self.url = ""
+        self.urls: dict[str, str] = {}
+        """Per instance, for a host serving several (:mod:`rosaos.devices.host_batch`)."""
+        self.errors: dict[str, str] = {}
+        """Instances of a batch that could not start, and why."""
+
+    @classmethod
+    async def spawn(
+        cls, job: HostJob, log_file: Path, start_timeout: float, stop_grace: float
+    ) -> HostProcess:
+        """Start a host for ``job`` and wait for its ready line; DeviceError says why it did not come up."""
+        host = await cls._start(log_file)
+        try:
+            reply = await host._handshake(job.model_dump_json(), 1, start_timeout)
+        except BaseException:  # including cancellation: never leave a half-started host behind
+            await host.stop(stop_grace)
+            raise
+        if "url" not in reply[0]:
+            await host.stop(stop_grace)
+            reason = reply[0].get("error") or await asyncio.to_thread(_tail, log_file)
+            raise DeviceError(f"{reason} (log: {log_file})")
+        host.url = str(reply[0]["url"])
+        return host
+
+    @classmethod
+    async def spawn_batch(
+        cls, jobs: Sequence[HostJob], log_file: Path, start_timeout: float, stop_grace: float
+    ) -> HostProcess:
+        """Start one host for several instances; ``urls`` has those that serve, ``errors`` the rest.
+
+        DeviceError when none of them came up (the host is stopped then).
+        """
+        from rosaos.devices.host_batch import HostBatch
+
+        host = await cls._start(log_file)
+        try:
+            replies = await host._handshake(
+                HostBatch(jobs=list(jobs)).model_dump_json(), len(jobs), start_timeout
+            )
+        except BaseException:
+            await host.stop(stop_grace)
+            raise
+        for reply in replies:
+            name = str(reply.get("instance", ""))
+            if "url" in reply:
+                host.urls[name] = str(reply["url"])
+            else:
+                host.errors[name] = str(reply.get("error") or "no answer")
+        for job in jobs:
+            if job.instance not in host.urls and job.instance not in host.errors:
+                host.errors[job.instance] = f"the host did not report it (log: {log_file})"
+        if not host.urls:
+            await host.stop(stop_grace)
+            tail = await asyncio.to_thread(_tail, log_file)
+            raise DeviceError(f"no instance of the shared host started: {tail} (log: {log_file})")
+        return host
+
+    @classmethod
+    async def _start(cls, log_file: Path) -> HostProcess:
+        log_handle = await asyncio.to_thread(open_rotated_log, log_file)
+        try:
+            process = await asyncio.create_subprocess_exec(
+                sys.executable,
+                "-P",  # the working directory must not shadow a module (a stray h2.py)
+                "-m",
+                "rosaos.devices.host",
+                stdin=asyncio.subprocess.PIPE,
+                stdout=asyncio.subprocess.PIPE,
+                stderr=log_handle,
+                # Its own process group: Ctrl-C in the terminal reaches the supervisor only, which
+                # then stops hosts in order; killpg also reaches anything a driver spawned.
+                start_new_session=True,
+            )
+        finally:
+            log_handle.close()
+        return cls(process, log_file)
+
+    async def _handshake(self, job: str, lines: int, start_timeout: float) -> list[dict[str, Any]]:
+        stdin, stdout = self.process.stdin, self.process.stdout
+        assert stdin is not None
+        assert stdout is not None
+        # The job goes over stdin, which then stays open: the host exits when it sees EOF, so a
+        # supervisor that dies hard leaves no orphan hosts behind.
+        stdin.write(job.encode() + b"\n")
+        await stdin.drain()
+        replies: list[dict[str, Any]] = []
+        try:
+            async with asyncio.timeout(start_timeout):
+                while len(replies) < lines:
+                    line = await stdout.readline()
+                    if not line.strip():  # the host exited
+                        break
+                    replies.append(_reply(line))
+        except TimeoutError:
+            raise DeviceError(
+                f"the host did not become ready within {start_timeout:g} s; see {self.log_file}"
+            ) from None
+        return replies or [{}]
+
+    @property
+    def pid(self) -> int:
+        return self.process.pid
+
+    async def wait(self) -> int:
+        """Wait for the host to exit; its return code (negative: killed by that signal)."""
+        return await self.process.wait()
+
+    async def exit_reason(self) -> str:
+        """Why the host exited, for the status: the signal, or the code and the log's last lines."""
+        code = self.process.returncode
+        if code is not None and code < 0:
+            return f"host was killed by {signal.Signals(-code).name}"
+        tail = await asyncio.to_thread(_tail, self.log_file)
+        return f"host exited with code {code}" + (f": {tail}" if tail else "")
+
+    async def stop(self, grace: float) -> None:
+        """SIGTERM the host's process group, SIGKILL it after ``grace`` seconds; reap the host."""
+        if self.process.returncode is None:
+            _signal_group(self.pid, signal.SIGTERM)
+            try:
+                async with asyncio.timeout(grace):
+                    await self.process.wait()
+            except TimeoutError:
+                log.warning("host %s did not stop within %g s; killing it", self.pid, grace)
+        # Whatever the host left in its group (a simulator it spawned) goes too.
+        _signal_group(self.pid, signal.SIGKILL)
+        await self.process.wait()
+
+
+def _reply(line: bytes) -> dict[str, Any]:
+    try:
+        reply = json.loads(line)
+    except ValueError:
+        return {"error": f"unexpected output from the host: {line[:200]!r}"}
+    return reply if isinstance(reply, dict) else {}
+
+
+def _tail(path: Path, lines: int = 3) -> str:
+    """The last lines of a host's log: usually the reason it died."""
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError:
+        return ""
+    return " | ".join(line.strip() for line in text.strip().splitlines()[-lines:])
+
+
+def _signal_group(pid: int, sig: signal.Signals) -> None:
+    with contextlib.suppress(ProcessLookupError, PermissionError):
+        os.killpg(pid, sig)

@@ -1,0 +1,188 @@
+"""Device notices, kernel side: fetch them from every device, filter, and enqueue the ones that pass.
+
+One task per device long-polls its ``GET /notices`` (:mod:`rosaos.device_notices`) with the
+device's own token, so a device host never holds the kernel's token and a remote device works the
+same as a local one. Each notice that passes :class:`NoticeFilter` becomes a ``device_notice``
+event with an idempotency key made from the board and sequence number, so a notice fetched twice
+(a retry after a lost answer) is enqueued once.
+
+The filter is where "rate-limited and deduplicated" lives:
+
+- the same notice (device, name and data) again within ``repeat_window`` seconds is dropped;
+- the same name from the same device more often than every ``min_interval`` seconds is dropped;
+- a device is allowed at most ``per_minute`` notices a minute.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import json
+import logging
+import time
+from collections import deque
+from collections.abc import Awaitable, Callable, Mapping
+
+import httpx
+from pydantic import ValidationError
+
+from rosaos.device_notices import MAX_WAIT, Notice, NoticeBatch
+from rosaos.devices.endpoints import DeviceEndpoint
+from rosaos.kernel.events import DeviceNotice, DeviceNoticeEvent
+
+log = logging.getLogger(__name__)
+
+POLL_WAIT = 15.0
+"""Seconds one long poll waits for a notice before asking again."""
+RETRY_DELAY = 2.0
+"""Seconds before asking a device again after it did not answer (restarting, unreachable)."""
+
+
+class NoticeFilter:
+    """Decides which notices reach the kernel's queue; see the module docstring for the rules."""
+
+    def __init__(
+        self,
+        repeat_window: float = 300.0,
+        min_interval: float = 10.0,
+        per_minute: int = 10,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.repeat_window = repeat_window
+        self.min_interval = min_interval
+        self.per_minute = per_minute
+        self._clock = clock
+        self._seen: dict[str, float] = {}
+        self._last_name: dict[tuple[str, str], float] = {}
+        self._recent: dict[str, deque[float]] = {}
+        self.dropped = 0
+        """How many notices were dropped (for tests and ``rosaos log``'s curious reader)."""
+
+    def admit(self, notice: Notice) -> str | None:
+        """None when ``notice`` may be enqueued (and remember it); else why it is dropped."""
+        now = self._clock()
+        key = f"{notice.device}\0{notice.name}\0{json.dumps(notice.data, sort_keys=True)}"
+        reason = None
+        if now - self._seen.get(key, float("-inf")) < self.repeat_window:
+            reason = "a repeat"
+        elif now - self._last_name.get((notice.device, notice.name), float("-inf")) < self.min_interval:
+            reason = f"more than one {notice.name} within {self.min_interval:g} s"
+        else:
+            recent = self._recent.setdefault(notice.device, deque())
+            while recent and now - recent[0] >= 60.0:
+                recent.popleft()
+            if len(recent) >= self.per_minute:
+                reason = f"over {self.per_minute} notices a minute from {notice.device}"
+            else:
+                recent.append(now)
+        if reason is not None:
+            self.dropped += 1
+            return reason
+        self._seen[key] = now
+        self._last_name[(notice.device, notice.name)] = now
+        if len(self._seen) > 1000:  # forget the oldest; a notice this old may come again
+            for old in sorted(self._seen, key=self._seen.__getitem__)[:500]:
+                del self._seen[old]
+        return None
+
+
+def notice_event(notice: Notice, board: str) -> DeviceNoticeEvent:
+    """The ``device_notice`` event for a notice fetched from ``board``."""
+    return DeviceNoticeEvent(
+        kind="device_notice",
+        source=notice.device,
+        idempotency_key=f"notice:{notice.device}:{board}:{notice.seq}",
+        payload=DeviceNotice(
+            device=notice.device,
+            message=notice.message,
+            data=notice.data,
+            name=notice.name,
+            driver=notice.driver,
+            importance=notice.importance,
+        ),
+    )
+
+
+def notices_url(mcp_url: str) -> str:
+    """A device's ``/notices`` URL, from its MCP URL (``http://host:port/mcp``)."""
+    base = mcp_url.rstrip("/")
+    if base.endswith("/mcp"):
+        base = base[: -len("/mcp")]
+    return base + "/notices"
+
+
+class NoticeWatcher:
+    """Fetches every device's notices and hands those the filter admits to ``enqueue``."""
+
+    def __init__(
+        self,
+        endpoints: Callable[[], Mapping[str, DeviceEndpoint]],
+        enqueue: Callable[[DeviceNoticeEvent], Awaitable[None]],
+        notice_filter: NoticeFilter | None = None,
+        wait: float = POLL_WAIT,
+    ) -> None:
+        self._endpoints = endpoints
+        self._enqueue = enqueue
+        self.filter = notice_filter or NoticeFilter()
+        self.wait = min(wait, MAX_WAIT)
+        self._tasks: dict[str, asyncio.Task[None]] = {}
+
+    async def run(self) -> None:
+        """Watch every device until cancelled (devices added to the world later are picked up)."""
+        try:
+            async with httpx.AsyncClient(timeout=self.wait + 10) as client:
+                while True:
+                    for name in self._endpoints():
+                        if name not in self._tasks or self._tasks[name].done():
+                            self._tasks[name] = asyncio.create_task(self._watch(client, name))
+                    await asyncio.sleep(5.0)
+        finally:
+            for task in self._tasks.values():
+                task.cancel()
+            with contextlib.suppress(Exception):
+                await asyncio.gather(*self._tasks.values(), return_exceptions=True)
+
+    async def _watch(self, client: httpx.AsyncClient, name: str) -> None:
+        board: str | None = None
+        after = 0
+        while True:
+            endpoint = self._endpoints().get(name)
+            if endpoint is None or endpoint.url is None:
+                await asyncio.sleep(RETRY_DELAY)
+                continue
+            try:
+                batch = await self._fetch(client, endpoint, after, board)
+            except (httpx.HTTPError, ValidationError, ValueError) as error:
+                log.debug("notices of %s: %s", name, error)
+                await asyncio.sleep(RETRY_DELAY)
+                continue
+            if batch is None:  # a device server without /notices (an older rosaOS)
+                await asyncio.sleep(60.0)
+                continue
+            for notice in batch.notices:
+                await self.offer(notice, batch.board)
+            board, after = batch.board, batch.next
+
+    async def _fetch(
+        self, client: httpx.AsyncClient, endpoint: DeviceEndpoint, after: int, board: str | None
+    ) -> NoticeBatch | None:
+        assert endpoint.url is not None
+        params: dict[str, str | int | float] = {"after": after, "wait": self.wait}
+        if board is not None:
+            params["board"] = board
+        response = await client.get(
+            notices_url(endpoint.url), params=params, headers={"Authorization": f"Bearer {endpoint.token}"}
+        )
+        if response.status_code == 404:
+            return None
+        response.raise_for_status()
+        return NoticeBatch.model_validate_json(response.content)
+
+    async def offer(self, notice: Notice, board: str) -> bool:
+        """Enqueue ``notice`` unless the filter drops it; True when enqueued."""
+        reason = self.filter.admit(notice)
+        if reason is not None:
+            log.info("notice %s from %s dropped: %s", notice.name, notice.device, reason)
+            return False
+        await self._enqueue(notice_event(notice, board))
+        return True

@@ -1,0 +1,105 @@
+"""TimerBook: timers in the event store fire once, as timer_fired events, and never when cancelled."""
+
+from __future__ import annotations
+
+import asyncio
+from datetime import UTC, datetime, timedelta
+from pathlib import Path
+
+import pytest
+
+from rosaos.kernel.events import EventStore, TimerFired
+from rosaos.kernel.loop import render_event
+from rosaos.kernel.timer_text import DueTimeError, resolve_due
+from rosaos.kernel.timers import TimerBook, TimerError
+
+
+async def test_a_due_timer_queues_one_event_even_when_fired_again(store: EventStore) -> None:
+    book = await TimerBook.open(store)
+    timer = await book.set("turn off the kitchen light", datetime.now(UTC) - timedelta(seconds=1))
+    [event_id] = await book.fire_due()
+    assert await book.fire_due() == []
+    event = await store.get(event_id)
+    assert event is not None and event.kind == "timer_fired"
+    assert isinstance(event.payload, TimerFired) and event.payload.timer_id == timer.id
+    assert await store.pending_count() == 1
+    fired = await book.get(timer.id)
+    assert fired is not None and fired.state == "fired" and fired.event_id == event_id
+
+
+async def test_a_crash_between_queueing_and_marking_does_not_queue_twice(store: EventStore) -> None:
+    book = await TimerBook.open(store)
+    timer = await book.set("turn off the kitchen light", datetime.now(UTC) - timedelta(seconds=1))
+    [first] = await book.fire_due()
+    # As if the kernel died after the append, before the row was marked fired:
+    await store.database.execute("UPDATE timers SET state = 'pending' WHERE id = ?", (timer.id,))
+    assert await TimerBook(store).fire_due() == [first]
+    assert await store.pending_count() == 1
+
+
+async def test_a_cancelled_timer_never_fires_and_cannot_be_cancelled_twice(store: EventStore) -> None:
+    book = await TimerBook.open(store)
+    timer = await book.set("stop the music", datetime.now(UTC) + timedelta(seconds=0.2))
+    await book.cancel(timer.id)
+    await asyncio.sleep(0.3)
+    assert await book.fire_due() == []
+    assert await store.pending_count() == 0
+    with pytest.raises(TimerError, match="already cancelled"):
+        await book.cancel(timer.id)
+    with pytest.raises(KeyError):
+        await book.cancel(999)
+
+
+async def test_timers_survive_reopening_the_store(tmp_path: Path) -> None:
+    store = await EventStore.open(tmp_path / "kernel.sqlite3")
+    await (await TimerBook.open(store)).set("stop the music", datetime.now(UTC) + timedelta(hours=1))
+    await store.close()
+    reopened = await EventStore.open(tmp_path / "kernel.sqlite3")
+    try:
+        [timer] = await (await TimerBook.open(reopened)).pending()
+        assert timer.action == "stop the music"
+    finally:
+        await reopened.close()
+
+
+async def test_the_clock_fires_a_timer_set_while_it_waits(store: EventStore) -> None:
+    fired: list[int] = []
+    rang = asyncio.Event()
+
+    async def on_fired(event_id: int, _event: object) -> None:
+        fired.append(event_id)
+        rang.set()
+
+    book = await TimerBook.open(store, on_fired)
+    clock = asyncio.create_task(book.run())
+    try:
+        await asyncio.sleep(0.05)  # the clock is asleep with nothing to do
+        await book.set("turn on the lamp", datetime.now(UTC) + timedelta(seconds=0.2))
+        async with asyncio.timeout(5):
+            await rang.wait()
+    finally:
+        clock.cancel()
+    event = await store.get(fired[0])
+    assert event is not None
+    assert render_event(event).startswith("[Timer fired] timer=1 due=")
+    assert "late" not in render_event(event)
+
+
+async def test_a_late_timer_says_how_late(store: EventStore) -> None:
+    book = await TimerBook.open(store)
+    await book.set("turn on the lamp", datetime.now(UTC) - timedelta(minutes=90))
+    [event_id] = await book.fire_due()
+    event = await store.get(event_id)
+    assert event is not None
+    assert "(late by 1 h 30 min: the kernel was not running then)" in render_event(event)
+    assert render_event(event).endswith("\naction: turn on the lamp")
+
+
+def test_clock_times_resolve_to_the_next_local_moment() -> None:
+    now = datetime(2026, 11, 25, 22, 0).astimezone()
+    assert resolve_due(None, "23:00", now) == now.replace(hour=23)
+    assert resolve_due(None, "07:30", now) == (now + timedelta(days=1)).replace(hour=7, minute=30)
+    assert resolve_due(600, None, now) == now + timedelta(minutes=10)
+    for bad in [(None, None), (5, "23:00"), (None, "25:00"), (None, "soon"), (None, "2020-01-01T10:00")]:
+        with pytest.raises(DueTimeError):
+            resolve_due(*bad, now)  # type: ignore[arg-type]

@@ -1,0 +1,154 @@
+"""The paper's demonstration as an LLM would play it, scripted with ``FunctionModel`` (no LLM).
+
+Workers import this module in their own subprocess as ``python:paper_scripts:process_model``.
+
+The kernel script understands the two requests of the rosaOS paper (section 6) the way the kernel
+prompt asks an LLM to: the search is launched alone on the TurtleBot with the lamp as its
+follow-up (``launch_process(..., then=...)``); the follow-up is launched from the search's
+``[Worker callback]`` only when it found someone. The process script plays a process agent that
+reads its task and calls its granted device's tools.
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any
+
+from pydantic_ai.messages import (
+    ModelMessage,
+    ModelRequest,
+    ModelResponse,
+    TextPart,
+    ToolCallPart,
+    ToolReturnPart,
+    UserPromptPart,
+)
+from pydantic_ai.models.function import AgentInfo, FunctionModel
+
+from rosaos.kernel.follow_ups import follow_up_of
+from rosaos.models.conversation import parse_callback
+
+SEARCH_REQUEST = "undock the TurtleBot, search the environment for a person, and when someone is found, turn the lamp green"
+SECOND_REQUEST = "make the PuppyPi walk forward and play a song on Spotify"
+
+
+def _last_user_text(messages: list[ModelMessage]) -> str:
+    for message in reversed(messages):
+        if isinstance(message, ModelRequest):
+            for part in message.parts:
+                if isinstance(part, UserPromptPart) and isinstance(part.content, str):
+                    return part.content
+    return ""
+
+
+def _returns(messages: list[ModelMessage]) -> list[ToolReturnPart]:
+    last = messages[-1]
+    if not isinstance(last, ModelRequest):
+        return []
+    return [part for part in last.parts if isinstance(part, ToolReturnPart)]
+
+
+def kernel_model() -> FunctionModel:
+    """The kernel, as an LLM following the kernel prompt would act."""
+
+    async def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        assert (
+            "then"
+            in next(t for t in info.function_tools if t.name == "launch_process").parameters_json_schema[
+                "properties"
+            ]
+        )
+        returns = _returns(messages)
+        if returns:
+            return ModelResponse(parts=[TextPart("; ".join(str(part.content) for part in returns))])
+        text = _last_user_text(messages)
+        tag, _, body = text.partition("] ")
+        if tag == "[User said" and body.strip().lower() == SEARCH_REQUEST.lower():
+            launch = {
+                "task": "Undock, then search the environment for a person and report whether you found one.",
+                "devices": ["turtlebot"],
+                "then": "Turn the lamp green.",
+            }
+            return ModelResponse(parts=[ToolCallPart("launch_process", launch)])
+        if tag == "[User said" and body.strip().lower() == SECOND_REQUEST.lower():
+            return ModelResponse(
+                parts=[
+                    ToolCallPart(
+                        "launch_process", {"task": "Walk forward half a meter.", "devices": ["dog"]}
+                    ),
+                    ToolCallPart(
+                        "launch_process", {"task": "Play Here Comes the Sun.", "devices": ["spotify"]}
+                    ),
+                ]
+            )
+        if tag == "[Worker callback":
+            callback = parse_callback(body)
+            follow_up = follow_up_of(callback.task)
+            if follow_up is None:
+                return ModelResponse(parts=[TextPart(f"process {callback.worker}: {callback.output}")])
+            if callback.status == "ok" and (callback.output or "").startswith("Found"):
+                return ModelResponse(
+                    parts=[ToolCallPart("launch_process", {"task": follow_up, "devices": ["lamp"]})]
+                )
+            return ModelResponse(
+                parts=[TextPart(f"{callback.output or callback.error} So I did not: {follow_up}")]
+            )
+        return ModelResponse(parts=[TextPart(f"I don't know how to handle: {text[:80]}")])
+
+    return FunctionModel(respond, model_name="paper-kernel")
+
+
+def _tool(info: AgentInfo, name: str) -> str:
+    for tool in info.function_tools:
+        if tool.name == name or tool.name.endswith(f"_{name}"):
+            return tool.name
+    raise AssertionError(f"no tool {name!r} among {[t.name for t in info.function_tools]}")
+
+
+def _result(part: ToolReturnPart) -> dict[str, Any]:
+    content = part.content
+    if isinstance(content, str):
+        try:
+            content = json.loads(content)
+        except ValueError:
+            return {}
+    return content if isinstance(content, dict) else {}
+
+
+def process_model() -> FunctionModel:
+    """A process agent: the tool calls its task asks for, in order, then one sentence."""
+
+    async def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        # The task section of the system prompt only: device prompts mention other tools.
+        _, _, after = (info.instructions or "").partition("# Your task\n")
+        task = after.partition("\n\n#")[0].lower()
+        if "search" in task:
+            plan: list[tuple[str, dict[str, Any]]] = [("undock", {}), ("search", {"target": "person"})]
+        elif "lamp green" in task:
+            plan = [("set_color_name", {"name": "green"})]
+        elif "walk forward" in task:
+            plan = [("move_distance", {"meters": 0.5})]
+        elif "play" in task:
+            plan = [("play", {"query": "Here Comes the Sun"})]
+        else:
+            return ModelResponse(parts=[TextPart("I do not know this task.")])
+        returns = [
+            p
+            for m in messages
+            if isinstance(m, ModelRequest)
+            for p in m.parts
+            if isinstance(p, ToolReturnPart)
+        ]
+        if len(returns) < len(plan):
+            name, args = plan[len(returns)]
+            return ModelResponse(parts=[ToolCallPart(_tool(info, name), args)])
+        last = _result(returns[-1])
+        if "found" in last:
+            if last["found"]:
+                return ModelResponse(
+                    parts=[TextPart(f"Found a person at ({last.get('x')}, {last.get('y')}).")]
+                )
+            return ModelResponse(parts=[TextPart("I searched but found no one.")])
+        return ModelResponse(parts=[TextPart("Done.")])
+
+    return FunctionModel(respond, model_name="paper-process")

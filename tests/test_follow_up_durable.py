@@ -1,0 +1,80 @@
+"""A follow-up rides on its process's callback event, so a kernel that never saw the launch runs it.
+
+The offline engine's plan for "turn on the desk lamp, then turn on the shelf lamp" carries the
+second step in the first process's task. Here a fresh kernel (as after a restart) receives only
+that process's ``worker_callback`` (as the worker, or orphan recovery, would post it) and launches
+the follow-up on the real Tapo simulator; a failed callback launches nothing.
+"""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator
+from typing import Any
+
+import pytest
+import pytest_asyncio
+from e2e_support import device_state, eventually, kernel_api, running_kernel
+
+from rosaos.kernel.runtime import Kernel
+from rosaos.models.followups import plan_follow_up
+from rosaos.models.kernel_model import LocalIntentModel
+from rosaos.models.sources import intent_sources
+
+pytestmark = pytest.mark.asyncio(loop_scope="module")
+
+WORLD = """
+[devices.desk_lamp]
+driver = "tapo"
+description = "Lamp on the desk"
+sim = { on = false }
+
+[devices.shelf_lamp]
+driver = "tapo"
+description = "Lamp on the shelf"
+sim = { on = false }
+"""
+
+
+@pytest_asyncio.fixture(scope="module", loop_scope="module")
+async def kernel(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Kernel]:
+    async with running_kernel(tmp_path_factory.mktemp("durable"), WORLD) as kernel:
+        yield kernel
+
+
+def first_task(kernel: Kernel) -> str:
+    model = LocalIntentModel(intent_sources(kernel.world))
+    result = plan_follow_up("Turn on the desk lamp, then turn on the shelf lamp", model.match)
+    assert result is not None
+    return result.processes[0].task
+
+
+async def post_callback(kernel: Kernel, worker_id: int, **fields: Any) -> None:
+    payload = {"worker_id": worker_id, "task": first_task(kernel), **fields}
+    async with kernel_api(kernel) as api:
+        answer = await api.post(
+            "/event", json={"kind": "worker_callback", "source": "worker", "payload": payload}
+        )
+        assert answer.status_code == 202, answer.text
+
+
+async def test_a_failed_callback_from_before_the_restart_launches_nothing(kernel: Kernel) -> None:
+    await post_callback(kernel, 9001, status="crashed", error="kernel restarted: desk_lamp safe-stopped")
+    await eventually(lambda: _handled(kernel))
+    assert (await device_state(kernel, "shelf_lamp"))["on"] is False
+    assert await kernel.processes(include_ended=True) == []
+
+
+async def test_a_successful_callback_from_before_the_restart_launches_the_follow_up(kernel: Kernel) -> None:
+    await post_callback(kernel, 9002, status="ok", output="Done: turn on the desk lamp.")
+
+    async def shelf_on() -> bool:
+        return bool((await device_state(kernel, "shelf_lamp"))["on"])
+
+    await eventually(shelf_on)
+    [process] = await kernel.processes(include_ended=True)
+    assert process.devices == ["shelf_lamp"]
+    assert (await device_state(kernel, "desk_lamp"))["on"] is False  # only the follow-up ran
+
+
+async def _handled(kernel: Kernel) -> bool:
+    return await kernel.events.pending_count() == 0
