@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from rosaos.models.ha_intents import load_ha_intents, plain_text, state_word
-from rosaos.models.ha_mapping import HaAction
-from rosaos.models.intents_file import IntentsFileError, load_intents_file
+from rosaos.intents.grammar.ha_intents import load_ha_intents, plain_text, state_word
+from rosaos.intents.grammar.ha_mapping import HaAction
+from rosaos.intents.grammar.intents_file import IntentsFileError, load_intents_file
 
 FILE = """
 intents:

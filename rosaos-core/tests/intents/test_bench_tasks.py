@@ -24,7 +24,7 @@ from typing import Any
 
 import pytest
 from fastmcp import Client
-from models_support import BENCH_TASKS, OWN_TASKS
+from intents_support import BENCH_TASKS, OWN_TASKS
 from pydantic_ai import Agent
 from pydantic_ai.mcp import MCPToolset
 
@@ -33,9 +33,9 @@ from rosaos.bench.tasks import BenchTask, TaskFile, load_task_file
 from rosaos.config import DeviceConfig, RosaosConfig
 from rosaos.devices.serve import open_device
 from rosaos.devices.world import build_world
-from rosaos.models.matching import IntentMatcher
+from rosaos.intents.grammar.vocabulary import sources_from_config
+from rosaos.intents.understanding.matching import IntentMatcher
 from rosaos.models.process_model import LocalPlanModel
-from rosaos.models.sources import sources_from_config
 from rosaos.plugins import DriverRegistry, load_drivers
 from rosaos.processes.jobs import GrantedDevice
 from rosaos.processes.prompts import DEFAULT_PROCESS_PROMPT, process_system_prompt

@@ -2,7 +2,7 @@
 
 ``home_assistant_intents.get_intents(language)`` returns the whole hassil file of a language:
 about forty intents over every HA domain (covers, locks, timers, ...). The engine keeps only the
-intents some driver maps (see :mod:`rosaos.models.ha_mapping`), and within them only the template
+intents some driver maps (see :mod:`rosaos.intents.grammar.ha_mapping`), and within them only the template
 blocks whose domain is one of the drivers' domains and whose lists the engine can fill. That keeps
 recognition fast (a few milliseconds) and stops "open the garage door" from matching a light.
 

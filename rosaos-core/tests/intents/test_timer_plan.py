@@ -10,17 +10,17 @@ from typing import Any
 
 import pytest
 from fastmcp import FastMCP
-from models_support import home_world
+from intents_support import home_world
 from pydantic_ai import Agent
 from pydantic_ai.mcp import MCPToolset
 from pydantic_ai.messages import ModelMessage
 
+from rosaos.intents.planning.plan import decode_plan
 from rosaos.kernel.events import EventStore
 from rosaos.kernel.timer_text import render_timer_fired
 from rosaos.kernel.timer_tools import add_timer_tools
 from rosaos.kernel.timers import TimerBook, fired_event
 from rosaos.models.kernel_model import LocalIntentModel
-from rosaos.models.plan import decode_plan
 
 
 @dataclass

@@ -11,16 +11,21 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeAlias
 
 from hassil import RecognizeResult
 
-from rosaos.models.ha_intents import NO_AREA, state_word
-from rosaos.models.ha_mapping import HomeAssistantMapping
-from rosaos.models.intents_file import IntentAction
-from rosaos.models.phrases import join_options, phrase, says_all
-from rosaos.models.plan import RESULT_PLACEHOLDER, PlanAnswer, PlanStep
-from rosaos.models.sources import DeviceIntentSource
+from rosaos.intents.grammar.ha_intents import NO_AREA, state_word
+from rosaos.intents.grammar.ha_mapping import HomeAssistantMapping
+from rosaos.intents.grammar.intents_file import IntentAction
+from rosaos.intents.grammar.phrases import join_options, phrase, says_all
+from rosaos.intents.grammar.vocabulary import DeviceIntentSource
+from rosaos.intents.planning.plan import RESULT_PLACEHOLDER, PlanAnswer, PlanStep
+
+Focus: TypeAlias = frozenset[str] | None
+"""The devices a sentence may target: those the user picked when asked "which one?", or None
+for every device. Passed down each call of a matching, never kept on the matcher, so one
+sentence's answer cannot leak into the next (or into another task's concurrent match)."""
 
 RANK_DRIVER, RANK_NAME, RANK_AREA, RANK_ANY = 4, 3, 2, 1
 TARGET_SLOTS = frozenset({"name", "area", "domain", "device"})
@@ -135,7 +140,7 @@ def driver_reading(
     result: RecognizeResult,
     driver_devices: list[str],
     action: IntentAction,
-    focus: frozenset[str] | None = None,
+    focus: Focus = None,
 ) -> Reading | None:
     """The reading of a match against a driver's own template (``{device}`` = its instances).
 
@@ -185,7 +190,7 @@ def driver_reading(
 
 
 def ha_reading(
-    context: ReadingContext, clause: str, result: RecognizeResult, focus: frozenset[str] | None = None
+    context: ReadingContext, clause: str, result: RecognizeResult, focus: Focus = None
 ) -> Reading | None:
     """The reading of a match against Home Assistant's templates (``focus`` as in :func:`driver_reading`)."""
     intent = result.intent.name

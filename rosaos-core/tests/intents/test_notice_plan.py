@@ -5,14 +5,14 @@ from __future__ import annotations
 from typing import Any
 
 from fastmcp import FastMCP
-from models_support import home_world
+from intents_support import home_world
 from pydantic_ai import Agent
 from pydantic_ai.mcp import MCPToolset
 
+from rosaos.intents.planning.plan import decode_plan
 from rosaos.kernel.events import DeviceNotice
 from rosaos.kernel.notice_text import read_notice, render_notice
 from rosaos.models.kernel_model import LocalIntentModel
-from rosaos.models.plan import decode_plan
 from rosaos.processes.jobs import WorkerCallback
 
 BATTERY = DeviceNotice(

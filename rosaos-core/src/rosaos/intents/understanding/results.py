@@ -1,6 +1,6 @@
 """What a sentence means, as the kernel acts on it: :class:`MatchResult` and its :class:`ProcessPlan`s.
 
-Built from the chosen readings of a sentence's clauses (:mod:`rosaos.models.readings`): any
+Built from the chosen readings of a sentence's clauses (:mod:`rosaos.intents.understanding.readings`): any
 question or refusal wins and nothing is launched; otherwise one process per device, its tool
 calls from every clause in order, with the replies the process and the kernel will say.
 """
@@ -10,9 +10,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from rosaos.models.phrases import join_options, phrase
-from rosaos.models.plan import Plan, PlanStep, encode_task
-from rosaos.models.readings import Reading, ReadingContext, readout_reply
+from rosaos.intents.grammar.phrases import join_options, phrase
+from rosaos.intents.planning.plan import Plan, PlanStep, encode_task
+from rosaos.intents.understanding.readings import Reading, ReadingContext, readout_reply
 
 MatchKind = Literal["plans", "clarify", "no_match"]
 

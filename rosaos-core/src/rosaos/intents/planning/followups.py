@@ -1,6 +1,6 @@
 """Follow-ups in the offline engine: "X, then Y", "X, and when you find someone, Y", "X; if you see …, Y".
 
-One sentence becomes one process for X whose plan carries Y as :class:`~rosaos.models.plan.FollowUp`.
+One sentence becomes one process for X whose plan carries Y as :class:`~rosaos.intents.planning.plan.FollowUp`.
 Nothing holds Y's devices while X runs: the kernel launches Y when X's callback arrives, and only
 when X succeeded. The follow-up travels in X's task, which is in X's ``worker_callback`` event,
 so it survives a kernel restart (the event store has it).
@@ -26,9 +26,9 @@ from typing import Any
 
 from pydantic_ai.messages import ModelResponsePart, TextPart, ToolCallPart
 
+from rosaos.intents.planning.plan import FollowUp, FollowUpLaunch, Plan, PlanError, decode_plan, encode_task
+from rosaos.intents.understanding.results import MatchResult, ProcessPlan
 from rosaos.models.conversation import WorkerCallbackEvent
-from rosaos.models.plan import FollowUp, FollowUpLaunch, Plan, PlanError, decode_plan, encode_task
-from rosaos.models.results import MatchResult, ProcessPlan
 
 # Where a follow-up starts: "…, then Y", "… and then Y"; "…, and when/once/if … Y".
 _THEN = re.compile(r"(?:\s*[,;]\s*|\s+)(?:and\s+)?(?:then|after that|afterwards)\s*,?\s+", re.IGNORECASE)

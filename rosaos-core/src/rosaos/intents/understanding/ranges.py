@@ -11,8 +11,8 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 
-from rosaos.models.phrases import phrase
-from rosaos.models.results import MatchResult
+from rosaos.intents.grammar.phrases import phrase
+from rosaos.intents.understanding.results import MatchResult
 
 NUMBER = re.compile(r"(?<![\w.])(?:(?:minus|negative)\s+|-)?\d+(?:[.,]\d+)?(?![\w.])", re.IGNORECASE)
 PROBES = ("50", "1")

@@ -11,10 +11,10 @@ from typing import Any
 import pytest
 
 from rosaos.config import DeviceConfig
-from rosaos.models.fuzzy import ACT_SCORE, ASK_SCORE
-from rosaos.models.matching import IntentMatcher
-from rosaos.models.rephrase import join_split_names, negated, strip_fillers
-from rosaos.models.sources import sources_from_config
+from rosaos.intents.grammar.vocabulary import sources_from_config
+from rosaos.intents.understanding.fuzzy import ACT_SCORE, ASK_SCORE
+from rosaos.intents.understanding.matching import IntentMatcher
+from rosaos.intents.understanding.rephrase import join_split_names, negated, strip_fillers
 from rosaos.plugins import load_drivers
 
 

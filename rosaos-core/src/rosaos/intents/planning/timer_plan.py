@@ -2,7 +2,7 @@
 
 :class:`rosaos.models.kernel_model.LocalIntentModel` asks :func:`timer_turn` first. It answers:
 
-- user text that is a timer request (:mod:`rosaos.models.timer_phrases`) with a ``set_timer``,
+- user text that is a timer request (:mod:`rosaos.intents.grammar.timer_phrases`) with a ``set_timer``,
   ``list_timers`` or ``cancel_timer`` call, once the action is a command the engine understands
   now (a timer is never set for something it could not do when it fires);
 - those tools' results with one sentence ("Timer 2 set: turn off the kitchen light at 22:10
@@ -22,6 +22,8 @@ from typing import Any
 
 from pydantic_ai.messages import ModelMessage, ModelRequest, ModelResponsePart, TextPart, ToolCallPart
 
+from rosaos.intents.grammar.timer_phrases import CancelTimer, ListTimers, SetTimer, read_timer_request
+from rosaos.intents.understanding.results import MatchResult
 from rosaos.models.conversation import (
     ToolOutcome,
     content_text,
@@ -31,8 +33,6 @@ from rosaos.models.conversation import (
     tool_outcomes,
     user_text,
 )
-from rosaos.models.results import MatchResult
-from rosaos.models.timer_phrases import CancelTimer, ListTimers, SetTimer, read_timer_request
 
 TIMER_TAG = "Timer fired"
 USER_TAGS = frozenset({"User said", "User typed"})

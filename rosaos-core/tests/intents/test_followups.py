@@ -6,14 +6,14 @@ from typing import Any
 
 import pytest
 from fastmcp import FastMCP
-from models_support import home_world
+from intents_support import home_world
 from pydantic_ai import Agent
 from pydantic_ai.mcp import MCPToolset
 from pydantic_ai.messages import ModelMessage
 
-from rosaos.models.followups import plan_follow_up, unmet_output
+from rosaos.intents.planning.followups import plan_follow_up, unmet_output
+from rosaos.intents.planning.plan import decode_plan
 from rosaos.models.kernel_model import LocalIntentModel
-from rosaos.models.plan import decode_plan
 
 WHEN_FOUND = "Turn on the kitchen light, and when you find someone turn off the bedroom light"
 
@@ -157,7 +157,7 @@ async def test_a_terminated_first_step_cancels_the_follow_up(model: LocalIntentM
     ("found", "expected"), [(True, "Done: search."), (False, "I did not find anyone, so I did not x.")]
 )
 async def test_the_process_reports_an_unmet_condition_as_its_output(found: bool, expected: str) -> None:
-    from rosaos.models.plan import FollowUp, FollowUpLaunch, Plan, PlanStep, encode_task
+    from rosaos.intents.planning.plan import FollowUp, FollowUpLaunch, Plan, PlanStep, encode_task
     from rosaos.models.process_model import LocalPlanModel
 
     device = FastMCP("turtlebot")

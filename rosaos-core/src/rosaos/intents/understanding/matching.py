@@ -7,7 +7,7 @@ mean several devices, or names one that does not exist, yields a reply and no pr
 
 Templates come from each driver's ``intents.yaml`` (``{device}`` = that driver's instances) and
 from Home Assistant's built-in intents for the configured language (see
-:mod:`rosaos.models.ha_intents`). All hassil structures are built once, in the constructor.
+:mod:`rosaos.intents.grammar.ha_intents`). All hassil structures are built once, in the constructor.
 
 A sentence with several commands ("turn on the lamp and play some jazz") is split at
 conjunctions, but only when the whole sentence does not match by itself, or matched only by a
@@ -33,20 +33,21 @@ from hassil import Intents, recognize_all
 from hassil.intents import SlotList, TextSlotList
 from hassil.recognize import MISSING_ENTITY, RecognizeResult
 
-from rosaos.models.fuzzy import FuzzyMatcher
-from rosaos.models.generalize import understand
-from rosaos.models.ha_intents import NO_AREA, load_ha_intents
-from rosaos.models.intents_file import IntentsFile
-from rosaos.models.phrases import confirms, conjunctions, phrase, pronouns
-from rosaos.models.ranges import refuse_bad_number
-from rosaos.models.readings import (
+from rosaos.intents.grammar.ha_intents import NO_AREA, load_ha_intents
+from rosaos.intents.grammar.intents_file import IntentsFile
+from rosaos.intents.grammar.phrases import confirms, conjunctions, phrase, pronouns
+from rosaos.intents.grammar.vocabulary import ARTICLES, DeviceIntentSource, strip_article
+from rosaos.intents.understanding.fuzzy import FuzzyMatcher
+from rosaos.intents.understanding.generalize import understand
+from rosaos.intents.understanding.ranges import refuse_bad_number
+from rosaos.intents.understanding.readings import (
+    Focus,
     Reading,
     ReadingContext,
     driver_reading,
     ha_reading,
 )
-from rosaos.models.results import MatchResult, ProcessPlan, build_result, no_match
-from rosaos.models.sources import ARTICLES, DeviceIntentSource, strip_article
+from rosaos.intents.understanding.results import MatchResult, ProcessPlan, build_result, no_match
 
 __all__ = ["IntentMatcher", "MatchResult", "ProcessPlan"]
 
@@ -119,8 +120,7 @@ class IntentMatcher:
         words = "|".join(re.escape(word) for word in conjunctions(language))
         # ", and then" is one separator: a comma, a conjunction, or a comma then a conjunction.
         self._splitter = re.compile(rf"\s*((?:,\s*)?\b(?:{words})\b|,)\s*", re.IGNORECASE)
-        self._cache: dict[tuple[str, frozenset[str] | None], Reading | None] = {}
-        self._focus: frozenset[str] | None = None
+        self._cache: dict[tuple[str, Focus], Reading | None] = {}
         self._unknown_cache: dict[str, Reading | None] = {}
         self._fuzzy = FuzzyMatcher(
             [(driver.intents, frozenset(driver.device_list_names)) for driver in self._drivers],
@@ -185,12 +185,12 @@ class IntentMatcher:
         result = self.match(question, focus)
         return result if result.is_exact else None
 
-    def match(self, text: str, focus: frozenset[str] | None = None) -> MatchResult:
+    def match(self, text: str, focus: Focus = None) -> MatchResult:
         """What ``text`` asks for in this world. Never raises on user input.
 
         ``focus`` limits the targets to those devices (see :meth:`follow_up`). The literal
         reading comes first; everyday phrasings and close guesses after it
-        (:func:`rosaos.models.generalize.understand`).
+        (:func:`rosaos.intents.understanding.generalize.understand`).
         """
         text = " ".join(text.split())
         if not text:
@@ -199,43 +199,43 @@ class IntentMatcher:
             text, focus, self._literal, self.context.names, self._fuzzy, self.language, self._whole
         )
 
-    def _whole(self, text: str, focus: frozenset[str] | None = None) -> MatchResult:
-        self._focus = focus
-        return self._exact(text)
+    def _whole(self, text: str, focus: Focus = None) -> MatchResult:
+        return self._exact(text, focus)
 
-    def _literal(self, text: str, focus: frozenset[str] | None = None) -> MatchResult:
+    def _literal(self, text: str, focus: Focus = None) -> MatchResult:
         """``text`` read against the templates as said: whole, split at conjunctions, or elided."""
-        self._focus = focus
-        whole = self._best(text)
+        whole = self._best(text, focus)
         if whole is not None and whole.actionable and not self._hides_command(whole):
-            return build_result(self.context, text, [whole], self._focus is not None)
+            return build_result(self.context, text, [whole], focus is not None)
         pieces = self._splitter.split(text)
         if 3 <= len(pieces) <= 2 * MAX_PIECES - 1:
             for allow_unknown in (False, True):
-                split = self._partition(tuple(pieces), allow_unknown)
+                split = self._partition(tuple(pieces), allow_unknown, focus)
                 if split is not None:
-                    return build_result(self.context, text, split, self._focus is not None)
-        refused = refuse_bad_number(text, self._exact, self._display_name, self.context.language)
+                    return build_result(self.context, text, split, focus is not None)
+        refused = refuse_bad_number(
+            text, lambda sentence: self._exact(sentence, focus), self._display_name, self.context.language
+        )
         if refused is not None:
             return refused
         if whole is not None:
-            return build_result(self.context, text, [whole], self._focus is not None)
+            return build_result(self.context, text, [whole], focus is not None)
         unknown = self._unknown(text)
         if unknown is not None:
             return build_result(self.context, text, [unknown], False)
-        elided = self._elided_anywhere(text)
+        elided = self._elided_anywhere(text, focus)
         if elided is not None:
-            return build_result(self.context, text, [elided], self._focus is not None)
+            return build_result(self.context, text, [elided], focus is not None)
         return no_match(self.context, text)
 
     # Recognition
 
-    def _readings(self, clause: str) -> list[Reading]:
+    def _readings(self, clause: str, focus: Focus) -> list[Reading]:
         readings: list[Reading] = []
         for driver in self._drivers:
             for result in self._recognize(clause, driver.intents, driver.lists):
                 action = driver.file.actions[result.intent.name]
-                reading = driver_reading(self.context, clause, result, driver.devices, action, self._focus)
+                reading = driver_reading(self.context, clause, result, driver.devices, action, focus)
                 if reading is not None:
                     readings.append(reading)
         # A driver's own template outranks any HA reading, so HA (the slower, bigger grammar)
@@ -244,7 +244,7 @@ class IntentMatcher:
             for result in self._recognize(clause, self._ha, self._ha_lists, ha=True):
                 if self._only_names(clause, result):
                     continue
-                reading = ha_reading(self.context, clause, result, self._focus)
+                reading = ha_reading(self.context, clause, result, focus)
                 if reading is not None:
                     readings.append(reading)
         return readings
@@ -280,21 +280,21 @@ class IntentMatcher:
                 text = text.replace(entity.text.strip().lower(), " ", 1)
         return all(word in self._filler for word in re.findall(r"[\w']+", text))
 
-    def _best(self, clause: str) -> Reading | None:
+    def _best(self, clause: str, focus: Focus) -> Reading | None:
         # Cached: a split tries the same clauses again, and users repeat themselves.
-        key = (clause, self._focus)
+        key = (clause, focus)
         if key not in self._cache:
             if len(self._cache) >= CACHE_SIZE:
                 self._cache.pop(next(iter(self._cache)))
-            readings = self._readings(clause)
+            readings = self._readings(clause, focus)
             self._cache[key] = max(readings, key=Reading.sort_key) if readings else None
         return self._cache[key]
 
-    def _exact(self, text: str) -> MatchResult:
+    def _exact(self, text: str, focus: Focus) -> MatchResult:
         """``text`` as one whole command, or "not understood" (no splitting, no questions)."""
-        whole = self._best(text)
+        whole = self._best(text, focus)
         if whole is not None and whole.actionable and not self._hides_command(whole):
-            return build_result(self.context, text, [whole], self._focus is not None)
+            return build_result(self.context, text, [whole], focus is not None)
         return no_match(self.context, text)
 
     def _display_name(self, device: str) -> str:
@@ -304,7 +304,7 @@ class IntentMatcher:
         """A wildcard that swallowed a conjunction: "play jazz and turn on the lamp"."""
         return any(len(self._splitter.split(text)) > 1 for text in reading.wildcards)
 
-    def _partition(self, pieces: tuple[str, ...], allow_unknown: bool) -> list[Reading] | None:
+    def _partition(self, pieces: tuple[str, ...], allow_unknown: bool, focus: Focus) -> list[Reading] | None:
         """Cut ``pieces`` (texts and separators, alternating) into the fewest clauses that all match.
 
         A clause may lean on the one before it (``before``: its device and its text): "... and
@@ -320,9 +320,13 @@ class IntentMatcher:
             joined = " ".join(word for word in words if word.strip())
             if not texts[start].strip() or not texts[end - 1].strip():
                 return None
-            found = self._best(joined)
+            found = self._best(joined, focus)
             if before is not None and (found is None or not found.actionable):
-                found = self._elided(joined, before[0]) or self._same_command(joined, *before) or found
+                found = (
+                    self._elided(joined, before[0], focus)
+                    or self._same_command(joined, before[0], before[1], focus)
+                    or found
+                )
             if found is None and allow_unknown:
                 found = self._unknown(joined)
             return found
@@ -341,7 +345,7 @@ class IntentMatcher:
 
         return rest(0, None)
 
-    def _same_command(self, clause: str, device: str, command: str) -> Reading | None:
+    def _same_command(self, clause: str, device: str, command: str, focus: Focus) -> Reading | None:
         """``clause`` is only another device's name: ``command`` (which acted on ``device``) again,
         for that device. "Turn off the kitchen light and the desk lamp" turns off both."""
         named, leftover = self.context.named_in(clause)
@@ -360,9 +364,9 @@ class IntentMatcher:
             return None
         spoken = self.devices[other].spoken_names(self.language)[0]
         again = re.sub(rf"(?<!\w){re.escape(said)}(?!\w)", spoken, command, count=1, flags=re.IGNORECASE)
-        return self._exactly_for(other, [again])
+        return self._exactly_for(other, [again], focus)
 
-    def _elided(self, clause: str, device: str) -> Reading | None:
+    def _elided(self, clause: str, device: str, focus: Focus) -> Reading | None:
         """``clause`` read as a command to ``device`` that does not name it, or None.
 
         "drive it forward" becomes "drive turtlebot forward"; "drive forward" is tried as "drive
@@ -379,34 +383,29 @@ class IntentMatcher:
             # Position 0 last: "look around for a person" → "turtlebot, look around for a person".
             positions = [*range(1, last + 1), 0]
             candidates = [" ".join([*words[:at], name, *words[at:]]) for at in positions]
-        found = self._exactly_for(device, candidates)
+        found = self._exactly_for(device, candidates, focus)
         return replace(found, clause=clause) if found is not None else None
 
-    def _exactly_for(self, device: str, sentences: list[str]) -> Reading | None:
+    def _exactly_for(self, device: str, sentences: list[str], focus: Focus) -> Reading | None:
         """The first of ``sentences`` that reads as an exact command to ``device`` alone, or None
         (also when the user's answer to "which one?" ruled ``device`` out)."""
-        focus = self._focus
         if focus is not None and device not in focus:
             return None
-        self._focus = frozenset({device})
-        try:
-            for sentence in sentences:
-                found = self._best(sentence)
-                if found is not None and found.actionable and set(found.calls) == {device}:
-                    return found
-        finally:
-            self._focus = focus
+        for sentence in sentences:
+            found = self._best(sentence, frozenset({device}))
+            if found is not None and found.actionable and set(found.calls) == {device}:
+                return found
         return None
 
-    def _elided_anywhere(self, clause: str) -> Reading | None:
+    def _elided_anywhere(self, clause: str, focus: Focus) -> Reading | None:
         """``clause`` as a command that leaves out its device, read against every device.
 
         One device fits: its reading. Several: "which one?". None: None. A pronoun with nothing
         before it to refer to ("turn it off") is read the same way.
         """
-        fits = [device for device in self.devices if self._elided(clause, device) is not None]
+        fits = [device for device in self.devices if self._elided(clause, device, focus) is not None]
         if len(fits) == 1:
-            return self._elided(clause, fits[0])
+            return self._elided(clause, fits[0], focus)
         if fits:
             return self.context.clarify(clause, 0, 0, fits)
         return None

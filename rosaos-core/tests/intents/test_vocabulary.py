@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from models_support import BULB
+from intents_support import BULB
 
 from rosaos.config import DeviceConfig
-from rosaos.models.sources import DeviceIntentSource, sources_from_config, strip_article
+from rosaos.intents.grammar.vocabulary import DeviceIntentSource, sources_from_config, strip_article
 from rosaos.plugins import DriverRegistry
 
 

@@ -45,7 +45,7 @@ is exactly what :meth:`hassil.Intents.from_dict` accepts. The conformance kit an
 local-intent engine both read intents through this one function.
 
 A second, optional extension maps Home Assistant's built-in (multilingual) intents onto the
-driver's tools: a top-level ``homeassistant:`` table, described in :mod:`rosaos.models.ha_mapping`.
+driver's tools: a top-level ``homeassistant:`` table, described in :mod:`rosaos.intents.grammar.ha_mapping`.
 """
 
 from __future__ import annotations
@@ -58,7 +58,7 @@ import yaml
 from hassil import Intents
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
-from rosaos.models.ha_mapping import HomeAssistantMapping
+from rosaos.intents.grammar.ha_mapping import HomeAssistantMapping
 
 ROSAOS_KEY = "rosaos"
 HOMEASSISTANT_KEY = "homeassistant"

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from pydantic_ai.messages import ModelResponsePart, TextPart, ToolCallPart
 
+from rosaos.intents.planning.plan import Plan, PlanStep, encode_task
 from rosaos.kernel.notice_text import read_notice
-from rosaos.models.plan import Plan, PlanStep, encode_task
 
 SPEAK_TOOL = "speak"
 SILENCE = " "

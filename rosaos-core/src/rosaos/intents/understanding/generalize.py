@@ -1,13 +1,13 @@
 """From the exact reading of a sentence to what an everyday sentence means: the order of attempts.
 
-:meth:`rosaos.models.matching.IntentMatcher.match` reads a sentence literally first. When that is
+:meth:`rosaos.intents.understanding.matching.IntentMatcher.match` reads a sentence literally first. When that is
 not an exact command, :func:`understand` tries, in order, and stops at the first that is:
 
 1. **a negation** ("don't turn on the lamp"): when the rest is an exact command, it is refused by
    name and nothing else is tried (no rephrasing, no guessing);
-2. **rephrasings** (:mod:`rosaos.models.rephrase`): fillers dropped, a split name joined, a name
+2. **rephrasings** (:mod:`rosaos.intents.understanding.rephrase`): fillers dropped, a split name joined, a name
    said first or last ("dog, a bit closer") taken as the device the command is for;
-3. **the fuzzy model** (:mod:`rosaos.models.fuzzy`), only when the literal reading found nothing
+3. **the fuzzy model** (:mod:`rosaos.intents.understanding.fuzzy`), only when the literal reading found nothing
    at all (a question or a refusal stands): a close guess acts; a weaker one asks "Did you mean
    …?" and does nothing; questions are never guessed into actions.
 
@@ -19,12 +19,13 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 
-from rosaos.models.fuzzy import ACT_SCORE, ASK_SCORE, FuzzyMatcher
-from rosaos.models.phrases import phrase
-from rosaos.models.rephrase import negated, rephrasings, strip_fillers
-from rosaos.models.results import MatchResult
+from rosaos.intents.grammar.phrases import phrase
+from rosaos.intents.understanding.fuzzy import ACT_SCORE, ASK_SCORE, FuzzyMatcher
+from rosaos.intents.understanding.readings import Focus
+from rosaos.intents.understanding.rephrase import negated, rephrasings, strip_fillers
+from rosaos.intents.understanding.results import MatchResult
 
-Literal = Callable[[str, frozenset[str] | None], MatchResult]
+Literal = Callable[[str, Focus], MatchResult]
 QUESTION_START: dict[str, re.Pattern[str]] = {
     "en": re.compile(
         r"^(is|are|was|were|what|what's|whats|how|where|who|why|when|which|does|do|did|has|have)\b", re.I
@@ -34,7 +35,7 @@ QUESTION_START: dict[str, re.Pattern[str]] = {
 
 def understand(
     text: str,
-    focus: frozenset[str] | None,
+    focus: Focus,
     literal: Literal,
     names: dict[str, list[str]],
     fuzzy: FuzzyMatcher | None,
@@ -74,7 +75,7 @@ def _guess(
     first: MatchResult,
     literal: Literal,
     fuzzy: FuzzyMatcher,
-    focus: frozenset[str] | None,
+    focus: Focus,
     language: str,
 ) -> MatchResult:
     plain = strip_fillers(text, language)

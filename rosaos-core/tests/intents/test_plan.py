@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from rosaos.models.plan import (
+from rosaos.intents.planning.plan import (
     Plan,
     PlanAnswer,
     PlanError,

@@ -5,10 +5,10 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from models_support import bulb, speaker
+from intents_support import bulb, speaker
 
-from rosaos.models.matching import IntentMatcher, MatchResult
-from rosaos.models.sources import DeviceIntentSource
+from rosaos.intents.grammar.vocabulary import DeviceIntentSource
+from rosaos.intents.understanding.matching import IntentMatcher, MatchResult
 
 
 def calls(result: MatchResult) -> list[tuple[str, str, dict[str, Any]]]:

@@ -1,4 +1,4 @@
-"""A driver's intents.yaml (rosaos.models.intents_file): hassil sentences plus the tool each intent calls."""
+"""A driver's intents.yaml (rosaos.intents.grammar.intents_file): hassil sentences plus the tool each intent calls."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 from hassil import recognize
 
-from rosaos.models.intents_file import IntentAction, IntentsFileError, load_intents_file
+from rosaos.intents.grammar.intents_file import IntentAction, IntentsFileError, load_intents_file
 
 INLINE = """
 language: en

@@ -97,7 +97,7 @@ class FollowUpLaunch(BaseModel):
 
 
 class FollowUp(BaseModel):
-    """The next step of a plan, launched by the kernel on the callback (see :mod:`rosaos.models.followups`)."""
+    """The next step of a plan, launched by the kernel on the callback (see :mod:`rosaos.intents.planning.followups`)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 

@@ -16,9 +16,9 @@ import pytest
 
 from rosaos.bench.tasks import BenchTask, TaskFile, load_task_file
 from rosaos.bench.world import bench_world
-from rosaos.models.followups import plan_follow_up
+from rosaos.intents.grammar.vocabulary import intent_sources
+from rosaos.intents.planning.followups import plan_follow_up
 from rosaos.models.kernel_model import LocalIntentModel
-from rosaos.models.sources import intent_sources
 from rosaos.plugins import load_drivers
 
 DEMO = Path(__file__).resolve().parents[3].parent / "shared" / "bench" / "demo"

@@ -18,8 +18,8 @@ from pathlib import Path
 
 from rosaos.config import DeviceConfig
 from rosaos.devices.world import DeviceInstance
-from rosaos.models.intents_file import IntentsFile, load_intents_file
-from rosaos.models.phrases import kind_synonyms
+from rosaos.intents.grammar.intents_file import IntentsFile, load_intents_file
+from rosaos.intents.grammar.phrases import kind_synonyms
 from rosaos.plugins import DriverRegistry
 
 # Leading articles people put before a name ("the lamp"); stripped so templates' own

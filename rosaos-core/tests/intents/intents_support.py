@@ -1,6 +1,6 @@
 """Helpers for the local-intent engine tests: test worlds, device servers, and the bench task files.
 
-Two test drivers live in ``intents/``: ``bulb`` (a light, like Tapo) and ``speaker`` (a media
+Two test drivers live in ``drivers/``: ``bulb`` (a light, like Tapo) and ``speaker`` (a media
 player, like the coming Spotify driver). :func:`build_device_server` gives either one an
 in-memory FastMCP server with the tools their intents name, so plans run for real.
 """
@@ -14,9 +14,9 @@ from fastmcp import FastMCP
 from fastmcp.exceptions import ToolError
 from pydantic import Field
 
-from rosaos.models.sources import DeviceIntentSource
+from rosaos.intents.grammar.vocabulary import DeviceIntentSource
 
-INTENTS = Path(__file__).parent / "intents"
+INTENTS = Path(__file__).parent / "drivers"
 BULB = INTENTS / "bulb.yaml"
 SPEAKER = INTENTS / "speaker.yaml"
 BENCH_TASKS = Path(__file__).resolve().parents[3].parent / "shared" / "bench" / "tasks"
