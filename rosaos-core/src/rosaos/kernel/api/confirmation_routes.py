@@ -1,6 +1,6 @@
 """The confirmation routes: workers ask, people answer (web buttons, scripts), everyone can list.
 
-Registered on the protected router of :mod:`rosaos.kernel.api_routes` (the bearer token applies).
+Registered on the protected router of :mod:`rosaos.kernel.api.routes` (the bearer token applies).
 """
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from typing import Annotated, Any
 
 from fastapi import HTTPException, Query
 
-from rosaos.kernel.api_routes import Runtime, protected
+from rosaos.kernel.api.routes import Runtime, protected
 from rosaos.kernel.confirmations import (
     Confirmation,
     ConfirmationAnswer,

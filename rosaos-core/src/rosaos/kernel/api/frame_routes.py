@@ -24,7 +24,7 @@ from fastapi import Path as FastPath
 from fastapi.responses import FileResponse
 from pydantic import BaseModel, Field
 
-from rosaos.kernel.api_routes import Runtime, protected
+from rosaos.kernel.api.routes import Runtime, protected
 
 FRAME_SUFFIXES = (".jpg", ".jpeg", ".png")
 BOX_LISTS = ("faces", "people", "detections", "boxes")

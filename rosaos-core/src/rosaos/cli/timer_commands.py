@@ -16,11 +16,11 @@ from typing import Any
 
 from rich.table import Table
 
+from rosaos.cli.console import console as terminal
+from rosaos.cli.log_command import EVENTS_FILE
+from rosaos.cli.up_command import EXIT_CONFIG
 from rosaos.config import ConfigError, load_config
-from rosaos.frontends.console import console as terminal
-from rosaos.kernel.activity_command import EVENTS_FILE
-from rosaos.kernel.client import KernelClient, KernelUnavailable, running_kernel_url
-from rosaos.kernel.commands import EXIT_CONFIG
+from rosaos.kernel.api.client import KernelClient, KernelUnavailable, running_kernel_url
 from rosaos.kernel.events import EventStore
 from rosaos.kernel.timer_text import clock_text, duration_text
 from rosaos.kernel.timers import TimerBook, TimerError

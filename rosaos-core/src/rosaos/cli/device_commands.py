@@ -23,6 +23,7 @@ from rich.markup import escape
 from rich.table import Table
 
 from rosaos.auth import bound_hosts, load_or_create_token, token_path
+from rosaos.cli.console import console
 from rosaos.config import ConfigError, RosaosConfig, load_config
 from rosaos.devices.health import CheckBudget, CheckResult, HealthCheck, Route, Via, find_routes
 from rosaos.devices.host import START_TIMEOUT, install_stop_signals, serve_until_stopped
@@ -31,7 +32,6 @@ from rosaos.devices.runtime import devices_not_ready, record_served_device, serv
 from rosaos.devices.serve import ServedDevice
 from rosaos.devices.world import DeviceInstance, World, build_world
 from rosaos.drivers import DeviceError
-from rosaos.frontends.console import console
 from rosaos.plugins import DriverRegistry, load_drivers
 
 LIST_TIMEOUT = 5.0

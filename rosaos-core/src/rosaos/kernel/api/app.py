@@ -1,8 +1,8 @@
 """The kernel's HTTP API: the FastAPI app that serves the routes, and the rules around them.
 
 ``create_app(runtime)`` builds the FastAPI app; ``rosaos up`` serves it with uvicorn on loopback.
-The routes are in :mod:`rosaos.kernel.api_routes`; what they take and answer, and what they need
-from the kernel (:class:`KernelRuntime`), in :mod:`rosaos.kernel.api_types`. Every route needs
+The routes are in :mod:`rosaos.kernel.api.routes`; what they take and answer, and what they need
+from the kernel (:class:`KernelRuntime`), in :mod:`rosaos.kernel.api.schemas`. Every route needs
 ``Authorization: Bearer <token>`` except ``/health``, the web page and its assets, ``/login``, and
 the API docs (``/docs``, ``/openapi.json``). Browser requests from another origin are refused with
 403 before anything else runs. Errors are JSON with a ``detail`` that says what went wrong.
@@ -22,13 +22,13 @@ from fastapi.staticfiles import StaticFiles
 
 import rosaos
 from rosaos.auth import BearerAuthMiddleware, HostOriginGuard
-from rosaos.kernel import (
+from rosaos.kernel.api import (
     confirmation_routes,  # noqa: F401  (adds its routes to protected)
     frame_routes,  # noqa: F401  (adds its routes to protected)
     timer_routes,  # noqa: F401  (adds its routes to protected)
 )
-from rosaos.kernel.api_routes import WEB_DIR, protected, public
-from rosaos.kernel.api_types import KernelRuntime
+from rosaos.kernel.api.routes import WEB_DIR, protected, public
+from rosaos.kernel.api.schemas import KernelRuntime
 
 MAX_BODY_BYTES = 1_000_000
 """Larger request bodies get 413; a worker's output is the biggest thing anyone posts."""

@@ -1,4 +1,4 @@
-"""``rosaos ...``: the command line. Each command lives with the role it belongs to; this file wires them.
+"""``rosaos ...``: the typer app. It declares each command's options and calls the command's function.
 
 Commands import their modules lazily so ``rosaos --help`` stays fast.
 """
@@ -79,7 +79,7 @@ def devices_list(
 
     Exits 0 even when a device is unhealthy (the listing says so); 2 for a configuration error.
     """
-    from rosaos.devices.commands import list_devices
+    from rosaos.cli.device_commands import list_devices
 
     raise typer.Exit(
         list_devices(
@@ -97,7 +97,7 @@ def devices_check(
     start_timeout: StartTimeoutOption = 60.0,
 ) -> None:
     """Connect to one instance, call get_state and print it. Non-zero exit with the reason if it fails."""
-    from rosaos.devices.commands import check_device
+    from rosaos.cli.device_commands import check_device
 
     raise typer.Exit(
         check_device(name, config, json_output=json_output, timeout=timeout, start_timeout=start_timeout)
@@ -143,7 +143,7 @@ def serve_device(
     ] = None,
 ) -> None:
     """Serve one instance's MCP server over streamable HTTP, behind the bearer token."""
-    from rosaos.devices.commands import serve_device_command
+    from rosaos.cli.device_commands import serve_device_command
 
     raise typer.Exit(serve_device_command(name, config, host=host, port=port, allow_hosts=allow_host or []))
 
@@ -224,7 +224,7 @@ def up(
     pool_size: Annotated[int | None, typer.Option(help="Warm worker processes (default 2).", min=0)] = None,
 ) -> None:
     """Start the devices, the kernel, the worker pool and the web page; print the page's URL."""
-    from rosaos.kernel.commands import model_overrides, up_command
+    from rosaos.cli.up_command import model_overrides, up_command
 
     models = model_overrides(model, process_model, base_url, model_name)
     raise typer.Exit(up_command(config, host=host, port=port, pool_size=pool_size, models=models))
@@ -251,7 +251,7 @@ def chat(
 ) -> None:
     """Chat with the running kernel: a REPL, or one message with -m."""
     from rosaos.frontends.chat import chat_command
-    from rosaos.kernel.client import KernelClient
+    from rosaos.kernel.api.client import KernelClient
 
     def client() -> KernelClient:
         from rosaos.config import load_config
@@ -318,10 +318,10 @@ def ps(
 ) -> None:
     """List the kernel's processes: id, state, devices held, age, task. --timers: its timers."""
     if timers:
-        from rosaos.kernel.timer_command import timers_command
+        from rosaos.cli.timer_commands import timers_command
 
         raise typer.Exit(timers_command(config, url, json_output, all_processes))
-    from rosaos.kernel.commands import ps_command
+    from rosaos.cli.process_commands import ps_command
 
     raise typer.Exit(ps_command(config, url, json_output, all_processes))
 
@@ -341,7 +341,7 @@ def log(
     limit: Annotated[int, typer.Option("--limit", "-n", help="The newest this many.", min=1, max=2000)] = 200,
 ) -> None:
     """Show the activity log: every tool call of the processes, its result and the safety decision."""
-    from rosaos.kernel.activity_command import log_command
+    from rosaos.cli.log_command import log_command
 
     raise typer.Exit(log_command(config, url, device, process, since, limit, json_output))
 
@@ -356,7 +356,7 @@ def open_page(
     ] = False,
 ) -> None:
     """Print a fresh one-time login link for the web page of the running kernel."""
-    from rosaos.kernel.open_command import open_command
+    from rosaos.cli.open_command import open_command
 
     raise typer.Exit(open_command(config, url, browser, json_output))
 
@@ -373,10 +373,10 @@ def kill(
 ) -> None:
     """Terminate a process; its device leases are released. --timer: cancel a timer instead."""
     if timer:
-        from rosaos.kernel.timer_command import cancel_timer_command
+        from rosaos.cli.timer_commands import cancel_timer_command
 
         raise typer.Exit(cancel_timer_command(config, url, process_id, json_output))
-    from rosaos.kernel.commands import kill_command
+    from rosaos.cli.process_commands import kill_command
 
     raise typer.Exit(kill_command(config, url, process_id, json_output))
 
@@ -392,7 +392,7 @@ def estop(
     json_output: JsonOption = False,
 ) -> None:
     """Emergency stop: kill every process, put every device in its safe state, refuse new work until reset."""
-    from rosaos.kernel.commands import estop_command
+    from rosaos.cli.process_commands import estop_command
 
     raise typer.Exit(estop_command(config, url, reset, reason, json_output))
 
@@ -436,8 +436,8 @@ def bench(
     state is checked against the task's expect. Exits 0 when the run completed (failures
     included), 1 below --fail-under, 2 for a usage or configuration error.
     """
-    from rosaos.bench.command import bench_command
-    from rosaos.kernel.commands import model_overrides
+    from rosaos.cli.bench_command import bench_command
+    from rosaos.cli.up_command import model_overrides
 
     raise typer.Exit(
         bench_command(

@@ -1,6 +1,6 @@
 """The timer routes: ``GET /timers`` lists them, ``DELETE /timers/{id}`` cancels one.
 
-Registered on the protected router of :mod:`rosaos.kernel.api_routes` (the bearer token applies).
+Registered on the protected router of :mod:`rosaos.kernel.api.routes` (the bearer token applies).
 Timers are set by the kernel agent's ``set_timer`` tool ("turn off the light in ten minutes"),
 so there is no route to set one: say it to the kernel with ``POST /chat``.
 """
@@ -13,7 +13,7 @@ from typing import Annotated
 from fastapi import HTTPException, Query
 from fastapi import Path as FastPath
 
-from rosaos.kernel.api_routes import SQLITE_MAX_ID, Runtime, protected
+from rosaos.kernel.api.routes import SQLITE_MAX_ID, Runtime, protected
 from rosaos.kernel.timers import Timer, TimerError, TimerList
 
 

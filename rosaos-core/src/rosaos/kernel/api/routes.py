@@ -1,6 +1,6 @@
 """The kernel's HTTP routes: events in, updates out, processes, devices, the emergency stop, the web page.
 
-Two routers, included by :func:`rosaos.kernel.api.create_app` in this order: ``public`` (open to
+Two routers, included by :func:`rosaos.kernel.api.app.create_app` in this order: ``public`` (open to
 anyone who can reach the port: ``/health``, ``/login`` and the web page) and ``protected`` (the
 rest; ``BearerAuthMiddleware`` enforces the token, the router only documents it in OpenAPI).
 Events (``POST /chat``, ``POST /stt``, ``POST /event``) are answered ``202 {"id", "duplicate"}``
@@ -26,7 +26,8 @@ import rosaos
 from rosaos.kernel.activity import DEFAULT_LIMIT as DEFAULT_ACTIVITY
 from rosaos.kernel.activity import MAX_LIMIT as MAX_ACTIVITY
 from rosaos.kernel.activity import ActivityPage
-from rosaos.kernel.api_types import (
+from rosaos.kernel.api.login_codes import login_url
+from rosaos.kernel.api.schemas import (
     COMMON_ERRORS,
     PROTECTED_ERRORS,
     Accepted,
@@ -51,12 +52,11 @@ from rosaos.kernel.events import (
     UserTypedEvent,
     WorkerCallbackEvent,
 )
-from rosaos.kernel.login import login_url
 from rosaos.kernel.updates import UpdateStream
 
 log = logging.getLogger(__name__)
 
-WEB_DIR = Path(__file__).resolve().parent.parent / "frontends" / "web"
+WEB_DIR = Path(__file__).resolve().parents[2] / "frontends" / "web"
 SSE_PING_SECONDS = 15
 SSE_SEND_TIMEOUT = 30.0
 """A client that takes longer than this to accept one message is dropped (it reconnects and resumes)."""

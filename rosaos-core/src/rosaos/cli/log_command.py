@@ -17,10 +17,10 @@ from typing import Any
 
 from rich.table import Table
 
+from rosaos.cli.console import console as terminal
 from rosaos.config import ConfigError, load_config
-from rosaos.frontends.console import console as terminal
 from rosaos.kernel.activity import ActivityLog
-from rosaos.kernel.client import KernelClient, KernelUnavailable, running_kernel_url
+from rosaos.kernel.api.client import KernelClient, KernelUnavailable, running_kernel_url
 from rosaos.kernel.events import Database
 
 EXIT_CONFIG = 2

@@ -24,8 +24,8 @@ from rosaos.bench.report import ProgressBar, print_report
 from rosaos.bench.results import BenchResult, FileResult, Summary
 from rosaos.bench.runner import BenchProgress, run_file, select_tasks
 from rosaos.bench.tasks import TaskFileError, TaskSelection, find_task_files, load_task_files
+from rosaos.cli.console import console as terminal
 from rosaos.config import ConfigError, RosaosConfig, load_config
-from rosaos.frontends.console import console as terminal
 from rosaos.models.defaults import kernel_spec
 from rosaos.models.select import ModelError, build_model
 from rosaos.plugins import DriverRegistry, load_drivers

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from rosaos.config import ConfigError, load_config
-from rosaos.kernel.client import KernelClient, KernelUnavailable
+from rosaos.kernel.api.client import KernelClient, KernelUnavailable
 
 EXIT_UNAVAILABLE = 2
 

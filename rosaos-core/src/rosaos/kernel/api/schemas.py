@@ -1,7 +1,7 @@
 """What the kernel's HTTP API speaks: what it needs from the kernel, and its bodies and answers.
 
 :class:`KernelRuntime` is the API's side of the running kernel (``rosaos up`` implements it); the
-pydantic models are the request bodies and answers of the routes in :mod:`rosaos.kernel.api_routes`,
+pydantic models are the request bodies and answers of the routes in :mod:`rosaos.kernel.api.routes`,
 and their names are the schema names in the OpenAPI document.
 """
 
@@ -14,9 +14,9 @@ from typing import Any, Literal, Protocol
 from pydantic import BaseModel, ConfigDict, Field
 
 from rosaos.kernel.activity import ActivityLog
+from rosaos.kernel.api.login_codes import LoginCodes
 from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.events import EventStore, IdempotencyKey, Source
-from rosaos.kernel.login import LoginCodes
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import Update, UpdateStream
 from rosaos.processes.jobs import WorkerCallback
