@@ -15,10 +15,10 @@ import pytest
 import pytest_asyncio
 from e2e_support import device_state, eventually, kernel_api, running_kernel
 
+from rosaos.intents.grammar.vocabulary import intent_sources
+from rosaos.intents.planning.followups import plan_follow_up
 from rosaos.kernel.runtime import Kernel
-from rosaos.models.followups import plan_follow_up
 from rosaos.models.kernel_model import LocalIntentModel
-from rosaos.models.sources import intent_sources
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 

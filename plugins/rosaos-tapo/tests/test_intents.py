@@ -6,9 +6,9 @@ from typing import Any
 
 import pytest
 
-from rosaos.models.intents_file import IntentsFile
-from rosaos.models.matching import IntentMatcher
-from rosaos.models.sources import DeviceIntentSource
+from rosaos.intents.grammar.intents_file import IntentsFile
+from rosaos.intents.grammar.vocabulary import DeviceIntentSource
+from rosaos.intents.understanding.matching import IntentMatcher
 from rosaos.testing import IntentProbe
 from rosaos_tapo.colors import NAMED_COLORS
 from rosaos_tapo.plugin import SPEC

@@ -20,10 +20,9 @@ import pytest
 from rich.console import Console
 from typer.testing import CliRunner
 
-from rosaos.bench import command
 from rosaos.bench.report import print_report
 from rosaos.bench.results import BenchResult, Summary
-from rosaos.cli import app
+from rosaos.cli import app, bench_command
 
 DESK = """\
 name: desk
@@ -226,7 +225,7 @@ def test_failures_exit_zero_unless_below_fail_under(
             summary=summary,
         )
 
-    monkeypatch.setattr(command, "run_bench", two_of_three)
+    monkeypatch.setattr(bench_command, "run_bench", two_of_three)
     tasks = tmp_path / "desk.yaml"
     tasks.write_text(DESK, encoding="utf-8")
     args = ["bench", str(tasks), "--json"] + (["--fail-under", str(fail_under)] if fail_under else [])

@@ -24,8 +24,8 @@ from devices_support import ROSAOS, eventually, write_config
 from rich.console import Console
 
 from rosaos.auth import load_or_create_token
+from rosaos.cli.device_commands import check_device, list_devices, serve_device_command
 from rosaos.config import load_config
-from rosaos.devices.commands import check_device, list_devices, serve_device_command
 from rosaos.devices.progress import CheckProgress
 from rosaos.devices.runtime import (
     DeviceStatus,

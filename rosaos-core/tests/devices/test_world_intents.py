@@ -6,8 +6,8 @@ from pathlib import Path
 
 from devices_support import drivers_for_tests, world_of
 
-from rosaos.models.matching import IntentMatcher
-from rosaos.models.sources import intent_sources
+from rosaos.intents.grammar.vocabulary import intent_sources
+from rosaos.intents.understanding.matching import IntentMatcher
 
 
 def test_a_placeholder_instance_is_not_offered_by_the_offline_engine(data_dir: Path) -> None:

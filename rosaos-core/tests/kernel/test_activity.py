@@ -13,9 +13,9 @@ import pytest
 from fastapi import FastAPI
 from kernel_support import AUTH, TOKEN, TestRuntime, kitchen_light
 
+from rosaos.cli.log_command import log_command, parse_since
 from rosaos.kernel.activity import ActivityLog
-from rosaos.kernel.activity_command import log_command, parse_since
-from rosaos.kernel.api import create_app
+from rosaos.kernel.api.app import create_app
 from rosaos.kernel.events import Event, EventStore
 from rosaos.kernel.loop import render_event
 from rosaos.kernel.updates import UpdateStream

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
+from rosaos.cli.timer_commands import cancel_timer_command, timers_command
 from rosaos.kernel.events import EventStore
-from rosaos.kernel.timer_command import cancel_timer_command, timers_command
 from rosaos.kernel.timers import TimerBook
 
 

@@ -8,8 +8,8 @@ from typing import Any
 import pytest
 
 from rosaos.drivers import DriverSpec
-from rosaos.models.matching import IntentMatcher
-from rosaos.models.sources import DeviceIntentSource
+from rosaos.intents.grammar.vocabulary import DeviceIntentSource
+from rosaos.intents.understanding.matching import IntentMatcher
 from rosaos.testing import IntentMatch, IntentProbe
 
 INTENTS = """

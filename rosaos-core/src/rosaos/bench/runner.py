@@ -34,7 +34,7 @@ from rosaos.bench.results import DifferenceView, FileResult, Summary, TaskResult
 from rosaos.bench.tasks import BenchTask, TaskFile, TaskSelection
 from rosaos.bench.world import BenchWorld, SimDevices, bench_world
 from rosaos.config import RosaosConfig
-from rosaos.kernel.client import KernelClient
+from rosaos.kernel.api.client import KernelClient
 from rosaos.kernel.runtime import Kernel
 from rosaos.kernel.updates import Update
 from rosaos.plugins import DriverRegistry

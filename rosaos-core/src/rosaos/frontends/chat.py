@@ -17,9 +17,9 @@ from typing import Any
 
 from rich.console import Console
 
+from rosaos.cli.console import console as terminal
 from rosaos.config import ConfigError
-from rosaos.frontends.console import console as terminal
-from rosaos.kernel.client import KernelClient, KernelUnavailable
+from rosaos.kernel.api.client import KernelClient, KernelUnavailable
 
 POLL_SECONDS = 0.1
 

@@ -1,7 +1,7 @@
 """The running kernel: devices, event store, worker pool, kernel agent and HTTP API, wired together.
 
 :class:`Kernel` is what ``rosaos up`` runs and what integration tests start on loopback. It
-implements the HTTP API's :class:`~rosaos.kernel.api.KernelRuntime`.
+implements the HTTP API's :class:`~rosaos.kernel.api.schemas.KernelRuntime`.
 """
 
 from __future__ import annotations
@@ -34,14 +34,14 @@ from rosaos.devices.world import World
 from rosaos.drivers import DeviceError
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
-from rosaos.kernel.api import create_app
-from rosaos.kernel.api_types import DeviceSafeStop, DeviceView, EmergencyStopReport, EmergencyStopState
-from rosaos.kernel.client import kernel_file, running_kernel_url
+from rosaos.kernel.api.app import create_app
+from rosaos.kernel.api.client import kernel_file, running_kernel_url
+from rosaos.kernel.api.login_codes import LoginCodes, login_url
+from rosaos.kernel.api.schemas import DeviceSafeStop, DeviceView, EmergencyStopReport, EmergencyStopState
 from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people
 from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
 from rosaos.kernel.device_status import DeviceStatusUpdates
 from rosaos.kernel.events import DeviceNoticeEvent, Event, EventStore, StoreClosedError, WorkerCallbackEvent
-from rosaos.kernel.login import LoginCodes, login_url
 from rosaos.kernel.loop import KernelLoop
 from rosaos.kernel.notices import NoticeWatcher
 from rosaos.kernel.orphans import LiveProcesses, recover_orphans

@@ -63,9 +63,9 @@ def kernel_models(config: RosaosConfig, world: World, override: Model | None = N
     No model configured: the offline local-intent engine is the kernel. A model configured: it
     is the kernel, and with ``prefer_local`` the engine still takes the sentences it matches.
     """
+    from rosaos.intents.grammar.vocabulary import intent_sources
     from rosaos.models.kernel_model import LocalIntentModel
     from rosaos.models.routing import KernelRouter
-    from rosaos.models.sources import intent_sources
 
     spec = kernel_spec(config)
     process = process_spec(config)
