@@ -251,7 +251,7 @@ def chat(
 ) -> None:
     """Chat with the running kernel: a REPL, or one message with -m."""
     from rosaos.frontends.chat import chat_command
-    from rosaos.kernel.api.client import KernelClient
+    from rosaos.kernel.api.kernel_client import KernelClient
 
     def client() -> KernelClient:
         from rosaos.config import load_config

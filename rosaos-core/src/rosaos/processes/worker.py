@@ -120,7 +120,7 @@ async def run_job(job: WorkerJob) -> WorkerCallback:
         status, error = "error", f"{failed.device}: {failed.tool} failed: {failed.error}"
     requests, tool_calls = count_usage(messages)
     return WorkerCallback(
-        worker_id=job.process_id,
+        process_id=job.process_id,
         status=status,
         output=output,
         error=error,
@@ -300,7 +300,7 @@ def callback_event(callback: WorkerCallback) -> dict[str, Any]:
         "kind": "worker_callback",
         "source": "worker",
         "payload": callback.model_dump(mode="json"),
-        "idempotency_key": callback_idempotency_key(callback.worker_id),
+        "idempotency_key": callback_idempotency_key(callback.process_id),
     }
 
 

@@ -36,9 +36,10 @@ from hassil.recognize import MISSING_ENTITY, RecognizeResult
 from rosaos.intents.grammar.ha_intents import NO_AREA, load_ha_intents
 from rosaos.intents.grammar.intents_file import IntentsFile
 from rosaos.intents.grammar.phrases import confirms, conjunctions, phrase, pronouns
-from rosaos.intents.grammar.vocabulary import ARTICLES, DeviceIntentSource, strip_article
+from rosaos.intents.grammar.vocabulary import ARTICLES, DeviceVocabulary, strip_article
 from rosaos.intents.understanding.fuzzy import FuzzyMatcher
 from rosaos.intents.understanding.generalize import understand
+from rosaos.intents.understanding.match_result import MatchResult, ProcessPlan, build_result, no_match
 from rosaos.intents.understanding.ranges import refuse_bad_number
 from rosaos.intents.understanding.readings import (
     Focus,
@@ -47,7 +48,6 @@ from rosaos.intents.understanding.readings import (
     driver_reading,
     ha_reading,
 )
-from rosaos.intents.understanding.results import MatchResult, ProcessPlan, build_result, no_match
 
 __all__ = ["IntentMatcher", "MatchResult", "ProcessPlan"]
 
@@ -91,7 +91,7 @@ class _DriverIntents:
 class IntentMatcher:
     """Matches sentences against the intents of one world's devices, in one language."""
 
-    def __init__(self, devices: Sequence[DeviceIntentSource], language: str = "en") -> None:
+    def __init__(self, devices: Sequence[DeviceVocabulary], language: str = "en") -> None:
         self.language = language
         self.devices = {device.name: device for device in devices}
         self.context = ReadingContext(self.devices, language)
@@ -140,7 +140,7 @@ class IntentMatcher:
         }
 
     def _driver_intents(self) -> list[_DriverIntents]:
-        by_driver: dict[str, list[DeviceIntentSource]] = {}
+        by_driver: dict[str, list[DeviceVocabulary]] = {}
         for device in self.devices.values():
             by_driver.setdefault(device.driver, []).append(device)
         drivers = []
