@@ -32,7 +32,7 @@ PersonName = Annotated[str, Field(min_length=1, max_length=40, description="The 
 NOTE = "OpenCV Haar cascades, offline; 'looks_like' compares with remembered faces and can be wrong."
 
 
-def register_vision_tools(mcp: FastMCP, backend: ReachyBackend) -> None:
+def register(mcp: FastMCP, backend: ReachyBackend) -> None:
     """Add the camera, face and vision-model tools to ``mcp``."""
 
     async def picture(path: str | None) -> tuple[str, Any]:

@@ -63,7 +63,7 @@ DIRECTIONS: dict[str, tuple[float, float]] = {
 }
 
 
-def register_motion_tools(mcp: FastMCP, backend: ReachyBackend) -> None:
+def register(mcp: FastMCP, backend: ReachyBackend) -> None:
     """Add the motion tools to ``mcp``."""
 
     @mcp.tool(annotations=SET)
