@@ -13,7 +13,7 @@ import pytest
 from processes_support import TOKEN, KernelStandIn, LoopbackDevice, build_test_device, make_job, model_spec
 
 from rosaos.devices.serve import serve_http
-from rosaos.models.plan import Plan, PlanStep, encode_task
+from rosaos.intents.planning.plan import Plan, PlanStep, encode_task
 from rosaos.models.select import ModelSpec
 from rosaos.processes.jobs import WorkerCallback
 from rosaos.processes.worker import SESSIONS, deliver_callback, run_job

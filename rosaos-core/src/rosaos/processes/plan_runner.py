@@ -20,10 +20,10 @@ from pydantic_ai.models import Model
 from pydantic_ai.toolsets import AbstractToolset, ToolsetTool
 from pydantic_ai.usage import RunUsage
 
+from rosaos.intents.grammar.phrases import phrase
+from rosaos.intents.planning.followups import unmet_output
+from rosaos.intents.planning.plan import Plan
 from rosaos.models.conversation import content_text
-from rosaos.models.followups import unmet_output
-from rosaos.models.phrases import phrase
-from rosaos.models.plan import Plan
 from rosaos.models.process_model import clamp_arguments, final_reply, resolve_tool
 from rosaos.processes.confirming import ConfirmationDeclined
 

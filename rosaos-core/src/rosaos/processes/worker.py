@@ -39,7 +39,7 @@ from pydantic_ai.models import Model
 from pydantic_ai.toolsets import AbstractToolset
 from pydantic_ai.usage import UsageLimits
 
-from rosaos.models.plan import Plan, PlanError, decode_plan
+from rosaos.intents.planning.plan import Plan, PlanError, decode_plan
 from rosaos.models.process_model import LocalPlanModel
 from rosaos.models.select import ModelError, build_model
 from rosaos.processes.confirming import ConfirmationDeclined, ConfirmingToolset, KernelAsker
