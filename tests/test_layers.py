@@ -1,5 +1,5 @@
-"""The layers of ``rosaos``: the command line and the front ends sit on top, and nothing below
-them imports them.
+"""The layout of ``rosaos``: the command line and the front ends sit on top, nothing below
+them imports them, and no two modules share a file name.
 
 The kernel, the device hosting layer, the processes, the models and the offline engine run
 without a terminal (in the kernel, in workers, in device hosts). If one of them imported
@@ -71,3 +71,16 @@ def test_lower_layers_do_not_import_the_cli_or_the_front_ends() -> None:
         if (found := upward(imported_modules(path)))
     }
     assert not offenders, f"lower layers importing rosaos.cli / rosaos.frontends: {offenders}"
+
+
+def test_core_module_names_are_unique() -> None:
+    """Two ``runtime.py`` (or ``world.py``, ``sources.py``) in one package make a reader open both
+    to learn which is which; a file's name should say what it does (see the glossary in
+    ``docs/architecture.md``)."""
+    by_name: dict[str, list[str]] = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        if path.name not in {"__init__.py", "__main__.py"}:
+            by_name.setdefault(path.name, []).append(str(path.relative_to(PACKAGE)))
+    assert len(by_name) > 100, "the scan found too few modules"
+    clashes = {name: paths for name, paths in by_name.items() if len(paths) > 1}
+    assert not clashes, f"core modules sharing a file name (rename one after what it does): {clashes}"

@@ -14,7 +14,7 @@ from fastmcp import FastMCP
 from fastmcp.exceptions import ToolError
 from pydantic import Field
 
-from rosaos.intents.grammar.vocabulary import DeviceIntentSource
+from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 
 INTENTS = Path(__file__).parent / "drivers"
 BULB = INTENTS / "bulb.yaml"
@@ -24,24 +24,24 @@ OWN_TASKS = Path(__file__).resolve().parents[3] / "benchmarks" / "tasks"
 """rosaOS's own task files (everyday variants of the public sentences), in the same format."""
 
 
-def bulb(name: str, description: str = "", **extra: Any) -> DeviceIntentSource:
+def bulb(name: str, description: str = "", **extra: Any) -> DeviceVocabulary:
     """A light of the test ``bulb`` driver."""
-    return DeviceIntentSource(name=name, driver="bulb", description=description, intents=BULB, **extra)
+    return DeviceVocabulary(name=name, driver="bulb", description=description, intents=BULB, **extra)
 
 
-def speaker(name: str = "speaker", description: str = "Music on the desk speaker") -> DeviceIntentSource:
+def speaker(name: str = "speaker", description: str = "Music on the desk speaker") -> DeviceVocabulary:
     """A media player of the test ``speaker`` driver."""
-    return DeviceIntentSource(name=name, driver="speaker", description=description, intents=SPEAKER)
+    return DeviceVocabulary(name=name, driver="speaker", description=description, intents=SPEAKER)
 
 
-def home_world() -> list[DeviceIntentSource]:
+def home_world() -> list[DeviceVocabulary]:
     """Three lights in three rooms, a speaker, and a device with no intents at all."""
     return [
         bulb("kitchen_light", "Ceiling light in the kitchen", area="cuisine", aliases=("plafonnier",)),
         bulb("living_room_lamp", "Floor lamp in the living room"),
         bulb("bedroom_light", "Bedside light in the bedroom"),
         speaker(),
-        DeviceIntentSource(name="turtlebot", driver="ros", description="TurtleBot4 wheeled mobile robot"),
+        DeviceVocabulary(name="turtlebot", driver="ros", description="TurtleBot4 wheeled mobile robot"),
     ]
 
 

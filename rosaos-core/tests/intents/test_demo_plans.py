@@ -14,9 +14,9 @@ from typing import Any
 
 import pytest
 
+from rosaos.bench.sim_world import bench_world
 from rosaos.bench.tasks import BenchTask, TaskFile, load_task_file
-from rosaos.bench.world import bench_world
-from rosaos.intents.grammar.vocabulary import intent_sources
+from rosaos.intents.grammar.vocabulary import device_vocabularies
 from rosaos.intents.planning.followups import plan_follow_up
 from rosaos.models.kernel_model import LocalIntentModel
 from rosaos.plugins import load_drivers
@@ -40,7 +40,7 @@ def _tasks() -> list[Any]:
 
 @pytest.mark.parametrize(("task_file", "task"), _tasks())
 def test_every_demo_sentence_is_planned(task_file: TaskFile, task: BenchTask) -> None:
-    model = LocalIntentModel(intent_sources(bench_world(task_file, REGISTRY).world))
+    model = LocalIntentModel(device_vocabularies(bench_world(task_file, REGISTRY).world))
     for item in task.utterances:
         result = plan_follow_up(item.text, model.match) or model.match(item.text)
         assert result.is_exact, f"{item.text!r}: {result.reply}"

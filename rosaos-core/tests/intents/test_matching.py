@@ -7,7 +7,7 @@ from typing import Any
 import pytest
 from intents_support import bulb, speaker
 
-from rosaos.intents.grammar.vocabulary import DeviceIntentSource
+from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.understanding.matching import IntentMatcher, MatchResult
 
 
@@ -311,7 +311,7 @@ def test_the_task_reads_as_a_sentence_and_carries_the_plan(matcher: IntentMatche
 
 
 def test_a_world_without_intents_matches_nothing() -> None:
-    bare = IntentMatcher([DeviceIntentSource(name="robot", driver="ros")], "en")
+    bare = IntentMatcher([DeviceVocabulary(name="robot", driver="ros")], "en")
     assert bare.match("Turn on the lamp").kind == "no_match"
 
 

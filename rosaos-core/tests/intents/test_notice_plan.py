@@ -78,7 +78,7 @@ async def test_the_speaking_process_ending_adds_no_reply() -> None:
     agent, launched = _agent(speaker="reachy")
     await agent.run(render_notice(BATTERY))
     callback = WorkerCallback(
-        worker_id=1, status="ok", output="turtlebot: battery at 12 %", task=launched[0][0]
+        process_id=1, status="ok", output="turtlebot: battery at 12 %", task=launched[0][0]
     )
     rendered = f"[Worker callback] worker=1 status=ok task={callback.task!r}\noutput: {callback.output}"
     assert (await agent.run(rendered)).output.strip() == ""

@@ -188,7 +188,7 @@ async def test_a_plan_from_the_matcher_changes_a_real_tapo_bulb(tmp_path: Path) 
     from rosaos.config import DeviceConfig, RosaosConfig
     from rosaos.devices.serve import open_device
     from rosaos.devices.world import build_world
-    from rosaos.intents.grammar.vocabulary import intent_sources
+    from rosaos.intents.grammar.vocabulary import device_vocabularies
     from rosaos.intents.understanding.matching import IntentMatcher
     from rosaos.plugins import load_drivers
 
@@ -202,7 +202,9 @@ async def test_a_plan_from_the_matcher_changes_a_real_tapo_bulb(tmp_path: Path) 
         }
     )
     world = build_world(config, load_drivers())
-    [process] = IntentMatcher(intent_sources(world)).match("Set the kitchen light to 30 percent").processes
+    [process] = (
+        IntentMatcher(device_vocabularies(world)).match("Set the kitchen light to 30 percent").processes
+    )
     async with open_device(world.get("kitchen_light"), tmp_path) as device:
         output, calls = await run_process(process.task, {"kitchen_light": ("tapo", device.server)})
         state = await device.backend.state()  # type: ignore[attr-defined]

@@ -131,7 +131,7 @@ async def test_model_that_cannot_be_imported_is_an_error(kernel: KernelStandIn) 
 
 async def test_callback_is_posted_as_a_worker_callback_event(kernel: KernelStandIn) -> None:
     job = make_job(kernel, "unused")
-    callback = WorkerCallback(worker_id=job.process_id, status="ok", output="done", task=job.task)
+    callback = WorkerCallback(process_id=job.process_id, status="ok", output="done", task=job.task)
     assert await deliver_callback(job, callback)
     assert kernel.callbacks_for(job.process_id) == [
         {
@@ -147,12 +147,12 @@ async def test_callback_to_an_unreachable_kernel_is_not_delivered(
     kernel: KernelStandIn, unreachable_url: str
 ) -> None:
     job = make_job(kernel, "unused", callback_url=unreachable_url)
-    assert not await deliver_callback(job, WorkerCallback(worker_id=job.process_id, status="ok"))
+    assert not await deliver_callback(job, WorkerCallback(process_id=job.process_id, status="ok"))
 
 
 async def test_callback_with_a_wrong_token_is_not_delivered(kernel: KernelStandIn) -> None:
     job = make_job(kernel, "unused").model_copy(update={"callback_token": "wrong"})
-    assert not await deliver_callback(job, WorkerCallback(worker_id=job.process_id, status="ok"))
+    assert not await deliver_callback(job, WorkerCallback(process_id=job.process_id, status="ok"))
     assert kernel.callbacks_for(job.process_id) == []
 
 

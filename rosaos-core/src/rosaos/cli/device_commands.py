@@ -28,7 +28,7 @@ from rosaos.config import ConfigError, RosaosConfig, load_config
 from rosaos.devices.health import CheckBudget, CheckResult, HealthCheck, Route, Via, find_routes
 from rosaos.devices.host import START_TIMEOUT, install_stop_signals, serve_until_stopped
 from rosaos.devices.progress import CheckProgress, wants_progress
-from rosaos.devices.runtime import devices_not_ready, record_served_device, served_devices
+from rosaos.devices.run_files import devices_not_ready, record_served_device, served_devices
 from rosaos.devices.serve import ServedDevice
 from rosaos.devices.world import DeviceInstance, World, build_world
 from rosaos.drivers import DeviceError

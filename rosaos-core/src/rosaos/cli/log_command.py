@@ -20,7 +20,7 @@ from rich.table import Table
 from rosaos.cli.console import console as terminal
 from rosaos.config import ConfigError, load_config
 from rosaos.kernel.activity import ActivityLog
-from rosaos.kernel.api.client import KernelClient, KernelUnavailable, running_kernel_url
+from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable, running_kernel_url
 from rosaos.kernel.events import Database
 
 EXIT_CONFIG = 2

@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from rosaos.config import ConfigError, load_config
-from rosaos.kernel.api.client import KernelClient, KernelUnavailable
+from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
 
 EXIT_UNAVAILABLE = 2
 

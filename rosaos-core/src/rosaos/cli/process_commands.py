@@ -14,7 +14,7 @@ from rich.table import Table
 from rosaos.cli.console import console as terminal
 from rosaos.cli.up_command import EXIT_CONFIG
 from rosaos.config import ConfigError, load_config
-from rosaos.kernel.api.client import KernelClient, KernelUnavailable
+from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
 
 
 def _client(config_path: Path | None, url: str | None) -> KernelClient:

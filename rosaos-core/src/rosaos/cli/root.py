@@ -12,6 +12,16 @@ from typing import Annotated, Literal
 import typer
 
 from rosaos import __version__
+from rosaos.cli.devices_app import devices_app
+from rosaos.cli.options import (
+    BaseUrlOption,
+    ConfigOption,
+    JsonOption,
+    ModelNameOption,
+    ModelOption,
+    ProcessModelOption,
+    UrlOption,
+)
 
 app = typer.Typer(
     name="rosaos",
@@ -20,34 +30,7 @@ app = typer.Typer(
     rich_markup_mode="rich",
     pretty_exceptions_enable=False,
 )
-devices_app = typer.Typer(help="Inspect and check the device instances of the world.", no_args_is_help=True)
 app.add_typer(devices_app, name="devices")
-
-ConfigOption = Annotated[
-    Path | None,
-    typer.Option(
-        "--config",
-        "-c",
-        help="rosaos.toml to use (default: $ROSAOS_CONFIG, ./rosaos.toml, then the user config dir).",
-        exists=False,
-        dir_okay=False,
-    ),
-]
-JsonOption = Annotated[bool, typer.Option("--json", help="Print machine-readable JSON.")]
-AnswerTimeoutOption = Annotated[
-    float,
-    typer.Option("--timeout", metavar="SECONDS", min=0.1, help="Seconds get_state may take to answer."),
-]
-StartTimeoutOption = Annotated[
-    float,
-    typer.Option(
-        "--start-timeout",
-        metavar="SECONDS",
-        min=0.1,
-        help="Seconds a device may take to start: one started here for the check, "
-        "or one that `rosaos up` is still starting.",
-    ),
-]
 
 
 def _version(value: bool) -> None:
@@ -63,70 +46,6 @@ def root(
     ] = False,
 ) -> None:
     """rosaOS: an agentic operating system for embodied LLMs."""
-
-
-@devices_app.command("list")
-def devices_list(
-    config: ConfigOption = None,
-    json_output: JsonOption = False,
-    check: Annotated[
-        bool, typer.Option("--check/--no-check", help="Health-check each instance (get_state).")
-    ] = True,
-    timeout: AnswerTimeoutOption = 5.0,
-    start_timeout: StartTimeoutOption = 60.0,
-) -> None:
-    """List the device instances: driver, package, concurrency, backend, URL and health.
-
-    Exits 0 even when a device is unhealthy (the listing says so); 2 for a configuration error.
-    """
-    from rosaos.cli.device_commands import list_devices
-
-    raise typer.Exit(
-        list_devices(
-            config, json_output=json_output, check=check, timeout=timeout, start_timeout=start_timeout
-        )
-    )
-
-
-@devices_app.command("check")
-def devices_check(
-    name: Annotated[str, typer.Argument(help="Instance name, e.g. kitchen_light.")],
-    config: ConfigOption = None,
-    json_output: JsonOption = False,
-    timeout: AnswerTimeoutOption = 10.0,
-    start_timeout: StartTimeoutOption = 60.0,
-) -> None:
-    """Connect to one instance, call get_state and print it. Non-zero exit with the reason if it fails."""
-    from rosaos.cli.device_commands import check_device
-
-    raise typer.Exit(
-        check_device(name, config, json_output=json_output, timeout=timeout, start_timeout=start_timeout)
-    )
-
-
-@devices_app.command("login")
-def devices_login(
-    name: Annotated[str, typer.Argument(help="Instance name, e.g. spotify.")],
-    config: ConfigOption = None,
-) -> None:
-    """Log an instance in to its cloud account (e.g. spotify): prints a URL, reads the pasted answer."""
-    from rosaos.config import ConfigError, load_config
-    from rosaos.devices.world import build_world
-    from rosaos.plugins import load_drivers
-
-    try:
-        settings = load_config(config)
-        instance = build_world(settings, load_drivers()).get(name)
-    except (ConfigError, KeyError) as error:
-        typer.echo(f"error: {error.args[0] if error.args else error}", err=True)
-        raise typer.Exit(2) from None
-    if instance.spec.login is None:
-        typer.echo(f"driver {instance.spec.name!r} needs no login; {name} is ready as configured")
-        raise typer.Exit(0)
-    if instance.is_remote:
-        typer.echo(f"error: {name} is served on another machine; log in there", err=True)
-        raise typer.Exit(1)
-    raise typer.Exit(instance.spec.login(instance.context(settings.data_dir)))
 
 
 @app.command("serve-device")
@@ -181,33 +100,6 @@ def new_driver(
     )
 
 
-ModelOption = Annotated[
-    str | None,
-    typer.Option(
-        "--model",
-        "-m",
-        help="Kernel model: any pydantic-ai model string (openai:gpt-5.2, anthropic:…, google:…, groq:…) "
-        "or 'openai-compatible' with --base-url and --model-name.",
-    ),
-]
-ProcessModelOption = Annotated[
-    str | None, typer.Option(help="Model for process agents (default: the kernel's).")
-]
-BaseUrlOption = Annotated[
-    str | None, typer.Option(help="OpenAI-compatible endpoint, e.g. http://127.0.0.1:11434/v1.")
-]
-ModelNameOption = Annotated[
-    str | None, typer.Option(help="Model name at the OpenAI-compatible endpoint, e.g. qwen3:8b.")
-]
-UrlOption = Annotated[
-    str | None,
-    typer.Option(
-        "--url",
-        help="Kernel URL (default: the running kernel of this data directory, else \\[kernel] host/port).",
-    ),
-]
-
-
 @app.command("up")
 def up(
     config: ConfigOption = None,
@@ -251,7 +143,7 @@ def chat(
 ) -> None:
     """Chat with the running kernel: a REPL, or one message with -m."""
     from rosaos.frontends.chat import chat_command
-    from rosaos.kernel.api.client import KernelClient
+    from rosaos.kernel.api.kernel_client import KernelClient
 
     def client() -> KernelClient:
         from rosaos.config import load_config

@@ -9,7 +9,7 @@ format every layer shares):
 - :mod:`~rosaos.intents.understanding`: what a sentence means in this world. hassil matching
   (:class:`~rosaos.intents.understanding.matching.IntentMatcher`), readings ranked per clause,
   rephrasings, the fuzzy model, refusals → a
-  :class:`~rosaos.intents.understanding.results.MatchResult`.
+  :class:`~rosaos.intents.understanding.match_result.MatchResult`.
 - :mod:`~rosaos.intents.planning`: what to do about it. The ``rosaos-plan`` block a task
   carries, follow-ups ("X, then Y"), the answer to a device notice, timer turns.
 

@@ -46,7 +46,7 @@ def render_event(event: Event) -> str:
         case "user_typed":
             return f"[User typed] {payload.text}"
         case "worker_callback":
-            head = f"[Worker callback] worker={payload.worker_id} status={payload.status}"
+            head = f"[Worker callback] worker={payload.process_id} status={payload.status}"
             if payload.task:
                 head += f" task={payload.task!r}"
             body = (

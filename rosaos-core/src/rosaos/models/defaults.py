@@ -63,7 +63,7 @@ def kernel_models(config: RosaosConfig, world: World, override: Model | None = N
     No model configured: the offline local-intent engine is the kernel. A model configured: it
     is the kernel, and with ``prefer_local`` the engine still takes the sentences it matches.
     """
-    from rosaos.intents.grammar.vocabulary import intent_sources
+    from rosaos.intents.grammar.vocabulary import device_vocabularies
     from rosaos.models.kernel_model import LocalIntentModel
     from rosaos.models.routing import KernelRouter
 
@@ -72,7 +72,7 @@ def kernel_models(config: RosaosConfig, world: World, override: Model | None = N
     if override is not None:
         return KernelModels(override, process, override.model_name, None, lambda event: None)
     speaker = next((i.name for i in world.instances.values() if i.spec.always_attached), None)
-    local = LocalIntentModel(intent_sources(world), language=config.models.language, speaker=speaker)
+    local = LocalIntentModel(device_vocabularies(world), language=config.models.language, speaker=speaker)
     if spec.model is None:
         return KernelModels(local, process, "offline local-intent engine", OFFLINE_NOTICE, lambda event: None)
     llm = build_model(spec)

@@ -35,7 +35,7 @@ from pydantic_ai.models import Model, ModelRequestParameters
 from pydantic_ai.settings import ModelSettings
 
 from rosaos.intents.grammar.phrases import phrase
-from rosaos.intents.grammar.vocabulary import DeviceIntentSource
+from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.planning.followups import callback_response, plan_follow_up
 from rosaos.intents.planning.notice_plan import SILENCE, notice_response
 from rosaos.intents.planning.plan import PlanError, decode_plan, has_plan
@@ -62,12 +62,12 @@ NO_OUTPUT = "(no output)"
 class LocalIntentModel(Model):
     """The offline kernel model: sentence templates instead of an LLM.
 
-    ``devices`` are the world's devices (:func:`rosaos.intents.grammar.vocabulary.intent_sources`);
+    ``devices`` are the world's devices (:func:`rosaos.intents.grammar.vocabulary.device_vocabularies`);
     ``language`` is ``[models] language``. The hassil grammars are built here, once.
     """
 
     def __init__(
-        self, devices: Sequence[DeviceIntentSource], language: str = "en", speaker: str | None = None
+        self, devices: Sequence[DeviceVocabulary], language: str = "en", speaker: str | None = None
     ) -> None:
         super().__init__()
         self.language = language

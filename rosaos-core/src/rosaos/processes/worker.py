@@ -125,7 +125,7 @@ async def run_job(job: WorkerJob) -> WorkerCallback:
     if not messages:  # a plan run without an agent (processes/plan_runner.py): no model requests
         tool_calls = len(calls.calls)
     return WorkerCallback(
-        worker_id=job.process_id,
+        process_id=job.process_id,
         status=status,
         output=output,
         error=error,
@@ -315,7 +315,7 @@ def callback_event(callback: WorkerCallback) -> dict[str, Any]:
         "kind": "worker_callback",
         "source": "worker",
         "payload": callback.model_dump(mode="json"),
-        "idempotency_key": callback_idempotency_key(callback.worker_id),
+        "idempotency_key": callback_idempotency_key(callback.process_id),
     }
 
 

@@ -28,7 +28,7 @@ from hassil.intents import TextSlotList
 
 from rosaos.drivers import DriverSpec
 from rosaos.intents.grammar.intents_file import IntentsFile
-from rosaos.intents.grammar.vocabulary import DeviceIntentSource
+from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.understanding.matching import MAX_RESULTS_PER_SOURCE
 from rosaos.intents.understanding.readings import Reading, ReadingContext, driver_reading
 
@@ -74,7 +74,7 @@ class IntentProbe:
         for spoken, instance in devices.items():
             aliases.setdefault(instance, []).append(spoken)
         sources = {
-            name: DeviceIntentSource(name=name, driver=driver, aliases=tuple(spoken), intents=path)
+            name: DeviceVocabulary(name=name, driver=driver, aliases=tuple(spoken), intents=path)
             for name, spoken in aliases.items()
         }
         file = next(iter(sources.values())).intents_file(language)

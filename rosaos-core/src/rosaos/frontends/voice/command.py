@@ -37,7 +37,7 @@ from rosaos.frontends.voice.sources import (
 from rosaos.frontends.voice.stt import OpenAITranscriptionSTT, build_stt
 from rosaos.frontends.voice.vad import EnergyClassifier, FrameClassifier, Segmenter, SileroClassifier
 from rosaos.frontends.voice.wake import EyeContact, HaarFaceDetector, WakeGate
-from rosaos.kernel.api.client import KernelClient, KernelUnavailable
+from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
 
 EXIT_OK = 0
 EXIT_FAILED = 1

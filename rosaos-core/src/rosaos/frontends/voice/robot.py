@@ -22,7 +22,7 @@ from typing import Any, Protocol
 
 from rosaos.devices.client import DeviceClient
 from rosaos.drivers import DeviceError
-from rosaos.kernel.api.client import KernelClient, KernelUnavailable
+from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
 
 log = logging.getLogger(__name__)
 

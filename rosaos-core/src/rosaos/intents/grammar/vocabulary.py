@@ -44,7 +44,7 @@ MAX_NAME_WORDS = 3
 
 
 @dataclass(frozen=True)
-class DeviceIntentSource:
+class DeviceVocabulary:
     """One device instance as the local-intent engine sees it."""
 
     name: str
@@ -58,7 +58,7 @@ class DeviceIntentSource:
     _files: dict[str, IntentsFile | None] = field(default_factory=dict, compare=False, repr=False)
 
     @classmethod
-    def from_instance(cls, instance: DeviceInstance) -> DeviceIntentSource:
+    def from_instance(cls, instance: DeviceInstance) -> DeviceVocabulary:
         """Build from a world's :class:`~rosaos.devices.world.DeviceInstance`."""
         return cls(
             name=instance.name,
@@ -160,16 +160,16 @@ def strip_article(text: str, language: str) -> str:
     return text
 
 
-def intent_sources(world: Iterable[DeviceInstance]) -> list[DeviceIntentSource]:
+def device_vocabularies(world: Iterable[DeviceInstance]) -> list[DeviceVocabulary]:
     """The engine's view of every instance of a :class:`rosaos.devices.world.World` that can be
     served: a placeholder driver's instance is never served, so the engine neither targets it
     nor offers it in "Devices I can control"."""
-    return [DeviceIntentSource.from_instance(instance) for instance in world if instance.spec.implemented]
+    return [DeviceVocabulary.from_instance(instance) for instance in world if instance.spec.implemented]
 
 
 def sources_from_config(
     devices: Mapping[str, DeviceConfig], registry: DriverRegistry
-) -> list[DeviceIntentSource]:
+) -> list[DeviceVocabulary]:
     """Sources straight from ``[devices.NAME]`` tables, without validating driver settings.
 
     For tools that read a world without serving it (the task benchmark, tests). A driver that is
@@ -179,7 +179,7 @@ def sources_from_config(
     for name, device in devices.items():
         spec = registry.drivers[device.driver].spec if device.driver in registry.drivers else None
         sources.append(
-            DeviceIntentSource(
+            DeviceVocabulary(
                 name=name,
                 driver=device.driver,
                 description=device.description or (spec.description if spec else ""),

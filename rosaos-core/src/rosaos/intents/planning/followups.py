@@ -27,7 +27,7 @@ from typing import Any
 from pydantic_ai.messages import ModelResponsePart, TextPart, ToolCallPart
 
 from rosaos.intents.planning.plan import FollowUp, FollowUpLaunch, Plan, PlanError, decode_plan, encode_task
-from rosaos.intents.understanding.results import MatchResult, ProcessPlan
+from rosaos.intents.understanding.match_result import MatchResult, ProcessPlan
 from rosaos.models.conversation import WorkerCallbackEvent
 
 # Where a follow-up starts: "…, then Y", "… and then Y"; "…, and when/once/if … Y".

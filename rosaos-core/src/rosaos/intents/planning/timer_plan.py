@@ -23,7 +23,7 @@ from typing import Any
 from pydantic_ai.messages import ModelMessage, ModelRequest, ModelResponsePart, TextPart, ToolCallPart
 
 from rosaos.intents.grammar.timer_phrases import CancelTimer, ListTimers, SetTimer, read_timer_request
-from rosaos.intents.understanding.results import MatchResult
+from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.models.conversation import (
     ToolOutcome,
     content_text,

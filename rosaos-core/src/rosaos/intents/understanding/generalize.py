@@ -21,9 +21,9 @@ from collections.abc import Callable
 
 from rosaos.intents.grammar.phrases import phrase
 from rosaos.intents.understanding.fuzzy import ACT_SCORE, ASK_SCORE, FuzzyMatcher
+from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.intents.understanding.readings import Focus
 from rosaos.intents.understanding.rephrase import negated, rephrasings, strip_fillers
-from rosaos.intents.understanding.results import MatchResult
 
 Literal = Callable[[str, Focus], MatchResult]
 QUESTION_START: dict[str, re.Pattern[str]] = {

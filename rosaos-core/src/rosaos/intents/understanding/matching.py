@@ -31,14 +31,15 @@ from functools import cache
 
 from hassil import Intents, recognize_all
 from hassil.intents import SlotList, TextSlotList
-from hassil.recognize import MISSING_ENTITY, RecognizeResult
+from hassil.recognize import RecognizeResult
 
 from rosaos.intents.grammar.ha_intents import NO_AREA, load_ha_intents
 from rosaos.intents.grammar.intents_file import IntentsFile
-from rosaos.intents.grammar.phrases import confirms, conjunctions, phrase, pronouns
-from rosaos.intents.grammar.vocabulary import ARTICLES, DeviceIntentSource, strip_article
+from rosaos.intents.grammar.phrases import confirms, conjunctions, pronouns
+from rosaos.intents.grammar.vocabulary import ARTICLES, DeviceVocabulary
 from rosaos.intents.understanding.fuzzy import FuzzyMatcher
 from rosaos.intents.understanding.generalize import understand
+from rosaos.intents.understanding.match_result import MatchResult, ProcessPlan, build_result, no_match
 from rosaos.intents.understanding.ranges import refuse_bad_number
 from rosaos.intents.understanding.readings import (
     Focus,
@@ -47,7 +48,7 @@ from rosaos.intents.understanding.readings import (
     driver_reading,
     ha_reading,
 )
-from rosaos.intents.understanding.results import MatchResult, ProcessPlan, build_result, no_match
+from rosaos.intents.understanding.unknown_names import Grammar, UnknownNames
 
 __all__ = ["IntentMatcher", "MatchResult", "ProcessPlan"]
 
@@ -55,13 +56,6 @@ MAX_RESULTS_PER_SOURCE = 16
 """hassil can yield many equivalent parses; the first ones are the most literal."""
 MAX_PIECES = 6
 """Sentences cut into more pieces than this are not split (each split costs recognitions)."""
-MIN_LITERAL_FOR_UNKNOWN = 6
-"""Template characters an "unknown device" reading must match, so "tell the drone to take off"
-is "not understood" rather than "I don't know a device called 'tell the drone'"."""
-MAX_UNKNOWN_WORDS = 3
-MIN_KIND_WORD = 3
-"""Shortest word that counts when comparing an unknown name with known ones ("light", not "a")."""
-UNKNOWN_SLOTS = frozenset({"name", "device"})
 MAX_ELIDED_POSITION = 3
 """A left-out device name is tried after each of a clause's first words, up to this many: the
 verb, and a particle ("turn off", "set to"); templates name the device right there."""
@@ -91,7 +85,7 @@ class _DriverIntents:
 class IntentMatcher:
     """Matches sentences against the intents of one world's devices, in one language."""
 
-    def __init__(self, devices: Sequence[DeviceIntentSource], language: str = "en") -> None:
+    def __init__(self, devices: Sequence[DeviceVocabulary], language: str = "en") -> None:
         self.language = language
         self.devices = {device.name: device for device in devices}
         self.context = ReadingContext(self.devices, language)
@@ -121,26 +115,19 @@ class IntentMatcher:
         # ", and then" is one separator: a comma, a conjunction, or a comma then a conjunction.
         self._splitter = re.compile(rf"\s*((?:,\s*)?\b(?:{words})\b|,)\s*", re.IGNORECASE)
         self._cache: dict[tuple[str, Focus], Reading | None] = {}
-        self._unknown_cache: dict[str, Reading | None] = {}
         self._fuzzy = FuzzyMatcher(
             [(driver.intents, frozenset(driver.device_list_names)) for driver in self._drivers],
             self.context.names,
             self.context.areas,
             language,
         )
-        with_intents = {name for driver in self._drivers for name in driver.devices} | set(
-            self.context.mappings
-        )
-        self._kind_words = {
-            word
-            for device in with_intents
-            for name in self.devices[device].spoken_names(language)
-            for word in name.split()
-            if len(word) >= MIN_KIND_WORD
-        }
+        grammars = [Grammar(driver.intents, driver.lists, False, driver.devices) for driver in self._drivers]
+        if self._ha is not None:
+            grammars.append(Grammar(self._ha, self._ha_lists, True, None))
+        self._unknown_names = UnknownNames(self.context, grammars, self._recognize)
 
     def _driver_intents(self) -> list[_DriverIntents]:
-        by_driver: dict[str, list[DeviceIntentSource]] = {}
+        by_driver: dict[str, list[DeviceVocabulary]] = {}
         for device in self.devices.values():
             by_driver.setdefault(device.driver, []).append(device)
         drivers = []
@@ -163,7 +150,7 @@ class IntentMatcher:
     def clear_cache(self) -> None:
         """Forget cached clause readings (benchmarks time full recognitions)."""
         self._cache.clear()
-        self._unknown_cache.clear()
+        self._unknown_names.clear_cache()
 
     def choice(self, text: str) -> frozenset[str]:
         """The devices ``text`` picks when it is only a choice ("the kitchen one", "bedroom light"),
@@ -220,7 +207,7 @@ class IntentMatcher:
             return refused
         if whole is not None:
             return build_result(self.context, text, [whole], focus is not None)
-        unknown = self._unknown(text)
+        unknown = self._unknown_names.reading(text)
         if unknown is not None:
             return build_result(self.context, text, [unknown], False)
         elided = self._elided_anywhere(text, focus)
@@ -328,7 +315,7 @@ class IntentMatcher:
                     or found
                 )
             if found is None and allow_unknown:
-                found = self._unknown(joined)
+                found = self._unknown_names.reading(joined)
             return found
 
         @cache
@@ -409,75 +396,6 @@ class IntentMatcher:
         if fits:
             return self.context.clarify(clause, 0, 0, fits)
         return None
-
-    def _unknown(self, clause: str) -> Reading | None:
-        """A refusal naming what exists, when the sentence matches except for the device's name.
-
-        Only when the unknown name shares a word with the names of devices that could do it
-        ("garage light" vs "kitchen light"): then the user clearly means a device of that kind.
-        Otherwise ("set the volume to 70" read as a light called "volume") it is "not understood".
-        """
-        if clause in self._unknown_cache:
-            return self._unknown_cache[clause]
-        self._unknown_cache[clause] = None
-        # Cheap test first: an unknown name must share a word with the name of a device that has
-        # intents, so a clause sharing none ("play some jazz") cannot give such a reading.
-        if not self._kind_words & set(clause.lower().split()):
-            return None
-        best: tuple[tuple[int, int], Reading] | None = None
-        sources: list[tuple[Intents, dict[str, SlotList], bool, list[str] | None]] = [
-            (driver.intents, driver.lists, False, driver.devices) for driver in self._drivers
-        ]
-        if self._ha is not None:
-            sources.append((self._ha, self._ha_lists, True, None))
-        for intents, lists, ha, devices in sources:
-            if ha and best is not None:
-                break  # a driver's reading already outranks any HA one
-            for result in self._recognize(clause, intents, lists, ha=ha, unmatched=True):
-                missing = [
-                    e for e in result.unmatched_entities_list if getattr(e, "text", "") != MISSING_ENTITY
-                ]
-                if len(missing) != 1 or missing[0].name not in UNKNOWN_SLOTS:
-                    continue
-                if result.text_chunks_matched < MIN_LITERAL_FOR_UNKNOWN:
-                    continue
-                spoken = strip_article(getattr(missing[0], "text", ""), self.language)
-                owners = devices if devices is not None else self._capable(result)
-                if len(spoken.split()) > MAX_UNKNOWN_WORDS or not self._same_kind(spoken, owners):
-                    continue
-                # A driver's {device} slot holds exactly the device phrase ("garage light"); an
-                # HA name slot may hold only part of it ("garage" + the template's "light").
-                key = (int(not ha), result.text_chunks_matched)
-                if best is None or key > best[0]:
-                    best = (key, self._not_found(clause, spoken, owners, result.text_chunks_matched))
-        self._unknown_cache[clause] = best[1] if best is not None else None
-        return self._unknown_cache[clause]
-
-    def _capable(self, result: RecognizeResult) -> list[str]:
-        domain = result.entities["domain"].value if "domain" in result.entities else None
-        return self.context.capable(result.intent.name, str(domain) if domain else None)
-
-    def _not_found(self, clause: str, spoken: str, owners: list[str], literal: int) -> Reading:
-        """ "the light" is part of several names: ask which one; "the garage light" is none: refuse."""
-        partial = [device for device in owners if self._named_partly(spoken, device)]
-        if partial:
-            return self.context.clarify(clause, literal, 0, partial)
-        reply = phrase(self.language, "unknown", phrase=spoken, options=self.context.display(owners))
-        return Reading(clause, 0, literal, issue=reply)
-
-    def _named_partly(self, spoken: str, device: str) -> bool:
-        """Whether every word of ``spoken`` is in one of ``device``'s names ("light", "bedside")."""
-        words = set(spoken.split())
-        return any(words <= set(name.split()) for name in self.devices[device].spoken_names(self.language))
-
-    def _same_kind(self, spoken: str, devices: list[str]) -> bool:
-        """Whether ``spoken`` shares a word with a name of one of ``devices``."""
-        words = {word for word in spoken.split() if len(word) >= MIN_KIND_WORD}
-        return any(
-            words & set(name.split())
-            for device in devices
-            for name in self.devices[device].spoken_names(self.language)
-        )
 
 
 def _leaned_on(reading: Reading | None) -> tuple[str, str] | None:

@@ -12,7 +12,7 @@ import re
 from collections.abc import Callable
 
 from rosaos.intents.grammar.phrases import phrase
-from rosaos.intents.understanding.results import MatchResult
+from rosaos.intents.understanding.match_result import MatchResult
 
 NUMBER = re.compile(r"(?<![\w.])(?:(?:minus|negative)\s+|-)?\d+(?:[.,]\d+)?(?![\w.])", re.IGNORECASE)
 PROBES = ("50", "1")

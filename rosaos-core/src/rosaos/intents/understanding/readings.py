@@ -19,7 +19,7 @@ from rosaos.intents.grammar.ha_intents import NO_AREA, state_word
 from rosaos.intents.grammar.ha_mapping import HomeAssistantMapping
 from rosaos.intents.grammar.intents_file import IntentAction
 from rosaos.intents.grammar.phrases import join_options, phrase, says_all
-from rosaos.intents.grammar.vocabulary import DeviceIntentSource
+from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.planning.plan import RESULT_PLACEHOLDER, PlanAnswer, PlanStep
 
 Focus: TypeAlias = frozenset[str] | None
@@ -82,7 +82,7 @@ def wildcard_texts(result: RecognizeResult) -> tuple[str, ...]:
 class ReadingContext:
     """The world facts readings are resolved against: devices, names, areas, HA mappings."""
 
-    def __init__(self, devices: dict[str, DeviceIntentSource], language: str) -> None:
+    def __init__(self, devices: dict[str, DeviceVocabulary], language: str) -> None:
         self.devices = devices
         self.language = language
         self.names: dict[str, list[str]] = {}

@@ -6,5 +6,5 @@
 - ``schemas``: what the routes take and answer, and :class:`KernelRuntime`, what they need
   from the kernel;
 - ``login_codes``: one-time login codes that let a browser get the token;
-- ``client``: :class:`KernelClient`, the HTTP client the CLI, front ends and benchmarks use.
+- ``kernel_client``: :class:`KernelClient`, the HTTP client the CLI, front ends and benchmarks use.
 """

@@ -316,6 +316,6 @@ async def _accept(runtime: KernelRuntime, event: NewEvent) -> Accepted:
             log.exception("worker_callback_recorded failed for event %s", appended.id)
             with contextlib.suppress(Exception):
                 await runtime.updates.publish(
-                    "error", f"could not release the leases of process {event.payload.worker_id}: {error}"
+                    "error", f"could not release the leases of process {event.payload.process_id}: {error}"
                 )
     return Accepted(id=appended.id, duplicate=appended.duplicate)

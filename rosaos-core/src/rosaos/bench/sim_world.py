@@ -25,7 +25,7 @@ from urllib.parse import urlsplit
 from rosaos.bench.tasks import TaskFile
 from rosaos.config import ConfigError, DeviceConfig, RosaosConfig
 from rosaos.devices.client import DeviceClient
-from rosaos.devices.runtime import DeviceStatus
+from rosaos.devices.run_files import DeviceStatus
 from rosaos.devices.serve import open_device, serve_http
 from rosaos.devices.supervisor import DirectoryEntry, SafeStopOutcome
 from rosaos.devices.world import DeviceInstance, World, build_world

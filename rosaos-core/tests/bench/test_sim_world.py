@@ -11,8 +11,8 @@ from fastmcp import FastMCP
 from rosaos import hookimpl
 from rosaos.bench.results import TrialResult
 from rosaos.bench.runner import run_file
+from rosaos.bench.sim_world import SimDevices, bench_world
 from rosaos.bench.tasks import TaskSelection, load_task_file
-from rosaos.bench.world import SimDevices, bench_world
 from rosaos.config import RosaosConfig
 from rosaos.devices.client import DeviceClient
 from rosaos.drivers import DeviceBackend, DeviceError, DriverSpec

@@ -1,4 +1,4 @@
-"""Which device instances are being served on this machine, and where: the runtime files.
+"""Which device instances are being served on this machine, and where: the run files.
 
 ``rosaos up`` (the :class:`~rosaos.devices.supervisor.DeviceSupervisor`) writes
 ``<data_dir>/run/devices.json`` on every status change and removes it when it stops;
@@ -27,8 +27,8 @@ DeviceStatus = Literal[
 instance that does not answer; ``not implemented``: a placeholder driver, listed but never served."""
 
 
-class RuntimeEntry(BaseModel):
-    """One served instance, as other commands see it."""
+class RunFileEntry(BaseModel):
+    """One served instance as `run/devices.json` records it for other commands (no token; the host's pid)."""
 
     url: str | None
     pid: int | None
@@ -38,14 +38,14 @@ class RuntimeEntry(BaseModel):
     restarts: int = 0
 
 
-class RuntimeFile(BaseModel):
+class RunFile(BaseModel):
     """``<data_dir>/run/devices.json``: written by the supervisor on every status change."""
 
     supervisor_pid: int
-    devices: dict[str, RuntimeEntry] = Field(default_factory=dict)
+    devices: dict[str, RunFileEntry] = Field(default_factory=dict)
 
 
-def runtime_file_path(data_dir: Path) -> Path:
+def run_file_path(data_dir: Path) -> Path:
     """Where the supervisor records the instances it serves."""
     return data_dir / "run" / "devices.json"
 
@@ -65,7 +65,7 @@ def write_atomic(path: Path, text: str) -> None:
 
 
 def pid_alive(pid: int) -> bool:
-    """Whether a process with this pid exists: how stale runtime files are recognised."""
+    """Whether a process with this pid exists: how stale run files are recognised."""
     if pid <= 0:  # 0 and negatives address process groups, not one process
         return False
     try:
@@ -77,25 +77,25 @@ def pid_alive(pid: int) -> bool:
     return True
 
 
-def read_runtime_file(data_dir: Path) -> RuntimeFile | None:
-    """The supervisor's runtime file, or None when absent, unreadable or left by a dead supervisor."""
+def read_runtime_file(data_dir: Path) -> RunFile | None:
+    """The supervisor's run file, or None when absent, unreadable or left by a dead supervisor."""
     try:
-        runtime = RuntimeFile.model_validate_json(runtime_file_path(data_dir).read_text(encoding="utf-8"))
+        runtime = RunFile.model_validate_json(run_file_path(data_dir).read_text(encoding="utf-8"))
     except (OSError, ValidationError):
         return None
     return runtime if pid_alive(runtime.supervisor_pid) else None
 
 
-def served_devices(data_dir: Path) -> dict[str, RuntimeEntry]:
+def served_devices(data_dir: Path) -> dict[str, RunFileEntry]:
     """Instances being served on this machine (by ``rosaos up`` or ``rosaos serve-device``), by name."""
-    served: dict[str, RuntimeEntry] = {}
+    served: dict[str, RunFileEntry] = {}
     runtime = read_runtime_file(data_dir)
     if runtime is not None:
         served.update({n: e for n, e in runtime.devices.items() if e.url and e.pid and pid_alive(e.pid)})
     with contextlib.suppress(OSError):
         for path in sorted(_serve_device_dir(data_dir).glob("*.json")):
             try:
-                entry = RuntimeEntry.model_validate_json(path.read_text(encoding="utf-8"))
+                entry = RunFileEntry.model_validate_json(path.read_text(encoding="utf-8"))
             except (OSError, ValidationError):
                 continue
             if entry.url and entry.pid and pid_alive(entry.pid):
@@ -103,7 +103,7 @@ def served_devices(data_dir: Path) -> dict[str, RuntimeEntry]:
     return served
 
 
-def devices_not_ready(data_dir: Path) -> dict[str, RuntimeEntry]:
+def devices_not_ready(data_dir: Path) -> dict[str, RunFileEntry]:
     """Instances a running ``rosaos up`` hosts but does not serve yet (starting, restarting, failed), by name.
 
     ``rosaos up`` owns them: a command that wants one waits for it rather than starting a second copy.
@@ -122,7 +122,7 @@ def devices_not_ready(data_dir: Path) -> dict[str, RuntimeEntry]:
 def record_served_device(data_dir: Path, name: str, url: str) -> Iterator[None]:
     """Record a ``rosaos serve-device`` instance for the block's duration, so ``devices check`` finds it."""
     path = _serve_device_dir(data_dir) / f"{name}.json"
-    entry = RuntimeEntry(url=url, pid=os.getpid(), status="healthy", since=now())
+    entry = RunFileEntry(url=url, pid=os.getpid(), status="healthy", since=now())
     write_atomic(path, entry.model_dump_json(indent=2))
     try:
         yield
@@ -131,5 +131,5 @@ def record_served_device(data_dir: Path, name: str, url: str) -> Iterator[None]:
 
 
 def now() -> datetime:
-    """The current time, timezone-aware (UTC), as runtime files record it."""
+    """The current time, timezone-aware (UTC), as run files record it."""
     return datetime.now(UTC)

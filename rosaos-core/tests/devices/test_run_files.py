@@ -1,4 +1,4 @@
-"""The runtime files: what other commands learn about served instances, and stale files ignored."""
+"""The run files: what other commands learn about served instances, and stale files ignored."""
 
 from __future__ import annotations
 
@@ -7,13 +7,13 @@ import subprocess
 import sys
 from pathlib import Path
 
-from rosaos.devices.runtime import (
-    RuntimeEntry,
-    RuntimeFile,
+from rosaos.devices.run_files import (
+    RunFile,
+    RunFileEntry,
     now,
     read_runtime_file,
     record_served_device,
-    runtime_file_path,
+    run_file_path,
     served_devices,
     write_atomic,
 )
@@ -28,9 +28,9 @@ def dead_pid() -> int:
 
 
 def write_runtime(data_dir: Path, supervisor_pid: int, host_pid: int) -> None:
-    entry = RuntimeEntry(url="http://127.0.0.1:9/mcp", pid=host_pid, status="healthy", since=now())
-    runtime = RuntimeFile(supervisor_pid=supervisor_pid, devices={"kitchen_light": entry})
-    write_atomic(runtime_file_path(data_dir), runtime.model_dump_json())
+    entry = RunFileEntry(url="http://127.0.0.1:9/mcp", pid=host_pid, status="healthy", since=now())
+    runtime = RunFile(supervisor_pid=supervisor_pid, devices={"kitchen_light": entry})
+    write_atomic(run_file_path(data_dir), runtime.model_dump_json())
 
 
 def test_a_live_supervisors_instances_are_served(data_dir: Path) -> None:
@@ -57,4 +57,4 @@ def test_serve_device_is_recorded_only_while_it_runs(data_dir: Path) -> None:
 
 def test_runtime_files_are_owner_only(data_dir: Path) -> None:
     write_runtime(data_dir, supervisor_pid=os.getpid(), host_pid=os.getpid())
-    assert runtime_file_path(data_dir).stat().st_mode & 0o077 == 0
+    assert run_file_path(data_dir).stat().st_mode & 0o077 == 0

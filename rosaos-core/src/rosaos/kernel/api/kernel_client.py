@@ -11,7 +11,7 @@ import httpx
 
 from rosaos.auth import token_path
 from rosaos.config import RosaosConfig
-from rosaos.devices.runtime import pid_alive
+from rosaos.devices.run_files import pid_alive
 
 KERNEL_FILE = "run/kernel.json"
 """Where a running kernel says where it is, so `rosaos chat/ps/kill` find it even on --port 0."""
