@@ -211,6 +211,15 @@ async def test_an_event_id_beyond_sqlite_integers_is_invalid_not_a_server_error(
     assert "event_id" in response.json()["detail"]
 
 
+async def test_the_largest_published_id_is_exact_as_a_json_number(client: httpx.AsyncClient) -> None:
+    schema = (await client.get("/openapi.json")).json()
+    [parameter] = schema["paths"]["/events/{event_id}"]["get"]["parameters"]
+    maximum = parameter["schema"]["maximum"]
+    assert float(maximum) == maximum  # a double holds it: a client sending the maximum sends it exactly
+    assert (await client.get(f"/events/{maximum}", headers=AUTH)).status_code == 404
+    assert (await client.get(f"/events/{maximum + 1}", headers=AUTH)).status_code == 422
+
+
 async def test_notice_data_nested_too_deep_is_refused_not_a_server_error(
     client: httpx.AsyncClient, store: EventStore
 ) -> None:

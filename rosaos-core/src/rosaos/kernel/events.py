@@ -100,7 +100,7 @@ class TimerFired(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    timer_id: int = Field(ge=1, le=2**63 - 1)
+    timer_id: int = Field(ge=1, le=2**53 - 1)  # exact as a JSON number (see kernel/api/routes.py MAX_ID)
     action: str = Field(min_length=1, max_length=4000)
     due: datetime
     late_seconds: float = Field(default=0.0, ge=0)

@@ -69,8 +69,10 @@ async def _runtime(request: Request) -> KernelRuntime:  # async: no thread hop p
 
 
 Runtime = Annotated[KernelRuntime, Depends(_runtime)]
-SQLITE_MAX_ID = 2**63 - 1
-"""Ids are SQLite integers: a larger one cannot exist (and would overflow the query)."""
+MAX_ID = 2**53 - 1
+"""The largest id the API accepts: below SQLite's 2**63 - 1 (a larger one would overflow the
+query), and exact as a JSON number in every client. A bound of 2**63 - 1 read as a double is
+2**63, so clients (and schema-driven test generators) would send ids the API then refuses."""
 IdempotencyHeader = Annotated[str | None, Header(alias="Idempotency-Key", max_length=200)]
 
 # Documents the token in OpenAPI (the /docs "Authorize" button); BearerAuthMiddleware enforces it.
@@ -149,7 +151,7 @@ async def post_event(
 
 
 @protected.get("/events/{event_id}")
-async def get_event(event_id: Annotated[int, FastPath(ge=1, le=SQLITE_MAX_ID)], runtime: Runtime) -> Event:
+async def get_event(event_id: Annotated[int, FastPath(ge=1, le=MAX_ID)], runtime: Runtime) -> Event:
     """One event, and whether the kernel has handled it."""
     event = await runtime.events.get(event_id)
     if event is None:
@@ -164,9 +166,7 @@ async def get_event(event_id: Annotated[int, FastPath(ge=1, le=SQLITE_MAX_ID)], 
 async def get_updates(
     request: Request,
     runtime: Runtime,
-    after: Annotated[
-        int | None, Query(ge=0, le=SQLITE_MAX_ID, description="Only updates with a larger id.")
-    ] = None,
+    after: Annotated[int | None, Query(ge=0, le=MAX_ID, description="Only updates with a larger id.")] = None,
     limit: Annotated[int, Query(ge=1, le=1000, description="At most this many (per page or backlog).")] = 100,
     last_event_id: Annotated[
         str | None,
@@ -208,9 +208,7 @@ async def _stream(updates: UpdateStream, after: int) -> AsyncIterator[ServerSent
 async def list_activity(
     runtime: Runtime,
     device: Annotated[str | None, Query(max_length=100, description="Only this device's calls.")] = None,
-    process: Annotated[
-        int | None, Query(ge=1, le=2**63 - 1, description="Only this process's calls.")  # SQLite's range
-    ] = None,
+    process: Annotated[int | None, Query(ge=1, le=MAX_ID, description="Only this process's calls.")] = None,
     since: Annotated[
         float | None, Query(ge=0, description="Only calls started at or after this time (epoch seconds).")
     ] = None,
@@ -255,7 +253,7 @@ async def reset_emergency_stop(runtime: Runtime) -> EmergencyStopState:
 
 @protected.post("/processes/{process_id}/terminate")
 async def terminate_process(
-    process_id: Annotated[int, FastPath(ge=1, le=SQLITE_MAX_ID)], runtime: Runtime
+    process_id: Annotated[int, FastPath(ge=1, le=MAX_ID)], runtime: Runtime
 ) -> ProcessView:
     """Kill a running process and release its devices. An ended process is returned as it is."""
     try:

@@ -13,7 +13,7 @@ from typing import Annotated
 from fastapi import HTTPException, Query
 from fastapi import Path as FastPath
 
-from rosaos.kernel.api.routes import SQLITE_MAX_ID, Runtime, protected
+from rosaos.kernel.api.routes import MAX_ID, Runtime, protected
 from rosaos.kernel.timers import Timer, TimerError, TimerList
 
 
@@ -29,7 +29,7 @@ async def list_timers(
 
 
 @protected.delete("/timers/{timer_id}")
-async def cancel_timer(timer_id: Annotated[int, FastPath(ge=1, le=SQLITE_MAX_ID)], runtime: Runtime) -> Timer:
+async def cancel_timer(timer_id: Annotated[int, FastPath(ge=1, le=MAX_ID)], runtime: Runtime) -> Timer:
     """Cancel a pending timer so it never fires; 409 if it has already fired or been cancelled."""
     try:
         timer = await runtime.timers.cancel(timer_id)
