@@ -21,7 +21,7 @@ from rosaos_reachy.backend import (
     MAX_HEAD_YAW,
     ReachyBackend,
 )
-from rosaos_reachy.state import MotionReport
+from rosaos_reachy.state import CompanionReport, MotionReport
 
 Direction = Literal["left", "right", "up", "down", "front"]
 Yaw = Annotated[
@@ -52,6 +52,10 @@ Antenna = Annotated[
     Field(ge=-175.0, le=175.0, description="Degrees; ~10 is rest, negative tips forward, 175 folds it down."),
 ]
 MoveName = Annotated[str, Field(min_length=1, max_length=60, description="A name list_emotions gives.")]
+ListenSeconds = Annotated[
+    float,
+    Field(gt=0, le=120, description="Listen at most this long, unless called again with on=false before."),
+]
 Wait = Annotated[bool, Field(description="Return only when it has finished (default: as it starts).")]
 
 DIRECTIONS: dict[str, tuple[float, float]] = {
@@ -144,3 +148,32 @@ def register_motion_tools(mcp: FastMCP, backend: ReachyBackend) -> None:
     async def sleep() -> MotionReport:
         """Go to sleep: fold head and antennas down and rest. Say goodbye before, not after."""
         return await backend.sleep()
+
+
+def register_companion_tools(mcp: FastMCP, backend: ReachyBackend) -> None:
+    """Add the tools that steer the companion (the robot's own motion between tasks) to ``mcp``."""
+
+    def report() -> CompanionReport:
+        companion = backend.companion
+        return CompanionReport(
+            companion=companion.mode, follow_face=companion.follow_face, listening=companion.listening
+        )
+
+    @mcp.tool(annotations=SET)
+    async def set_listening(
+        on: bool, direction: Yaw = None, seconds: ListenSeconds = 10.0
+    ) -> CompanionReport:
+        """Tell the robot someone is talking to it: the antennas wave while it listens, and it turns
+        its head to ``direction`` (degrees, + left, where the voice came from) if given.
+
+        The voice front end calls it on the wake word (on=true) and once the command is heard
+        (on=false). It never interrupts a motion a process asked for.
+        """
+        backend.companion.listen(seconds if on else 0.0, direction)
+        return report()
+
+    @mcp.tool(annotations=SET)
+    async def follow_face(on: bool) -> CompanionReport:
+        """Keep facing the person in view while listening and speaking (on), or stop (off)."""
+        backend.companion.follow_face = on
+        return report()

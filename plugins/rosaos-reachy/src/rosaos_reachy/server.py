@@ -15,7 +15,7 @@ from pydantic import Field
 from rosaos.drivers import DeviceContext
 from rosaos_reachy.annotations import ACT, READ_ONLY, SET
 from rosaos_reachy.backend import ReachyBackend
-from rosaos_reachy.motion_tools import register_motion_tools
+from rosaos_reachy.motion_tools import register_companion_tools, register_motion_tools
 from rosaos_reachy.speech import SpeechReport, StopReport
 from rosaos_reachy.state import ReachyState
 from rosaos_reachy.vision_tools import register_vision_tools
@@ -62,5 +62,6 @@ def build_server(ctx: DeviceContext, backend: ReachyBackend) -> FastMCP:
         return await backend.speaker.stop()
 
     register_motion_tools(mcp, backend)
+    register_companion_tools(mcp, backend)
     register_vision_tools(mcp, backend)
     return mcp
