@@ -132,22 +132,23 @@ async def test_while_speaking_the_head_sways(robot: Robot) -> None:
 
 
 async def test_asleep_it_keeps_still(robot: Robot) -> None:
-    await robot.call("set_listening", on=True, seconds=60)  # even when told to listen
     await robot.call("sleep")
     try:
         assert await mode(robot) == "asleep"
         await asyncio.sleep(1.0)
         still = await watch(robot, 3.0)
         assert max(still.roll, still.pitch, still.yaw) < 0.5 and still.antennas < 1.0, still
+        woken = await robot.call("set_listening", on=True)  # someone says the wake phrase
+        assert woken["companion"] == "listening" and (await robot.call("get_state"))["awake"] is True
     finally:
         await robot.call("wake_up")
-    assert await mode(robot) == "listening"
 
 
 async def test_after_an_emergency_stop_it_keeps_still_until_a_motion_tool(robot: Robot) -> None:
     await robot.call("set_listening", on=True)
     await robot.backend.safe_stop()  # what the kernel's emergency stop calls (the driver's safe_stop)
     assert await mode(robot) == "off"
+    assert (await robot.call("set_listening", on=True))["companion"] == "off"  # the voice cannot restart it
     await asyncio.sleep(1.0)
     still = await watch(robot, 3.0)
     assert max(still.roll, still.pitch, still.yaw) < 0.5 and still.antennas < 1.0, still

@@ -172,7 +172,12 @@ class Companion:
         )
 
     def listen(self, seconds: float, direction: float | None) -> None:
-        """The voice front end listens for ``seconds`` (0: stopped); turn toward ``direction`` if given."""
+        """The voice front end listens for ``seconds`` (0: stopped); turn toward ``direction`` if given.
+
+        Ignored after an emergency stop: only an owner's motion tool or ``wake_up`` ends that.
+        """
+        if self.stopped:
+            return
         self.listening_until = time.monotonic() + seconds if seconds > 0 else 0.0
         if seconds > 0 and direction is not None:
             self._turn_to = max(-MAX_GAZE_YAW, min(MAX_GAZE_YAW, direction))

@@ -167,9 +167,13 @@ def register_companion_tools(mcp: FastMCP, backend: ReachyBackend) -> None:
         its head to ``direction`` (degrees, + left, where the voice came from) if given.
 
         The voice front end calls it on the wake word (on=true) and once the command is heard
-        (on=false). It never interrupts a motion a process asked for.
+        (on=false). A sleeping robot wakes up first (not after an emergency stop, nor with the
+        companion off); otherwise it never interrupts a motion a process asked for.
         """
-        backend.companion.listen(seconds if on else 0.0, direction)
+        companion = backend.companion
+        if on and not backend.awake and companion.enabled and not companion.stopped:
+            await backend.wake_up()
+        companion.listen(seconds if on else 0.0, direction)
         return report()
 
     @mcp.tool(annotations=SET)
