@@ -179,8 +179,8 @@ def _instrument(kernel: Kernel, trace: Trace) -> None:
 
 
 def device_host_pid(kernel: Kernel) -> int | None:
-    """The pid of the device's host process, from the supervisor's runtime file."""
-    from rosaos.devices.runtime import read_runtime_file
+    """The pid of the device's host process, from the supervisor's run file."""
+    from rosaos.devices.run_files import read_runtime_file
 
     runtime = read_runtime_file(kernel.data_dir)
     entry = runtime.devices.get(DEVICE) if runtime else None

@@ -1,7 +1,7 @@
 """Micro-benchmark: how long the offline local-intent engine takes to match one sentence.
 
 Runs every ``say:`` sentence of the public task files (``../shared/bench/tasks/*.yaml``, or the
-folders or files given with ``--tasks``, repeatable) through :meth:`rosaos.models.matching.IntentMatcher.match` against
+folders or files given with ``--tasks``, repeatable) through :meth:`rosaos.intents.understanding.matching.IntentMatcher.match` against
 its own world, with the installed drivers' intents. Each sentence is matched once to warm up, then
 ``--repeat`` times with the match cache cleared, so every timing is a full recognition.
 
@@ -10,7 +10,7 @@ Prints a table (per sentence: outcome, p50, p95) and then one JSON object with t
     .venv/bin/python benchmarks/local_intent.py [--repeat 50] [--language en] [--tasks DIR_OR_FILE ...]
 
 The slowest sentences are the ones no template spells out: they go through rephrasing and the
-fuzzy model (:mod:`rosaos.models.generalize`) after the literal reading fails, so the table also
+fuzzy model (:mod:`rosaos.intents.understanding.generalize`) after the literal reading fails, so the table also
 gives p95 over the sentences that were not exact matches.
 """
 
@@ -26,8 +26,8 @@ from typing import Any
 import yaml
 
 from rosaos.config import DeviceConfig
-from rosaos.models.matching import IntentMatcher
-from rosaos.models.sources import sources_from_config
+from rosaos.intents.grammar.vocabulary import sources_from_config
+from rosaos.intents.understanding.matching import IntentMatcher
 from rosaos.plugins import load_drivers
 
 DEFAULT_TASKS = Path(__file__).resolve().parents[2] / "shared" / "bench" / "tasks"

@@ -56,7 +56,7 @@ from rosaos.frontends.voice.sources import SAMPLE_RATE, WavSource, read_wav
 from rosaos.frontends.voice.stt import MoonshineSTT, wav_bytes, word_error_rate
 from rosaos.frontends.voice.vad import Segmenter, SileroClassifier
 from rosaos.frontends.voice.wake import WakeGate
-from rosaos.kernel.client import KernelClient, running_kernel_url
+from rosaos.kernel.api.kernel_client import KernelClient, running_kernel_url
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_JSON = HERE / "results" / "voice.json"

@@ -19,7 +19,7 @@ from e2e_support import device_state, eventually, kernel_api, running_kernel
 from rich.console import Console
 
 from rosaos.frontends.chat import send_and_wait
-from rosaos.kernel.client import KernelClient
+from rosaos.kernel.api.kernel_client import KernelClient
 from rosaos.kernel.runtime import Kernel
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")

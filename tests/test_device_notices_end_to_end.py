@@ -16,7 +16,7 @@ import pytest
 import pytest_asyncio
 from e2e_support import eventually
 
-from rosaos.bench.world import SimDevices
+from rosaos.bench.sim_world import SimDevices
 from rosaos.config import load_config
 from rosaos.device_notices import NoticeBoard
 from rosaos.devices import serve

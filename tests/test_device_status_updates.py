@@ -9,7 +9,7 @@ from typing import Any
 
 from e2e_support import eventually, kernel_api, running_kernel
 
-from rosaos.devices.runtime import read_runtime_file
+from rosaos.devices.run_files import read_runtime_file
 
 WORLD = '[kernel]\npool_size = 0\nfork_server = false\n[devices.kitchen_light]\ndriver = "tapo"\n'
 

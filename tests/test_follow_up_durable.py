@@ -15,10 +15,10 @@ import pytest
 import pytest_asyncio
 from e2e_support import device_state, eventually, kernel_api, running_kernel
 
+from rosaos.intents.grammar.vocabulary import device_vocabularies
+from rosaos.intents.planning.followups import plan_follow_up
 from rosaos.kernel.runtime import Kernel
-from rosaos.models.followups import plan_follow_up
 from rosaos.models.kernel_model import LocalIntentModel
-from rosaos.models.sources import intent_sources
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 
@@ -42,14 +42,14 @@ async def kernel(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Kern
 
 
 def first_task(kernel: Kernel) -> str:
-    model = LocalIntentModel(intent_sources(kernel.world))
+    model = LocalIntentModel(device_vocabularies(kernel.world))
     result = plan_follow_up("Turn on the desk lamp, then turn on the shelf lamp", model.match)
     assert result is not None
     return result.processes[0].task
 
 
-async def post_callback(kernel: Kernel, worker_id: int, **fields: Any) -> None:
-    payload = {"worker_id": worker_id, "task": first_task(kernel), **fields}
+async def post_callback(kernel: Kernel, process_id: int, **fields: Any) -> None:
+    payload = {"process_id": process_id, "task": first_task(kernel), **fields}
     async with kernel_api(kernel) as api:
         answer = await api.post(
             "/event", json={"kind": "worker_callback", "source": "worker", "payload": payload}

@@ -101,7 +101,7 @@ async def test_chat_turns_on_the_kitchen_light_through_a_process(
     callback = next(
         u
         for u in updates
-        if u["kind"] == "event" and u["data"].get("payload", {}).get("worker_id") == process_id
+        if u["kind"] == "event" and u["data"].get("payload", {}).get("process_id") == process_id
     )
     assert callback["data"]["kind"] == "worker_callback"
     assert callback["data"]["payload"]["status"] == "ok"
@@ -109,7 +109,7 @@ async def test_chat_turns_on_the_kitchen_light_through_a_process(
         u["text"] for u in updates if u["kind"] == "kernel_reply" and u["event_id"] == callback["event_id"]
     ]
     assert replies == [f"process {process_id}: ok"]
-    assert any(u["kind"] == "process_ended" and u["data"]["worker_id"] == process_id for u in updates)
+    assert any(u["kind"] == "process_ended" and u["data"]["process_id"] == process_id for u in updates)
 
 
 async def test_the_kernel_is_offered_its_process_and_timer_tools_and_no_device_tool(
@@ -184,7 +184,7 @@ async def test_a_worker_killed_mid_task_reports_crashed_and_releases_its_lease(
                 u
                 for u in await updates_for(api)
                 if u["kind"] == "event"
-                and u["data"].get("payload", {}).get("worker_id") == process["id"]
+                and u["data"].get("payload", {}).get("process_id") == process["id"]
                 and u["data"]["payload"]["status"] == "crashed"
             ),
             None,

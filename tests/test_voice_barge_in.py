@@ -27,7 +27,7 @@ from rosaos.frontends.voice.sources import SAMPLE_RATE, WavSource, read_wav
 from rosaos.frontends.voice.stt import MoonshineSTT, wav_bytes
 from rosaos.frontends.voice.vad import Segmenter, SileroClassifier
 from rosaos.frontends.voice.wake import WakeGate
-from rosaos.kernel.client import KernelClient
+from rosaos.kernel.api.kernel_client import KernelClient
 
 pytestmark = pytest.mark.skipif(
     shutil.which("espeak-ng") is None, reason="espeak-ng is not installed: apt-get install espeak-ng"

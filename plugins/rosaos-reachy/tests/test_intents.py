@@ -6,7 +6,7 @@ from typing import Any
 
 import pytest
 
-from rosaos.models.intents_file import IntentsFile
+from rosaos.intents.grammar.intents_file import IntentsFile
 from rosaos.testing import IntentProbe
 from rosaos_reachy.emotions import MoveLibrary
 from rosaos_reachy.plugin import SPEC

@@ -8,7 +8,7 @@ from typing import Any
 import pytest
 import yaml
 
-from rosaos.models.intents_file import IntentsFile
+from rosaos.intents.grammar.intents_file import IntentsFile
 from rosaos.testing import IntentProbe
 from rosaos_ros.plugin import SPEC
 

@@ -6,7 +6,7 @@ from typing import Any
 
 import pytest
 
-from rosaos.models.intents_file import IntentsFile
+from rosaos.intents.grammar.intents_file import IntentsFile
 from rosaos.testing import IntentProbe
 from rosaos_spotify.catalog import KNOWN_GENRES
 from rosaos_spotify.plugin import SPEC

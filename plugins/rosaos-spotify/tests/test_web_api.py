@@ -7,6 +7,7 @@ Spotify's answers (Web API reference, 2025); the error bodies are the ones Spoti
 
 from __future__ import annotations
 
+import asyncio
 import json
 import time
 from collections.abc import Iterator
@@ -18,8 +19,9 @@ import responses
 from fastmcp import Client
 from responses import matchers
 
-from rosaos.drivers import DeviceError
+from rosaos.drivers import DeviceContext, DeviceError, NoticeBoard
 from rosaos_spotify.auth import SCOPES, TokenCache, token_path
+from rosaos_spotify.plugin import SPEC
 from rosaos_spotify.server import build_server
 from rosaos_spotify.settings import SpotifySettings
 from rosaos_spotify.web_api import WebApiBackend, build_web_backend
@@ -393,3 +395,70 @@ async def test_a_skip_is_not_retried_so_it_cannot_skip_twice(
     with pytest.raises(DeviceError, match=r"Spotify is having trouble \(HTTP 502\)"):
         await spotify.next_track()
     assert skip.call_count == 1
+
+
+# The watcher: the end of the music is a notice, a pause is not
+
+
+def stopped(progress_ms: int) -> dict[str, Any]:
+    return playing(is_playing=False, progress_ms=progress_ms)
+
+
+def notices_of(backend: WebApiBackend, tmp_path: Path) -> NoticeBoard:
+    """The board the backend's notices go to, as the hosting layer wires it."""
+    board = NoticeBoard("spotify", "spotify", SPEC.notices)
+    ctx = DeviceContext("spotify", "Speaker", SpotifySettings(), "real", {}, tmp_path, notices=board)
+    backend.ending.notify = ctx.notify
+    return board
+
+
+async def watch_through(tmp_path: Path, answers: list[dict[str, Any] | None]) -> list[str]:
+    """Let the watcher read ``answers`` in turn (None: nothing active); the notices it posted."""
+    save_login(tmp_path)
+    backend = backend_for(tmp_path)
+    board = notices_of(backend, tmp_path)
+    with responses.RequestsMock() as api:
+        for answer in answers:
+            api.get(PLAYER, status=204) if answer is None else api.get(PLAYER, json=answer)
+        for _ in answers:
+            await backend.watch()
+    return [notice.name for notice in board.after(0).notices]
+
+
+async def test_the_watcher_tells_the_end_of_the_music_from_a_pause(tmp_path: Path) -> None:
+    assert await watch_through(tmp_path / "end", [playing(), stopped(0)]) == ["playback_ended"]
+    assert await watch_through(tmp_path / "gone", [playing(), None]) == ["playback_ended"]
+    assert await watch_through(tmp_path / "paused", [playing(), stopped(93_000)]) == []
+    assert await watch_through(tmp_path / "idle", [stopped(0), stopped(0)]) == []
+
+
+async def test_our_own_pause_is_not_the_music_ending(
+    api: responses.RequestsMock, spotify: WebApiBackend, tmp_path: Path
+) -> None:
+    board = notices_of(spotify, tmp_path)
+    api.get(PLAYER, json=playing())
+    await spotify.watch()
+    api.replace(responses.GET, PLAYER, json=stopped(0))  # paused right at the start of a track
+    api.put(f"{PLAYER}/pause", status=204)
+    await spotify.pause()
+    await spotify.watch()
+    assert board.after(0).notices == []
+
+
+async def test_the_watcher_runs_from_start_to_close(tmp_path: Path) -> None:
+    save_login(tmp_path)
+    backend = backend_for(tmp_path, watch_seconds=0.05)
+    board = notices_of(backend, tmp_path)
+    with responses.RequestsMock(assert_all_requests_are_fired=False) as api:
+        api.get(PLAYER, json=playing())
+        api.get(PLAYER, json=stopped(0))
+        await backend.start()
+        try:
+            for _ in range(100):
+                if board.after(0).notices:
+                    break
+                await asyncio.sleep(0.05)
+        finally:
+            await backend.close()
+    [notice] = board.after(0).notices
+    assert notice.data == {"track": "Clair de Lune", "artist": "Claude Debussy"}

@@ -25,8 +25,9 @@ from kasa.smart import SmartDevice
 
 from rosaos.drivers import DeviceContext, DeviceError
 from rosaos_tapo.backend import TapoBackend, device_error
-from rosaos_tapo.plugin import TapoSettings, real_backend
+from rosaos_tapo.plugin import real_backend
 from rosaos_tapo.server import build_server
+from rosaos_tapo.settings import TapoSettings
 from rosaos_tapo.simulator import SimState, SimulatedL530, SimulatedL530Transport, simulated_config
 
 OWNER = ("owner@example.com", "right password")

@@ -6,9 +6,9 @@ from typing import Any
 
 import pytest
 
-from rosaos.models.intents_file import IntentsFile
-from rosaos.models.matching import IntentMatcher
-from rosaos.models.sources import DeviceIntentSource
+from rosaos.intents.grammar.intents_file import IntentsFile
+from rosaos.intents.grammar.vocabulary import DeviceVocabulary
+from rosaos.intents.understanding.matching import IntentMatcher
 from rosaos.testing import IntentProbe
 from rosaos_tapo.colors import NAMED_COLORS
 from rosaos_tapo.plugin import SPEC
@@ -144,10 +144,10 @@ def test_ha_sentences_reach_the_bulbs_through_the_engine(
 ) -> None:
     assert SPEC.intents is not None
     world = [
-        DeviceIntentSource(
+        DeviceVocabulary(
             "kitchen_light", "tapo", "Ceiling light in the kitchen", area="cuisine", intents=SPEC.intents
         ),
-        DeviceIntentSource(
+        DeviceVocabulary(
             "bedroom_light", "tapo", "Bedside light in the bedroom", area="chambre", intents=SPEC.intents
         ),
     ]

@@ -9,7 +9,8 @@ import pytest
 from pydantic import ValidationError
 
 from rosaos.plugins import load_drivers
-from rosaos_tapo.plugin import SPEC, TapoSettings, leave_light_as_is
+from rosaos_tapo.plugin import SPEC, leave_light_as_is
+from rosaos_tapo.settings import TapoSettings
 
 
 def test_entry_point_registers_the_tapo_driver() -> None:

@@ -8,7 +8,8 @@ from typing import Any
 import pytest
 
 from rosaos.drivers import DeviceContext, DeviceError, NoticeBoard
-from rosaos_tapo.plugin import SPEC, TapoSettings, sim_backend
+from rosaos_tapo.plugin import SPEC, sim_backend
+from rosaos_tapo.settings import TapoSettings
 
 
 async def test_a_bulb_that_goes_away_and_comes_back_is_two_notices(tmp_path: Path, monkeypatch: Any) -> None:

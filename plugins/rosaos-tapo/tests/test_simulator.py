@@ -12,7 +12,8 @@ from kasa.protocols import SmartProtocol
 from kasa.smart import SmartDevice
 
 from rosaos.drivers import DeviceContext, DeviceError
-from rosaos_tapo.plugin import TapoSettings, sim_backend
+from rosaos_tapo.plugin import sim_backend
+from rosaos_tapo.settings import TapoSettings
 from rosaos_tapo.simulator import (
     SimState,
     SimulatedL530,

@@ -21,7 +21,7 @@ import pytest
 from devices_support import ROSAOS, closed_port_url, free_port, requires_tapo, rosaos, write_config
 
 from rosaos.auth import token_path
-from rosaos.devices.commands import check_device, list_devices, serve_device_command
+from rosaos.cli.device_commands import check_device, list_devices, serve_device_command
 from rosaos.plugins import load_drivers
 
 pytestmark = requires_tapo

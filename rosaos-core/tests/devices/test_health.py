@@ -24,16 +24,16 @@ from devices_support import ROSAOS, eventually, write_config
 from rich.console import Console
 
 from rosaos.auth import load_or_create_token
+from rosaos.cli.device_commands import check_device, list_devices, serve_device_command
 from rosaos.config import load_config
-from rosaos.devices.commands import check_device, list_devices, serve_device_command
 from rosaos.devices.progress import CheckProgress
-from rosaos.devices.runtime import (
+from rosaos.devices.run_files import (
     DeviceStatus,
-    RuntimeEntry,
-    RuntimeFile,
+    RunFile,
+    RunFileEntry,
     devices_not_ready,
     now,
-    runtime_file_path,
+    run_file_path,
     write_atomic,
 )
 from rosaos.devices.serve import open_device, serve_http
@@ -74,10 +74,10 @@ def listed(capsys: pytest.CaptureFixture[str], config: Path, **options: Any) -> 
 def rosaos_up_is_starting(
     data_dir: Path, name: str, status: DeviceStatus = "starting", error: str | None = None
 ) -> None:
-    """Write the runtime file a running ``rosaos up`` (this test's process) has while starting ``name``."""
-    entry = RuntimeEntry(url=None, pid=None, status=status, since=now(), error=error)
-    runtime = RuntimeFile(supervisor_pid=os.getpid(), devices={name: entry})
-    write_atomic(runtime_file_path(data_dir), runtime.model_dump_json())
+    """Write the run file a running ``rosaos up`` (this test's process) has while starting ``name``."""
+    entry = RunFileEntry(url=None, pid=None, status=status, since=now(), error=error)
+    runtime = RunFile(supervisor_pid=os.getpid(), devices={name: entry})
+    write_atomic(run_file_path(data_dir), runtime.model_dump_json())
 
 
 # --- start-up and answer budgets ------------------------------------------------------------------
@@ -190,9 +190,9 @@ async def test_check_answers_once_rosaos_up_has_started_it(
 
         async def rosaos_up_finishes_starting() -> None:
             await asyncio.sleep(0.5)
-            entry = RuntimeEntry(url=served.url, pid=os.getpid(), status="healthy", since=now())
-            runtime = RuntimeFile(supervisor_pid=os.getpid(), devices={"lamp": entry})
-            write_atomic(runtime_file_path(data_dir), runtime.model_dump_json())
+            entry = RunFileEntry(url=served.url, pid=os.getpid(), status="healthy", since=now())
+            runtime = RunFile(supervisor_pid=os.getpid(), devices={"lamp": entry})
+            write_atomic(run_file_path(data_dir), runtime.model_dump_json())
 
         finishing = asyncio.create_task(rosaos_up_finishes_starting())
         code = await asyncio.to_thread(check_device, "lamp", config, True, 5.0, 30.0)

@@ -13,7 +13,7 @@ import pytest
 from devices_support import drivers_for_tests, eventually, pid_alive, plugin, requires_tapo, world_of
 
 from rosaos.devices.client import DeviceClient
-from rosaos.devices.runtime import DeviceStatus, runtime_file_path
+from rosaos.devices.run_files import DeviceStatus, run_file_path
 from rosaos.devices.supervisor import DeviceSupervisor
 from rosaos.plugins import load_drivers
 
@@ -24,7 +24,7 @@ pytestmark = [pytest.mark.asyncio, requires_tapo]
 
 
 def pids(data_dir: Path) -> dict[str, int | None]:
-    devices = json.loads(runtime_file_path(data_dir).read_text())["devices"]
+    devices = json.loads(run_file_path(data_dir).read_text())["devices"]
     return {name: entry["pid"] for name, entry in devices.items()}
 
 

@@ -1,4 +1,4 @@
-"""DeviceSupervisor: one host process per local instance, health checks, restarts, the runtime file."""
+"""DeviceSupervisor: one host process per local instance, health checks, restarts, the run file."""
 
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ from devices_support import (
 )
 
 from rosaos.devices.client import DeviceClient
-from rosaos.devices.runtime import runtime_file_path, served_devices
+from rosaos.devices.run_files import run_file_path, served_devices
 from rosaos.devices.supervisor import DeviceSupervisor
 from rosaos.devices.world import World
 from rosaos.drivers import DeviceError
@@ -50,7 +50,7 @@ async def shared(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Devi
 
 
 def runtime(data_dir: Path) -> dict[str, Any]:
-    devices = json.loads(runtime_file_path(data_dir).read_text())["devices"]
+    devices = json.loads(run_file_path(data_dir).read_text())["devices"]
     assert isinstance(devices, dict)
     return devices
 
@@ -84,15 +84,15 @@ async def test_safe_stop_reaches_every_served_instance(shared: DeviceSupervisor)
 
 
 async def test_a_second_supervisor_on_the_same_data_dir_is_refused(data_dir: Path) -> None:
-    # A runtime file left by a live supervisor (here: our parent process stands in for it).
-    path = runtime_file_path(data_dir)
+    # A run file left by a live supervisor (here: our parent process stands in for it).
+    path = run_file_path(data_dir)
     path.parent.mkdir(parents=True)
     path.write_text(json.dumps({"supervisor_pid": os.getppid(), "devices": {}}))
     world = world_of(drivers_for_tests(), data_dir, lamp={"driver": "tiny"})
     with pytest.raises(DeviceError, match="already served by another rosaOS"):
         async with DeviceSupervisor(world, data_dir, TOKEN):
             pass
-    assert path.exists(), "the other supervisor's runtime file must be left alone"
+    assert path.exists(), "the other supervisor's run file must be left alone"
 
 
 @requires_tapo
@@ -101,7 +101,7 @@ async def test_stop_terminates_the_hosts_and_removes_the_runtime_file(data_dir: 
         pid = runtime(data_dir)["kitchen_light"]["pid"]
         assert pid_alive(pid)
     assert not pid_alive(pid)
-    assert not runtime_file_path(data_dir).exists()
+    assert not run_file_path(data_dir).exists()
     assert supervisor.directory()["kitchen_light"].status == "stopped"
 
 

@@ -6,13 +6,13 @@ from pathlib import Path
 
 from devices_support import drivers_for_tests, world_of
 
-from rosaos.models.matching import IntentMatcher
-from rosaos.models.sources import intent_sources
+from rosaos.intents.grammar.vocabulary import device_vocabularies
+from rosaos.intents.understanding.matching import IntentMatcher
 
 
 def test_a_placeholder_instance_is_not_offered_by_the_offline_engine(data_dir: Path) -> None:
     world = world_of(drivers_for_tests(), data_dir, lamp={"driver": "tiny"}, robot={"driver": "someday"})
-    assert [source.name for source in intent_sources(world)] == ["lamp"]
-    reply = IntentMatcher(intent_sources(world), "en").match("tell the robot to fly").reply
+    assert [source.name for source in device_vocabularies(world)] == ["lamp"]
+    reply = IntentMatcher(device_vocabularies(world), "en").match("tell the robot to fly").reply
     assert "lamp" in reply
     assert "robot" not in reply.split("control:", 1)[1]

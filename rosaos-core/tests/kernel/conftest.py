@@ -19,7 +19,7 @@ import uvicorn
 from fastapi import FastAPI
 
 from rosaos.kernel.activity import ActivityLog
-from rosaos.kernel.api import create_app
+from rosaos.kernel.api.app import create_app
 from rosaos.kernel.events import EventStore
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream

@@ -1,6 +1,6 @@
 """Helpers for the kernel tests: the token, a small in-test runtime, and a polling wait.
 
-``TestRuntime`` implements :class:`rosaos.kernel.api.KernelRuntime` with a fixed list of processes
+``TestRuntime`` implements :class:`rosaos.kernel.api.schemas.KernelRuntime` with a fixed list of processes
 and devices; integration tests with the real process manager and device supervisor live elsewhere.
 """
 
@@ -13,10 +13,10 @@ from datetime import UTC, datetime
 from typing import Any
 
 from rosaos.kernel.activity import ActivityLog
-from rosaos.kernel.api_types import DeviceView, EmergencyStopReport, EmergencyStopState
+from rosaos.kernel.api.login_codes import LoginCodes
+from rosaos.kernel.api.schemas import DeviceView, EmergencyStopReport, EmergencyStopState
 from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.events import EventStore
-from rosaos.kernel.login import LoginCodes
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
 from rosaos.processes.jobs import WorkerCallback

@@ -13,9 +13,9 @@ import pytest
 from fastapi import FastAPI
 from kernel_support import AUTH, TOKEN, TestRuntime, kitchen_light
 
+from rosaos.cli.log_command import log_command, parse_since
 from rosaos.kernel.activity import ActivityLog
-from rosaos.kernel.activity_command import log_command, parse_since
-from rosaos.kernel.api import create_app
+from rosaos.kernel.api.app import create_app
 from rosaos.kernel.events import Event, EventStore
 from rosaos.kernel.loop import render_event
 from rosaos.kernel.updates import UpdateStream
@@ -34,7 +34,7 @@ class ActivityRuntime(TestRuntime):
     activity: ActivityLog
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
-        await self.activity.record(event_id, callback.worker_id, callback.receipts)
+        await self.activity.record(event_id, callback.process_id, callback.receipts)
 
 
 @pytest.fixture
@@ -48,14 +48,14 @@ async def activity_client(store: EventStore, updates: UpdateStream) -> Any:
         yield http
 
 
-def callback_body(worker_id: int, receipts: list[Receipt]) -> dict[str, Any]:
-    payload = {"worker_id": worker_id, "status": "ok", "output": "done"}
+def callback_body(process_id: int, receipts: list[Receipt]) -> dict[str, Any]:
+    payload = {"process_id": process_id, "status": "ok", "output": "done"}
     payload["receipts"] = [r.model_dump(mode="json") for r in receipts]  # type: ignore[assignment]
     return {
         "kind": "worker_callback",
         "source": "worker",
         "payload": payload,
-        "idempotency_key": f"w{worker_id}",
+        "idempotency_key": f"w{process_id}",
     }
 
 
@@ -105,7 +105,7 @@ def test_the_kernel_model_sees_the_receipts_and_the_engine_still_reads_the_outpu
         duration=0.01,
         safety=SafetyDecision(decision="refused", rule="velocity limit"),
     )
-    callback = WorkerCallback(worker_id=7, status="ok", output="I could not drive", receipts=[refused])
+    callback = WorkerCallback(process_id=7, status="ok", output="I could not drive", receipts=[refused])
     text = render_event(
         Event(id=1, time=datetime.now(UTC), kind="worker_callback", source="t", payload=callback)
     )

@@ -118,7 +118,7 @@ async def test_loopback_host_names_pass(client: httpx.AsyncClient, host: str) ->
 
 
 async def test_a_host_allowed_in_config_passes(runtime: TestRuntime) -> None:
-    from rosaos.kernel.api import create_app
+    from rosaos.kernel.api.app import create_app
 
     app = create_app(runtime, allowed_hosts=["desk.local"])
     async with httpx.AsyncClient(

@@ -82,7 +82,7 @@ async def test_event_accepts_each_kind(client: httpx.AsyncClient, store: EventSt
     bodies: list[dict[str, Any]] = [
         {"kind": "user_said", "payload": {"text": "hi"}},
         {"kind": "user_typed", "payload": {"text": "hi"}},
-        {"kind": "worker_callback", "source": "worker", "payload": {"worker_id": 3, "status": "ok"}},
+        {"kind": "worker_callback", "source": "worker", "payload": {"process_id": 3, "status": "ok"}},
         {"kind": "device_notice", "source": "vacuum", "payload": {"device": "vacuum", "message": "stuck"}},
         {"kind": "error", "source": "kernel", "payload": {"message": "boom", "source_event": 1}},
     ]
@@ -102,14 +102,24 @@ async def test_a_worker_callback_is_handed_to_the_runtime_after_the_commit(
     body = {
         "kind": "worker_callback",
         "source": "worker",
-        "payload": {"worker_id": 7, "status": "ok", "output": "done"},
+        "payload": {"process_id": 7, "status": "ok", "output": "done"},
         "idempotency_key": "worker-7",
     }
     first = await client.post("/event", json=body, headers=AUTH)
     await client.post("/event", json=body, headers=AUTH)  # a retry: the hook is idempotent, so called again
     event_id = first.json()["id"]
-    assert runtime.callbacks == [(event_id, WorkerCallback(worker_id=7, status="ok", output="done"))] * 2
+    assert runtime.callbacks == [(event_id, WorkerCallback(process_id=7, status="ok", output="done"))] * 2
     assert await store.get(event_id) is not None
+
+
+async def test_a_worker_callback_with_the_old_worker_id_key_is_still_understood(
+    client: httpx.AsyncClient, runtime: TestRuntime
+) -> None:
+    """``worker_id`` was the field's name before it was renamed ``process_id``; old scripts post it."""
+    body = {"kind": "worker_callback", "payload": {"worker_id": 9, "status": "ok"}}
+    response = await client.post("/event", json=body, headers=AUTH)
+    assert response.status_code == 202, response.text
+    assert runtime.callbacks == [(response.json()["id"], WorkerCallback(process_id=9, status="ok"))]
 
 
 async def test_an_accepted_event_is_announced_on_the_updates_stream(client: httpx.AsyncClient) -> None:
@@ -133,8 +143,8 @@ async def test_an_accepted_event_is_announced_on_the_updates_stream(client: http
         ("/event", {"kind": "telepathy", "payload": {}}, "does not match any of the expected tags"),
         ("/event", {"payload": {"text": "hi"}}, "Unable to extract tag using discriminator 'kind'"),
         ("/event", {"kind": "user_typed", "payload": {"text": ""}}, "body.user_typed.payload.text"),
-        ("/event", {"kind": "worker_callback", "payload": {"worker_id": 0, "status": "ok"}}, "worker_id"),
-        ("/event", {"kind": "worker_callback", "payload": {"worker_id": 1, "status": "meh"}}, "status"),
+        ("/event", {"kind": "worker_callback", "payload": {"process_id": 0, "status": "ok"}}, "process_id"),
+        ("/event", {"kind": "worker_callback", "payload": {"process_id": 1, "status": "meh"}}, "status"),
         ("/event", {"kind": "device_notice", "payload": {"message": "hi"}}, "device: Field required"),
     ],
 )
@@ -184,7 +194,7 @@ async def test_a_failing_callback_hook_still_answers_202_and_reports_the_error(
         raise RuntimeError("lease table unavailable")
 
     runtime.worker_callback_recorded = broken  # type: ignore[method-assign]
-    body = {"kind": "worker_callback", "payload": {"worker_id": 4, "status": "crashed"}}
+    body = {"kind": "worker_callback", "payload": {"process_id": 4, "status": "crashed"}}
     response = await client.post("/event", json=body, headers=AUTH)
     assert response.status_code == 202
     assert await store.get(response.json()["id"]) is not None

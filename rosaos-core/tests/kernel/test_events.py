@@ -156,7 +156,7 @@ async def test_wait_for_pending_returns_at_once_when_events_are_waiting(store: E
 
 
 async def test_events_round_trip_with_their_typed_payloads(store: EventStore) -> None:
-    callback = WorkerCallback(worker_id=7, status="ok", output="the light is on", tool_calls=1)
+    callback = WorkerCallback(process_id=7, status="ok", output="the light is on", tool_calls=1)
     notice = DeviceNotice(device="vacuum", message="bumped into a chair", data={"x": 1.5})
     ids = [
         (

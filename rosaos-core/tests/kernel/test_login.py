@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from rosaos.kernel.login import CODE_LIFETIME, MAX_LIVE_CODES, LoginCodes, login_url
+from rosaos.kernel.api.login_codes import CODE_LIFETIME, MAX_LIVE_CODES, LoginCodes, login_url
 
 
 class Clock:

@@ -12,7 +12,7 @@ import httpx
 import pytest
 from kernel_support import TOKEN
 
-from rosaos.kernel.open_command import open_command
+from rosaos.cli.open_command import open_command
 
 
 @pytest.fixture

@@ -94,7 +94,7 @@ async def test_the_timeline_shows_calls_and_asks_yes_or_no(
         "process_ended",
         "process 4 ended: error",
         {
-            "worker_id": 4,
+            "process_id": 4,
             "status": "error",
             "output": "",
             "error": "set_brightness failed",

@@ -1,30 +1,12 @@
-"""Fixtures for the local-intent engine tests."""
+"""Fixtures for the offline model adapters' tests: they share the engine tests' worlds and servers."""
 
 from __future__ import annotations
 
 import sys
 from pathlib import Path
 
-import pytest
-
-# Test modules import models_support from this folder (pytest's importlib mode does not put it
-# on sys.path).
-HERE = str(Path(__file__).parent)
-if HERE not in sys.path:
-    sys.path.insert(0, HERE)
-
-from models_support import home_world  # noqa: E402
-
-from rosaos.models.matching import IntentMatcher  # noqa: E402
-
-
-@pytest.fixture(scope="session")
-def matcher() -> IntentMatcher:
-    """The English matcher of the test home world (built once: building compiles grammars)."""
-    return IntentMatcher(home_world(), "en")
-
-
-@pytest.fixture(scope="session")
-def matcher_fr() -> IntentMatcher:
-    """The same world, in French."""
-    return IntentMatcher(home_world(), "fr")
+# The adapters' tests import intents_support from tests/intents (pytest's importlib mode does
+# not put it on sys.path).
+INTENTS_TESTS = str(Path(__file__).parent.parent / "intents")
+if INTENTS_TESTS not in sys.path:
+    sys.path.insert(0, INTENTS_TESTS)

@@ -8,13 +8,13 @@ from typing import Any
 import pytest
 from fastmcp import FastMCP
 from fastmcp.exceptions import ToolError
-from models_support import home_world
+from intents_support import home_world
 from pydantic_ai import Agent
 from pydantic_ai.mcp import MCPToolset
 from pydantic_ai.messages import ModelMessage, ModelResponse, ToolCallPart
 
+from rosaos.intents.planning.plan import decode_plan
 from rosaos.models.kernel_model import LocalIntentModel
-from rosaos.models.plan import decode_plan
 
 
 @dataclass

@@ -6,13 +6,13 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from models_support import build_device_server
+from intents_support import build_device_server
 from pydantic_ai import Agent
 from pydantic_ai.mcp import MCPToolset
 from pydantic_ai.messages import ToolCallPart
 from pydantic_ai.toolsets import AbstractToolset
 
-from rosaos.models.plan import Plan, PlanAnswer, PlanStep, encode_task
+from rosaos.intents.planning.plan import Plan, PlanAnswer, PlanStep, encode_task
 from rosaos.models.process_model import NO_PLAN_REPLY, LocalPlanModel, resolve_tool
 from rosaos.processes.jobs import GrantedDevice
 from rosaos.processes.prompts import DEFAULT_PROCESS_PROMPT, process_system_prompt
@@ -188,8 +188,8 @@ async def test_a_plan_from_the_matcher_changes_a_real_tapo_bulb(tmp_path: Path) 
     from rosaos.config import DeviceConfig, RosaosConfig
     from rosaos.devices.serve import open_device
     from rosaos.devices.world import build_world
-    from rosaos.models.matching import IntentMatcher
-    from rosaos.models.sources import intent_sources
+    from rosaos.intents.grammar.vocabulary import device_vocabularies
+    from rosaos.intents.understanding.matching import IntentMatcher
     from rosaos.plugins import load_drivers
 
     config = RosaosConfig(
@@ -202,7 +202,9 @@ async def test_a_plan_from_the_matcher_changes_a_real_tapo_bulb(tmp_path: Path) 
         }
     )
     world = build_world(config, load_drivers())
-    [process] = IntentMatcher(intent_sources(world)).match("Set the kitchen light to 30 percent").processes
+    [process] = (
+        IntentMatcher(device_vocabularies(world)).match("Set the kitchen light to 30 percent").processes
+    )
     async with open_device(world.get("kitchen_light"), tmp_path) as device:
         output, calls = await run_process(process.task, {"kitchen_light": ("tapo", device.server)})
         state = await device.backend.state()  # type: ignore[attr-defined]

@@ -7,7 +7,7 @@ from typing import Any
 
 import pytest
 from fastmcp import FastMCP
-from models_support import build_device_server, home_world
+from intents_support import build_device_server, home_world
 from pydantic_ai import Agent
 from pydantic_ai.mcp import MCPToolset
 from pydantic_ai.messages import ModelMessage, ModelResponse, TextPart

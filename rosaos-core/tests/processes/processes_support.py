@@ -141,7 +141,7 @@ class KernelStandIn:
     bodies: list[dict[str, Any]] = field(default_factory=list)
 
     def callbacks_for(self, process_id: int) -> list[dict[str, Any]]:
-        return [body for body in self.bodies if body["payload"]["worker_id"] == process_id]
+        return [body for body in self.bodies if body["payload"]["process_id"] == process_id]
 
 
 def make_job(
@@ -175,7 +175,7 @@ class Endings:
     reports: dict[int, list[tuple[WorkerCallback, bool]]] = field(default_factory=dict)
 
     async def record(self, callback: WorkerCallback, delivered: bool) -> None:
-        self.reports.setdefault(callback.worker_id, []).append((callback, delivered))
+        self.reports.setdefault(callback.process_id, []).append((callback, delivered))
 
     async def wait(self, process_id: int) -> tuple[WorkerCallback, bool]:
         """The one report for ``process_id``, once it arrives."""

@@ -147,12 +147,12 @@ async def test_recorded_callback_ends_the_process_and_the_later_report_changes_n
     manager: ProcessManager, endings: Endings
 ) -> None:
     info = await manager.launch("set the lamp level", ["lamp"])
-    manager.record_callback(WorkerCallback(worker_id=info.id, status="ok", output="recorded by the kernel"))
+    manager.record_callback(WorkerCallback(process_id=info.id, status="ok", output="recorded by the kernel"))
     recorded = manager.get(info.id)
     assert recorded.state == "ok"
     assert manager.leases.held_by(info.id) == []
     await endings.wait(info.id)
-    manager.record_callback(WorkerCallback(worker_id=info.id, status="error"))
+    manager.record_callback(WorkerCallback(process_id=info.id, status="error"))
     assert manager.get(info.id) == recorded
 
 

@@ -16,8 +16,8 @@ from processes_support import (
     worker_env,
 )
 
+from rosaos.cli.process_commands import progress_text
 from rosaos.devices.serve import serve_http
-from rosaos.kernel.commands import progress_text
 from rosaos.processes.manager import ProcessManager
 from rosaos.processes.pool import WorkerPool
 

@@ -13,6 +13,7 @@ import pytest
 from processes_support import TOKEN, KernelStandIn, LoopbackDevice, build_test_device, make_job, model_spec
 
 from rosaos.devices.serve import serve_http
+from rosaos.intents.planning.plan import Plan, PlanStep, encode_task
 from rosaos.models.select import ModelSpec
 from rosaos.processes.jobs import WorkerCallback
 from rosaos.processes.worker import SESSIONS, deliver_callback, run_job
@@ -130,7 +131,7 @@ async def test_model_that_cannot_be_imported_is_an_error(kernel: KernelStandIn) 
 
 async def test_callback_is_posted_as_a_worker_callback_event(kernel: KernelStandIn) -> None:
     job = make_job(kernel, "unused")
-    callback = WorkerCallback(worker_id=job.process_id, status="ok", output="done", task=job.task)
+    callback = WorkerCallback(process_id=job.process_id, status="ok", output="done", task=job.task)
     assert await deliver_callback(job, callback)
     assert kernel.callbacks_for(job.process_id) == [
         {
@@ -146,12 +147,12 @@ async def test_callback_to_an_unreachable_kernel_is_not_delivered(
     kernel: KernelStandIn, unreachable_url: str
 ) -> None:
     job = make_job(kernel, "unused", callback_url=unreachable_url)
-    assert not await deliver_callback(job, WorkerCallback(worker_id=job.process_id, status="ok"))
+    assert not await deliver_callback(job, WorkerCallback(process_id=job.process_id, status="ok"))
 
 
 async def test_callback_with_a_wrong_token_is_not_delivered(kernel: KernelStandIn) -> None:
     job = make_job(kernel, "unused").model_copy(update={"callback_token": "wrong"})
-    assert not await deliver_callback(job, WorkerCallback(worker_id=job.process_id, status="ok"))
+    assert not await deliver_callback(job, WorkerCallback(process_id=job.process_id, status="ok"))
     assert kernel.callbacks_for(job.process_id) == []
 
 
@@ -175,3 +176,63 @@ async def test_a_device_restarted_at_the_same_url_gets_a_fresh_session(kernel: K
     async with serve_http(build_test_device("heater", state), TOKEN, port=port):
         callback = await run_job(make_job(kernel, "sets_level", [heater]))
     assert (callback.status, state["level"]) == ("ok", 42)
+
+
+# Planned tasks run without an agent (processes/plan_runner.py)
+
+
+def planned_job(
+    kernel: KernelStandIn, devices: list[LoopbackDevice], *steps: tuple[str, str, dict[str, Any]]
+) -> Any:
+    plan = Plan(
+        steps=[PlanStep(device=device, tool=tool, args=args) for device, tool, args in steps],
+        reply="Done: {result}",
+        failure="Sorry, that failed: {error}",
+    )
+    job = make_job(kernel, "unused", devices)
+    return job.model_copy(update={"model": ModelSpec(), "task": encode_task("Set the levels.", plan)})
+
+
+async def test_a_planned_task_calls_its_tools_directly_with_receipts(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    lamp, fan = devices["lamp"], devices["fan"]
+    lamp.state["level"] = fan.state["level"] = 0
+    # 250 is out of range: clamped to the schema's maximum, as the plan model always did.
+    job = planned_job(
+        kernel, [lamp, fan], ("lamp", "set_level", {"level": 250}), ("fan", "set_level", {"level": 7})
+    )
+    callback = await run_job(job)
+    assert (callback.status, callback.output) == ("ok", "Done: fan level is 7")
+    assert (lamp.state["level"], fan.state["level"]) == (100, 7)
+    assert (callback.model_requests, callback.tool_calls) == (0, 2)
+    assert [(r.device, r.tool, r.arguments, r.ok) for r in callback.receipts] == [
+        ("lamp", "set_level", {"level": 100}, True),
+        ("fan", "set_level", {"level": 7}, True),
+    ]
+
+
+async def test_a_planned_step_that_fails_stops_the_plan_with_the_device_error(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    lamp, fan = devices["lamp"], devices["fan"]
+    lamp.state.update(level=0, jammed=True)
+    fan.state["level"] = 0
+    try:
+        job = planned_job(
+            kernel, [lamp, fan], ("lamp", "set_level", {"level": 5}), ("fan", "set_level", {"level": 9})
+        )
+        callback = await run_job(job)
+    finally:
+        lamp.state.pop("jammed")
+    assert callback.output == "Sorry, that failed: lamp is jammed; free it and try again"
+    assert callback.status == "error"
+    assert fan.state["level"] == 0  # the plan stopped at the failed step
+
+
+async def test_a_planned_step_naming_a_missing_tool_says_which_tools_exist(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    callback = await run_job(planned_job(kernel, [devices["lamp"]], ("lamp", "explode", {})))
+    assert (callback.output or "").startswith("Sorry, that failed:")
+    assert "get_state" in (callback.output or "") and "set_level" in (callback.output or "")

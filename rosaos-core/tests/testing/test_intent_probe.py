@@ -8,8 +8,8 @@ from typing import Any
 import pytest
 
 from rosaos.drivers import DriverSpec
-from rosaos.models.matching import IntentMatcher
-from rosaos.models.sources import DeviceIntentSource
+from rosaos.intents.grammar.vocabulary import DeviceVocabulary
+from rosaos.intents.understanding.matching import IntentMatcher
 from rosaos.testing import IntentMatch, IntentProbe
 
 INTENTS = """
@@ -80,7 +80,7 @@ def probe(intents: Path) -> IntentProbe:
     return IntentProbe(intents, devices=DEVICES)
 
 
-def engine_call(world: list[DeviceIntentSource], sentence: str) -> tuple[str, str, dict[str, Any]] | None:
+def engine_call(world: list[DeviceVocabulary], sentence: str) -> tuple[str, str, dict[str, Any]] | None:
     """The one tool call the real engine plans for ``sentence``, or None."""
     steps = [
         step for process in IntentMatcher(world).match(sentence).processes for step in process.plan.steps
@@ -152,7 +152,7 @@ def test_the_probe_agrees_with_the_engine(intents: Path, probe: IntentProbe, sen
     for spoken, instance in DEVICES.items():
         aliases.setdefault(instance, []).append(spoken)
     world = [
-        DeviceIntentSource(name, "lamp", aliases=tuple(names), intents=intents)
+        DeviceVocabulary(name, "lamp", aliases=tuple(names), intents=intents)
         for name, names in aliases.items()
     ]
     assert probe.match(sentence) == engine_call(world, sentence)

@@ -1,7 +1,8 @@
 """The MCP server of one Reachy Mini: state, speech, and the motion and vision tools.
 
-The tools are grouped by role: :mod:`rosaos_reachy.motion_tools` (head, body, antennas,
-emotions, wake and sleep) and :mod:`rosaos_reachy.vision_tools` (camera, faces, vision model).
+The tools are grouped by role: :mod:`rosaos_reachy.tools.motion` (head, body, antennas,
+emotions, wake and sleep), :mod:`rosaos_reachy.tools.companion` (listening, face following) and
+:mod:`rosaos_reachy.tools.vision` (camera, faces, vision model).
 This module builds the server and holds ``get_state`` and ``speak``.
 """
 
@@ -15,10 +16,9 @@ from pydantic import Field
 from rosaos.drivers import DeviceContext
 from rosaos_reachy.annotations import ACT, READ_ONLY, SET
 from rosaos_reachy.backend import ReachyBackend
-from rosaos_reachy.motion_tools import register_companion_tools, register_motion_tools
 from rosaos_reachy.speech import SpeechReport, StopReport
 from rosaos_reachy.state import ReachyState
-from rosaos_reachy.vision_tools import register_vision_tools
+from rosaos_reachy.tools import companion, motion, vision
 
 SpokenText = Annotated[
     str,
@@ -61,7 +61,7 @@ def build_server(ctx: DeviceContext, backend: ReachyBackend) -> FastMCP:
         The voice front end calls it when the user talks over the robot."""
         return await backend.speaker.stop()
 
-    register_motion_tools(mcp, backend)
-    register_companion_tools(mcp, backend)
-    register_vision_tools(mcp, backend)
+    motion.register(mcp, backend)
+    companion.register(mcp, backend)
+    vision.register(mcp, backend)
     return mcp

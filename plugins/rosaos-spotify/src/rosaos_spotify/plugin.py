@@ -12,6 +12,7 @@ from rosaos import hookimpl
 from rosaos.cards import Card, flag, gauge, text
 from rosaos.drivers import DemoInstance, DeviceContext, DeviceError, DriverSpec, read_packaged_text
 from rosaos_spotify.backend import SpotifyBackend
+from rosaos_spotify.ending import NOTICES
 from rosaos_spotify.login import DASHBOARD, login_interactive
 from rosaos_spotify.server import build_server
 from rosaos_spotify.settings import SpotifySettings
@@ -35,12 +36,16 @@ def real_backend(ctx: DeviceContext) -> SpotifyBackend:
             f"with Redirect URI {settings.redirect_uri}, copy its Client ID there, then run "
             f"`rosaos devices login {ctx.instance}`"
         )
-    return build_web_backend(ctx.instance, settings, ctx.data_dir)
+    backend = build_web_backend(ctx.instance, settings, ctx.data_dir)
+    backend.ending.notify = ctx.notify
+    return backend
 
 
 def sim_backend(ctx: DeviceContext) -> SpotifyBackend:
     """The ``sim`` backend: an in-process player starting in the state ``ctx.sim`` gives."""
-    return SimBackend(ctx.instance, SimSettings.from_sim(ctx.instance, dict(ctx.sim)))
+    backend = SimBackend(ctx.instance, SimSettings.from_sim(ctx.instance, dict(ctx.sim)))
+    backend.ending.notify = ctx.notify
+    return backend
 
 
 def login(ctx: DeviceContext) -> int:
@@ -68,6 +73,7 @@ SPEC: DriverSpec[SpotifyBackend] = DriverSpec(
     backends={"sim": sim_backend, "real": real_backend},
     intents=Path(__file__).parent / "intents.yaml",
     safe_stop=pause_music,
+    notices=NOTICES,
     card=Card.of(
         text("track", label="Track"),
         text("artist", label="Artist"),

@@ -36,3 +36,8 @@ class SpotifySettings(DeviceSettings):
     timeout: Annotated[float, Field(gt=0, le=120)] = Field(
         default=10.0, description="Seconds one Spotify request may take."
     )
+    watch_seconds: Annotated[float, Field(ge=0, le=3600)] = Field(
+        default=10.0,
+        description="How often to read the player to notice the music ending by itself "
+        "(the playback_ended notice); 0 turns the watcher off.",
+    )

@@ -9,6 +9,9 @@ It behaves like the Spotify app in the ways a task can observe through ``get_sta
   as Spotify does. ``previous_track`` goes back within the context.
 - ``shuffle`` plays the context in a random order, seeded by the instance name so a run can be
   repeated. ``repeat = track`` keeps the song going until someone skips.
+- Time stands still unless ``track_seconds`` is set: then every track lasts that long, the player
+  moves on by itself, and when the last one ends (repeat off, ``autoplay = false``) it stops and
+  posts the ``playback_ended`` notice. The default keeps a benchmark's end state stable.
 
 The initial state comes from the instance's ``sim`` table: the ``get_state`` keys plus
 ``catalog`` (a list of ``{track, artist, album, genre}``; default :data:`DEFAULT_CATALOG`).
@@ -43,6 +46,10 @@ from rosaos_spotify.catalog import (
     normalize,
     suggestions,
 )
+from rosaos_spotify.ending import PeriodicTask, PlaybackEndNotifier
+
+CLOCK_PERIOD = 0.5
+"""Seconds between the simulated clock's ticks (shorter when tracks are shorter)."""
 
 
 class SimSettings(BaseModel):
@@ -58,6 +65,10 @@ class SimSettings(BaseModel):
     repeat: Repeat = "off"
     catalog: Annotated[list[CatalogEntry], Field(min_length=1)] | None = None
     """Tracks the simulated Spotify knows; the built-in :data:`DEFAULT_CATALOG` when omitted."""
+    track_seconds: Annotated[float, Field(gt=0, le=3600)] | None = None
+    """How long every track lasts; None (the default): time stands still and tracks never end."""
+    autoplay: bool = True
+    """After the last track of a context, keep going with similar music (as Spotify does by default)."""
 
     @classmethod
     def from_sim(cls, instance: str, sim: dict[str, Any]) -> SimSettings:
@@ -98,6 +109,10 @@ class SimPlayer:
         self.current: CatalogEntry | None = None
         self.from_queue = False
         """The current track came from the queue, not from the context at ``position``."""
+        self.autoplay = settings.autoplay
+        self.track_seconds = settings.track_seconds
+        self.progress = 0.0
+        """Seconds into the current track (only the clock of ``track_seconds`` moves it)."""
         if settings.track is not None:
             start = self._initial_track(instance, settings.track, settings.artist)
             # A track set by hand plays within the whole catalog, so "next" has somewhere to go.
@@ -165,6 +180,23 @@ class SimPlayer:
     def next_track(self) -> str:
         """Skip forward: the queue, then the context, then repeat or autoplay."""
         self._need_track("next")
+        return self._advance() or f"{self._now()} was the last track, so the music stopped."
+
+    def tick(self, seconds: float) -> bool:
+        """Let ``seconds`` of playing time pass; True when the music ran out (it stopped by itself)."""
+        if self.track_seconds is None or not self.is_playing or self.current is None:
+            return False
+        self.progress += seconds
+        while self.is_playing and self.progress >= self.track_seconds:
+            left = self.progress - self.track_seconds  # into the next track
+            if self.repeat != "track" and self._advance() is None:
+                return True
+            self.progress = left
+        return False
+
+    def _advance(self) -> str | None:
+        """Move to the next track and play it; None when nothing comes next (playback stops)."""
+        self.progress = 0.0
         if self.queued:
             self.current, self.from_queue = self.queued.popleft(), True
             self.is_playing = True
@@ -174,6 +206,9 @@ class SimPlayer:
             self.position += 1
         elif self.repeat == "context":
             self.position, note = 0, " (repeating from the start)"
+        elif not self.autoplay:
+            self.is_playing = False
+            return None
         elif (similar := self._autoplay()) is not None:
             self.context.append(similar)
             self.order.append(len(self.context) - 1)
@@ -197,7 +232,7 @@ class SimPlayer:
         else:
             note = " from the beginning (it is the first track here)"
         self.current, self.from_queue = self.context[self.order[self.position]], False
-        self.is_playing = True
+        self.is_playing, self.progress = True, 0.0
         return f"Playing {self._now()}{note}."
 
     def set_volume(self, volume: int) -> str:
@@ -263,7 +298,7 @@ class SimPlayer:
         self.order = self._play_order(len(tracks), start)
         self.position = self.order.index(start) if start is not None else 0
         self.current, self.from_queue = tracks[self.order[self.position]], False
-        self.is_playing = playing
+        self.is_playing, self.progress = playing, 0.0
 
     def _play_order(self, size: int, first: int | None) -> list[int]:
         if not self.shuffle:
@@ -311,6 +346,26 @@ class SimBackend(SpotifyBackend):
         self.instance = instance
         # Seeded by the instance name: a benchmark run that shuffles can be repeated exactly.
         self.player = SimPlayer(settings, random.Random(instance if seed is None else seed), instance)
+        self.ending = PlaybackEndNotifier(instance)
+        self._clock: PeriodicTask | None = None
+        if settings.track_seconds is not None:
+            period = min(CLOCK_PERIOD, settings.track_seconds / 4)
+            self._clock = PeriodicTask(f"{instance} clock", period, self._tick)
+
+    async def start(self) -> None:
+        """Start the clock when tracks have a length (``sim.track_seconds``)."""
+        if self._clock is not None:
+            self._clock.start()
+
+    async def close(self) -> None:
+        """Stop the clock."""
+        if self._clock is not None:
+            await self._clock.stop()
+
+    async def _tick(self, seconds: float) -> None:
+        last = self.player.current
+        if self.player.tick(seconds) and last is not None:
+            self.ending.ended(last.track, last.artist)
 
     async def state(self) -> PlayerState:
         """The simulated player's state."""

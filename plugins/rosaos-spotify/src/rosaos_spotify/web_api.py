@@ -32,6 +32,7 @@ from rosaos_spotify.backend import (
     volume_message,
 )
 from rosaos_spotify.catalog import KNOWN_GENRES, SearchKind, clean_query, normalize
+from rosaos_spotify.ending import PeriodicTask, PlaybackEndNotifier, ran_out
 from rosaos_spotify.errors import (
     NO_ACTIVE_DEVICE,
     RESTRICTION_VIOLATED,
@@ -69,7 +70,14 @@ def build_web_backend(instance: str, settings: SpotifySettings, data_dir: Path) 
         requests_session=api_session(),
         requests_timeout=settings.timeout,
     )
-    return WebApiBackend(instance, client, cache, device=settings.device, market=settings.market)
+    return WebApiBackend(
+        instance,
+        client,
+        cache,
+        device=settings.device,
+        market=settings.market,
+        watch_seconds=settings.watch_seconds,
+    )
 
 
 def api_session() -> requests.Session:
@@ -105,6 +113,7 @@ class WebApiBackend(SpotifyBackend):
         device: str | None = None,
         market: str | None = None,
         settle_delay: float = SETTLE_DELAY,
+        watch_seconds: float = 0.0,
     ) -> None:
         self.instance = instance
         self.client = client
@@ -114,11 +123,40 @@ class WebApiBackend(SpotifyBackend):
         self.market = market or "from_token"
         self.settle_delay = settle_delay
         self._lock = asyncio.Lock()
+        self.ending = PlaybackEndNotifier(instance)
+        self._watcher = (
+            PeriodicTask(f"{instance} player watcher", watch_seconds, self.watch)
+            if watch_seconds > 0
+            else None
+        )
+        self._seen: PlayerState | None = None
+        """The player as the watcher (or our own pause) last saw it."""
 
     async def start(self) -> None:
-        """Check that a login is saved; the network is first used by the first tool call."""
+        """Check that a login is saved, and start watching for the end of the music.
+
+        The network is first used by the first tool call or the watcher's first read.
+        """
         if not await asyncio.to_thread(self.cache.has_login):
             raise DeviceError(f"{self.instance} is not logged in to Spotify: {login_hint(self.instance)}")
+        if self._watcher is not None:
+            self._watcher.start()
+
+    async def close(self) -> None:
+        """Stop the watcher."""
+        if self._watcher is not None:
+            await self._watcher.stop()
+
+    async def watch(self, _elapsed: float = 0.0) -> None:
+        """Read the player once; post ``playback_ended`` when it stopped by itself since the last read."""
+        playback = await self._api(self.client.current_playback, market=self.market)
+        state = state_of(playback) if playback else None
+        now = state or PlayerState(
+            is_playing=False, volume=0, track=None, artist=None, shuffle=False, repeat="off"
+        )
+        before, self._seen = self._seen, now
+        if ran_out(before, now, (playback or {}).get("progress_ms")) and before is not None:
+            self.ending.ended(before.track, before.artist)
 
     # Calling Spotify
 
@@ -229,6 +267,7 @@ class WebApiBackend(SpotifyBackend):
                 raise
             message = "Nothing is playing." if error.reason == NO_ACTIVE_DEVICE else "Already paused."
         state = await self._settled(lambda s: not s.is_playing)
+        self._seen = state  # a pause someone asked for is not the music ending
         return PlayerReport(message=message, state=state.model_copy(update={"is_playing": False}))
 
     async def resume(self) -> PlayerReport:

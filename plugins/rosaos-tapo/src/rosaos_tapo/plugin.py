@@ -7,9 +7,8 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
-from typing import Annotated
 
-from pydantic import BaseModel, Field, SecretStr
+from pydantic import BaseModel, Field
 
 from rosaos import hookimpl
 from rosaos.cards import Card, swatch
@@ -17,39 +16,16 @@ from rosaos.drivers import (
     DemoInstance,
     DeviceContext,
     DeviceError,
-    DeviceSettings,
     DriverSpec,
     NoticeSpec,
     read_packaged_text,
 )
-from rosaos_tapo.backend import Connection, TapoBackend
+from rosaos_tapo.backend import TapoBackend
 from rosaos_tapo.server import build_server
+from rosaos_tapo.settings import TapoSettings
 from rosaos_tapo.simulator import SimState
 
-
-class TapoSettings(DeviceSettings):
-    """One bulb's settings: the keys of ``[devices.NAME]`` besides driver, backend and sim.
-
-    Only the ``real`` backend uses them; the simulator needs none. The password can come from
-    the environment instead of the file: ``ROSAOS_DEVICES__NAME__PASSWORD``.
-    """
-
-    host: str | None = Field(default=None, description="IP address or hostname of the bulb.")
-    username: str | None = Field(
-        default=None, description="Email of the TP-Link cloud account that set the bulb up in the Tapo app."
-    )
-    password: SecretStr | None = Field(default=None, description="Password of that TP-Link account.")
-    timeout: Annotated[float, Field(gt=0, le=120)] = Field(
-        default=10.0, description="Seconds one operation (connect, command, read) may take."
-    )
-    # Not "port": [devices.NAME] port is rosaOS's own, the loopback port of the device server.
-    bulb_port: Annotated[int, Field(ge=1, le=65535)] | None = Field(
-        default=None, description="The bulb's HTTP port, if not 80 (port forwarding)."
-    )
-    connection: Connection = Field(
-        default="klap",
-        description='"klap" (current firmware) or "discover" (ask the bulb by UDP; old firmware, same LAN).',
-    )
+__all__ = ["SPEC", "TapoSettings", "real_backend", "sim_backend"]
 
 
 def real_backend(ctx: DeviceContext) -> TapoBackend:

@@ -1,6 +1,6 @@
 """Run task files through the full system: one kernel per file, every task from a clean start.
 
-For each file: resolve its world on sim backends (:mod:`rosaos.bench.world`), start one
+For each file: resolve its world on sim backends (:mod:`rosaos.bench.sim_world`), start one
 :class:`~rosaos.kernel.runtime.Kernel` on it (event store, worker pool, kernel agent, HTTP API),
 and for each task and trial:
 
@@ -31,10 +31,10 @@ from pydantic_ai.settings import ModelSettings
 
 from rosaos.bench.expect import device_differences, reply_matches, world_differences
 from rosaos.bench.results import DifferenceView, FileResult, Summary, TaskResult, TrialResult
+from rosaos.bench.sim_world import BenchWorld, SimDevices, bench_world
 from rosaos.bench.tasks import BenchTask, TaskFile, TaskSelection
-from rosaos.bench.world import BenchWorld, SimDevices, bench_world
 from rosaos.config import RosaosConfig
-from rosaos.kernel.client import KernelClient
+from rosaos.kernel.api.kernel_client import KernelClient
 from rosaos.kernel.runtime import Kernel
 from rosaos.kernel.updates import Update
 from rosaos.plugins import DriverRegistry
@@ -139,8 +139,8 @@ class _Activity:
                 activity.replies.append(update.text)
             elif update.kind == "error":
                 activity.errors.append(update.text)
-            elif update.kind == "process_ended" and update.data.get("worker_id") not in ended:
-                ended.add(update.data.get("worker_id", 0))
+            elif update.kind == "process_ended" and update.data.get("process_id") not in ended:
+                ended.add(update.data.get("process_id", 0))
                 activity.model_calls += int(update.data.get("model_requests", 0))
                 activity.tool_calls += int(update.data.get("tool_calls", 0))
         return activity

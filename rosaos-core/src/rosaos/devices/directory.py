@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from pydantic import BaseModel
 
 from rosaos.devices.client import DeviceClient
-from rosaos.devices.runtime import DeviceStatus
+from rosaos.devices.run_files import DeviceStatus
 from rosaos.drivers import DeviceError
 
 

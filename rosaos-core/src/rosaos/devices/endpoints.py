@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
-from rosaos.devices.runtime import DeviceStatus
+from rosaos.devices.run_files import DeviceStatus
 from rosaos.drivers import Concurrency
 
 

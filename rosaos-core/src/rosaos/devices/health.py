@@ -30,7 +30,7 @@ from typing import Any, Literal
 from rosaos.auth import load_or_create_token
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.host import START_TIMEOUT
-from rosaos.devices.runtime import RuntimeEntry, devices_not_ready, served_devices
+from rosaos.devices.run_files import RunFileEntry, devices_not_ready, served_devices
 from rosaos.devices.serve import OpenDevice, open_device
 from rosaos.devices.world import DeviceInstance
 from rosaos.drivers import DeviceError
@@ -40,7 +40,7 @@ Phase = Literal["queued", "starting", "waiting for rosaos up", "asking", "closin
 """Where one check stands, for progress: ``queued`` waits for another instance of its driver to start."""
 
 POLL_INTERVAL = 0.2
-"""Seconds between looks at the runtime files while ``rosaos up`` starts an instance."""
+"""Seconds between looks at the run files while ``rosaos up`` starts an instance."""
 
 
 @dataclass(frozen=True)
@@ -55,11 +55,11 @@ class CheckBudget:
 
 @dataclass(frozen=True)
 class Route:
-    """Where an instance is checked, as the runtime files tell it before the check."""
+    """Where an instance is checked, as the run files tell it before the check."""
 
     via: Via
     url: str | None
-    entry: RuntimeEntry | None = None
+    entry: RunFileEntry | None = None
     """What ``rosaos up``/``serve-device`` recorded, when it serves the instance or is starting it."""
 
     @property
@@ -84,14 +84,14 @@ class CheckResult:
 
 
 def find_routes(instances: list[DeviceInstance], data_dir: Path) -> dict[str, Route]:
-    """Where each instance would be checked, from the runtime files of this machine."""
+    """Where each instance would be checked, from the run files of this machine."""
     served = served_devices(data_dir)
     pending = devices_not_ready(data_dir)
     return {instance.name: _route(instance, served, pending) for instance in instances}
 
 
 def _route(
-    instance: DeviceInstance, served: dict[str, RuntimeEntry], pending: dict[str, RuntimeEntry]
+    instance: DeviceInstance, served: dict[str, RunFileEntry], pending: dict[str, RunFileEntry]
 ) -> Route:
     entry = served.get(instance.name)
     if entry is not None and entry.url:
@@ -185,7 +185,7 @@ class HealthCheck:
                 "a busy machine may need more (--start-timeout)"
             ) from None
 
-    async def _wait_for_rosaos_up(self, name: str, entry: RuntimeEntry) -> RuntimeEntry:
+    async def _wait_for_rosaos_up(self, name: str, entry: RunFileEntry) -> RunFileEntry:
         """Wait, within the start-up budget, until ``rosaos up`` serves ``name``; its served entry."""
         self.report(name, "waiting for rosaos up")
         seconds = self.budget.start

@@ -7,14 +7,14 @@ daemon) gets a host subprocess of its own (:mod:`rosaos.devices.host`). Every fe
 supervisor calls each instance's ``get_state`` over HTTP, and restarts a host that died or stopped
 answering, backing off exponentially: a crash restarts the instances of that host, and no other.
 An instance that cannot start in the shared host is retried in a host of its own. A host that
-cannot start is reported (log, status, runtime file) and retried, never fatal. Placeholder
+cannot start is reported (log, status, run file) and retried, never fatal. Placeholder
 drivers are listed as ``not implemented``; remote instances are only probed.
 
 :meth:`DeviceSupervisor.start` returns once every instance has had its first start attempt,
 except those whose driver starts in the background (``DriverSpec.background_start``): they stay
 ``starting`` until they answer, and :meth:`DeviceSupervisor.settle` waits for them.
 
-The runtime file ``<data_dir>/run/devices.json`` tells other commands (``rosaos devices list``,
+The run file ``<data_dir>/run/devices.json`` tells other commands (``rosaos devices list``,
 ``rosaos devices check``) which instances are being served, and where.
 ``rosaos serve-device`` records its one instance in ``<data_dir>/run/serve-device/<name>.json``.
 """
@@ -37,13 +37,13 @@ from rosaos.devices.client import DeviceClient
 from rosaos.devices.directory import DirectoryEntry, SafeStopOutcome, safe_stop_entry
 from rosaos.devices.host import START_TIMEOUT, HostJob
 from rosaos.devices.host_process import HostProcess
-from rosaos.devices.runtime import (
+from rosaos.devices.run_files import (
     DeviceStatus,
-    RuntimeEntry,
-    RuntimeFile,
+    RunFile,
+    RunFileEntry,
     now,
     read_runtime_file,
-    runtime_file_path,
+    run_file_path,
     write_atomic,
 )
 from rosaos.devices.world import DeviceInstance, World
@@ -153,7 +153,7 @@ class DeviceSupervisor:
 
     @property
     def runtime_file(self) -> Path:
-        return runtime_file_path(self.data_dir)
+        return run_file_path(self.data_dir)
 
     def log_file(self, name: str) -> Path:
         """Where a host's stderr goes: driver output, uvicorn warnings, tracebacks."""
@@ -219,7 +219,7 @@ class DeviceSupervisor:
         self.log_file("any").parent.mkdir(parents=True, exist_ok=True)
 
     async def stop(self) -> None:
-        """Stop watching, terminate every host (and its process group), remove the runtime file."""
+        """Stop watching, terminate every host (and its process group), remove the run file."""
         for task in self._tasks:
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)
@@ -404,7 +404,7 @@ class DeviceSupervisor:
             hosted.host = None
         await asyncio.gather(*(host.stop(self.stop_grace) for host in hosts.values()))
 
-    # --- status and the runtime file -------------------------------------------------------------
+    # --- status and the run file -------------------------------------------------------------
 
     def _set(
         self, hosted: _Hosted, status: DeviceStatus, *, error: str | None = None, **changes: Any
@@ -423,10 +423,10 @@ class DeviceSupervisor:
         async with self._save_lock:
             if not self._tasks:  # stopped (or not started): the file must not reappear
                 return
-            runtime = RuntimeFile(
+            runtime = RunFile(
                 supervisor_pid=os.getpid(),
                 devices={
-                    name: RuntimeEntry(
+                    name: RunFileEntry(
                         url=d.url,
                         pid=d.host.pid if d.host and d.url else None,
                         status=d.status,

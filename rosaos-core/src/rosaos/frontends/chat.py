@@ -17,9 +17,9 @@ from typing import Any
 
 from rich.console import Console
 
+from rosaos.cli.console import console as terminal
 from rosaos.config import ConfigError
-from rosaos.frontends.console import console as terminal
-from rosaos.kernel.client import KernelClient, KernelUnavailable
+from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
 
 POLL_SECONDS = 0.1
 
@@ -81,7 +81,8 @@ class Conversation:
         kind, event_id, data = update["kind"], update.get("event_id"), update.get("data") or {}
         if kind == "event" and data.get("kind") == "worker_callback" and event_id is not None:
             payload = data.get("payload", {})
-            process_id = int(payload.get("worker_id", 0))
+            # Events stored before the rename carry ``worker_id``.
+            process_id = int(payload.get("process_id", payload.get("worker_id", 0)))
             if process_id in self.processes:
                 self._claim(process_id, event_id, payload)
                 return True

@@ -9,7 +9,7 @@ from __future__ import annotations
 import asyncio
 import logging
 
-from rosaos.devices.runtime import DeviceStatus
+from rosaos.devices.run_files import DeviceStatus
 from rosaos.kernel.updates import UpdateStream
 
 log = logging.getLogger("rosaos.kernel.device_status")

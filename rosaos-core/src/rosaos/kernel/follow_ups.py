@@ -4,7 +4,7 @@ The follow-up is written into the process's task, addressed to the kernel, so it
 ``[Worker callback]`` (whose ``task=`` the kernel reads) and survives a kernel restart in the event
 store. The process agent sees the note too, but holds none of the follow-up's devices; the note
 tells it the step is not its own. The offline engine plans follow-ups itself, in the task's
-``rosaos-plan`` block (:mod:`rosaos.models.followups`).
+``rosaos-plan`` block (:mod:`rosaos.intents.planning.followups`).
 """
 
 from __future__ import annotations

@@ -16,13 +16,16 @@ from pydantic_ai import Agent
 from pydantic_ai.exceptions import UsageLimitExceeded
 from pydantic_ai.messages import ModelMessage, RetryPromptPart, ToolCallPart, ToolReturnPart
 from pydantic_ai.models import Model
+from pydantic_ai.toolsets import CombinedToolset
 from pydantic_ai.usage import UsageLimits
 
 from rosaos.kernel.agent import trim_history
 from rosaos.kernel.events import Event, EventStore
 from rosaos.kernel.notice_text import render_notice
+from rosaos.kernel.offline_turn import offline_turn
 from rosaos.kernel.timer_text import render_timer_fired
 from rosaos.kernel.updates import UpdateKind, UpdateStream
+from rosaos.models.kernel_model import LocalIntentModel
 from rosaos.receipts import receipts_text
 
 log = logging.getLogger(__name__)
@@ -43,7 +46,7 @@ def render_event(event: Event) -> str:
         case "user_typed":
             return f"[User typed] {payload.text}"
         case "worker_callback":
-            head = f"[Worker callback] worker={payload.worker_id} status={payload.status}"
+            head = f"[Worker callback] worker={payload.process_id} status={payload.status}"
             if payload.task:
                 head += f" task={payload.task!r}"
             body = (
@@ -85,6 +88,8 @@ class KernelLoop:
         self.handled = 0
         self.before: Callable[[Event], Awaitable[list[Output] | None]] | None = None
         """Sees each event before the model; outputs instead of a model run (confirmation answers)."""
+        self._toolset = CombinedToolset(agent.toolsets)
+        """The agent's tools, for turns of the offline engine that run without the agent."""
 
     async def run_forever(self) -> None:
         """Handle events until cancelled."""
@@ -118,15 +123,29 @@ class KernelLoop:
         if self.before is not None and (outputs := await self.before(event)) is not None:
             return outputs
         prompt = render_event(event)
+        model = self.model_for(event)
+        offline = model or self.agent.model
         for attempt in range(1, MODEL_RETRIES + 1):
             try:
-                result = await self.agent.run(
-                    prompt,
-                    message_history=self.history,
-                    instructions=self.instructions(),
-                    model=self.model_for(event),
-                    usage_limits=UsageLimits(request_limit=self.request_limit),
-                )
+                if isinstance(offline, LocalIntentModel):  # no agent run needed: see offline_turn
+                    turn = await offline_turn(
+                        offline,
+                        self._toolset,
+                        prompt,
+                        history=self.history,
+                        instructions=self.instructions(),
+                        request_limit=self.request_limit,
+                    )
+                    new_messages, output = turn.new_messages, turn.output
+                else:
+                    result = await self.agent.run(
+                        prompt,
+                        message_history=self.history,
+                        instructions=self.instructions(),
+                        model=model,
+                        usage_limits=UsageLimits(request_limit=self.request_limit),
+                    )
+                    new_messages, output = result.new_messages(), result.output
             except UsageLimitExceeded as error:
                 return [_error(f"the kernel gave up on this event: {error}")]
             except Exception as error:  # the model or its provider failed; try again, then report
@@ -136,10 +155,10 @@ class KernelLoop:
                 await asyncio.sleep(0.5 * 2**attempt)
                 continue
             break
-        outputs = tool_activity(result.new_messages())
-        if result.output.strip():
-            outputs.append(("kernel_reply", result.output, {}))
-        self.history = trim_history(result.all_messages(), self.history_budget)
+        outputs = tool_activity(new_messages)
+        if output.strip():
+            outputs.append(("kernel_reply", output, {}))
+        self.history = trim_history([*self.history, *new_messages], self.history_budget)
         return outputs
 
 

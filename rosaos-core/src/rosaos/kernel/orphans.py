@@ -109,7 +109,7 @@ async def recover_orphans(
             if name in stops
         )
         callback = WorkerCallback(
-            worker_id=process.id,
+            process_id=process.id,
             status="crashed",
             error=f"{RESTART_ERROR}: the kernel stopped while this process ran"
             + (f"; {stopped}" if stopped else ""),

@@ -1,7 +1,7 @@
 """The running kernel: devices, event store, worker pool, kernel agent and HTTP API, wired together.
 
 :class:`Kernel` is what ``rosaos up`` runs and what integration tests start on loopback. It
-implements the HTTP API's :class:`~rosaos.kernel.api.KernelRuntime`.
+implements the HTTP API's :class:`~rosaos.kernel.api.schemas.KernelRuntime`.
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from pydantic_ai.models import Model
 from rosaos.auth import bound_hosts, load_or_create_token
 from rosaos.config import RosaosConfig
 from rosaos.devices.endpoints import DeviceEndpoint
-from rosaos.devices.runtime import write_atomic
+from rosaos.devices.run_files import write_atomic
 from rosaos.devices.serve import bind_socket
 from rosaos.devices.state_cache import DeviceStateCache
 from rosaos.devices.supervisor import DeviceSupervisor, DirectoryEntry, SafeStopOutcome
@@ -34,14 +34,14 @@ from rosaos.devices.world import World
 from rosaos.drivers import DeviceError
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
-from rosaos.kernel.api import create_app
-from rosaos.kernel.api_types import DeviceSafeStop, DeviceView, EmergencyStopReport, EmergencyStopState
-from rosaos.kernel.client import kernel_file, running_kernel_url
+from rosaos.kernel.api.app import create_app
+from rosaos.kernel.api.kernel_client import kernel_file, running_kernel_url
+from rosaos.kernel.api.login_codes import LoginCodes, login_url
+from rosaos.kernel.api.schemas import DeviceSafeStop, DeviceView, EmergencyStopReport, EmergencyStopState
 from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people
 from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
 from rosaos.kernel.device_status import DeviceStatusUpdates
 from rosaos.kernel.events import DeviceNoticeEvent, Event, EventStore, StoreClosedError, WorkerCallbackEvent
-from rosaos.kernel.login import LoginCodes, login_url
 from rosaos.kernel.loop import KernelLoop
 from rosaos.kernel.notices import NoticeWatcher
 from rosaos.kernel.orphans import LiveProcesses, recover_orphans
@@ -165,12 +165,12 @@ class Kernel:
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         self.manager.record_callback(callback)
-        await self._live.ended(callback.worker_id)
-        await self._activity.record(event_id, callback.worker_id, callback.receipts)
-        if callback.worker_id in self._ended_published:
+        await self._live.ended(callback.process_id)
+        await self._activity.record(event_id, callback.process_id, callback.receipts)
+        if callback.process_id in self._ended_published:
             return
-        self._ended_published.add(callback.worker_id)
-        text = f"process {callback.worker_id} ended: {callback.status}"
+        self._ended_published.add(callback.process_id)
+        text = f"process {callback.process_id} ended: {callback.status}"
         if callback.error:
             text += f" ({callback.error})"
         await self._updates.publish(
@@ -403,7 +403,7 @@ class Kernel:
             kind="worker_callback",
             source="kernel",
             payload=callback,
-            idempotency_key=callback_idempotency_key(callback.worker_id),
+            idempotency_key=callback_idempotency_key(callback.process_id),
         )
         appended = await self._store.append(event)
         if not appended.duplicate:

@@ -77,7 +77,7 @@ def describe_event(event: Event | NewEvent) -> str:
         label = "User said" if event.kind == "user_said" else "User typed"
         return f"[{label}] {payload.text}"
     if isinstance(payload, WorkerCallback):
-        parts = [f"worker={payload.worker_id}", f"status={payload.status}"]
+        parts = [f"worker={payload.process_id}", f"status={payload.status}"]
         if payload.output:
             parts.append(f"output={payload.output}")
         if payload.error:

@@ -63,16 +63,16 @@ def kernel_models(config: RosaosConfig, world: World, override: Model | None = N
     No model configured: the offline local-intent engine is the kernel. A model configured: it
     is the kernel, and with ``prefer_local`` the engine still takes the sentences it matches.
     """
+    from rosaos.intents.grammar.vocabulary import device_vocabularies
     from rosaos.models.kernel_model import LocalIntentModel
     from rosaos.models.routing import KernelRouter
-    from rosaos.models.sources import intent_sources
 
     spec = kernel_spec(config)
     process = process_spec(config)
     if override is not None:
         return KernelModels(override, process, override.model_name, None, lambda event: None)
     speaker = next((i.name for i in world.instances.values() if i.spec.always_attached), None)
-    local = LocalIntentModel(intent_sources(world), language=config.models.language, speaker=speaker)
+    local = LocalIntentModel(device_vocabularies(world), language=config.models.language, speaker=speaker)
     if spec.model is None:
         return KernelModels(local, process, "offline local-intent engine", OFFLINE_NOTICE, lambda event: None)
     llm = build_model(spec)

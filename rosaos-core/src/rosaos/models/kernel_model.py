@@ -4,7 +4,7 @@ Plugged in where an LLM would be, so the kernel runs unchanged: same queue, same
 ``launch_process``, same workers, leases and MCP tools. Per request it reads the event being
 handled (see :func:`rosaos.kernel.loop.render_event`) and answers:
 
-- ``[User said]`` / ``[User typed]``: the sentence is matched (:class:`~rosaos.models.matching.
+- ``[User said]`` / ``[User typed]``: the sentence is matched (:class:`~rosaos.intents.understanding.matching.
   IntentMatcher`). An exact match becomes one ``launch_process`` call per process, all in one
   response (parallel tool calls). Anything else becomes a text reply: a clarifying question, a
   refusal naming what exists, or "not understood". Nothing is launched on a guess.
@@ -13,10 +13,10 @@ handled (see :func:`rosaos.kernel.loop.render_event`) and answers:
 - ``[Worker callback]``: the process's output (its plan made it a user-facing sentence), or an
   apology with the error. No new process.
 - ``[Device notice]``: ``notify`` ones are said through the Reachy Mini (one process that calls its
-  ``speak``); ``info`` ones get no reply (:mod:`rosaos.models.notice_plan`).
+  ``speak``); ``info`` ones get no reply (:mod:`rosaos.intents.planning.notice_plan`).
 - ``[Error]``: acknowledged in one sentence.
 - timers ("… in ten minutes", "what timers are set?", "cancel that timer") and ``[Timer fired]``:
-  :mod:`rosaos.models.timer_plan`, asked first.
+  :mod:`rosaos.intents.planning.timer_plan`, asked first.
 """
 
 from __future__ import annotations
@@ -34,6 +34,13 @@ from pydantic_ai.messages import (
 from pydantic_ai.models import Model, ModelRequestParameters
 from pydantic_ai.settings import ModelSettings
 
+from rosaos.intents.grammar.phrases import phrase
+from rosaos.intents.grammar.vocabulary import DeviceVocabulary
+from rosaos.intents.planning.followups import callback_response, plan_follow_up
+from rosaos.intents.planning.notice_plan import SILENCE, notice_response
+from rosaos.intents.planning.plan import PlanError, decode_plan, has_plan
+from rosaos.intents.planning.timer_plan import is_timer_sentence, timer_turn
+from rosaos.intents.understanding.matching import IntentMatcher, MatchResult
 from rosaos.models.conversation import (
     ToolOutcome,
     content_text,
@@ -45,13 +52,6 @@ from rosaos.models.conversation import (
     tool_outcomes,
     user_text,
 )
-from rosaos.models.followups import callback_response, plan_follow_up
-from rosaos.models.matching import IntentMatcher, MatchResult
-from rosaos.models.notice_plan import SILENCE, notice_response
-from rosaos.models.phrases import phrase
-from rosaos.models.plan import PlanError, decode_plan, has_plan
-from rosaos.models.sources import DeviceIntentSource
-from rosaos.models.timer_plan import is_timer_sentence, timer_turn
 
 LAUNCH_TOOL = "launch_process"
 USER_TAGS = frozenset({"User said", "User typed"})
@@ -62,12 +62,12 @@ NO_OUTPUT = "(no output)"
 class LocalIntentModel(Model):
     """The offline kernel model: sentence templates instead of an LLM.
 
-    ``devices`` are the world's devices (:func:`rosaos.models.sources.intent_sources`);
+    ``devices`` are the world's devices (:func:`rosaos.intents.grammar.vocabulary.device_vocabularies`);
     ``language`` is ``[models] language``. The hassil grammars are built here, once.
     """
 
     def __init__(
-        self, devices: Sequence[DeviceIntentSource], language: str = "en", speaker: str | None = None
+        self, devices: Sequence[DeviceVocabulary], language: str = "en", speaker: str | None = None
     ) -> None:
         super().__init__()
         self.language = language

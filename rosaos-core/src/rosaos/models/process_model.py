@@ -29,6 +29,9 @@ from pydantic_ai.models import Model, ModelRequestParameters
 from pydantic_ai.settings import ModelSettings
 from pydantic_ai.tools import ToolDefinition
 
+from rosaos.intents.grammar.phrases import phrase
+from rosaos.intents.planning.followups import unmet_output
+from rosaos.intents.planning.plan import Plan, PlanError, decode_plan, fill_state, render_result
 from rosaos.models.conversation import (
     ToolOutcome,
     content_text,
@@ -37,9 +40,6 @@ from rosaos.models.conversation import (
     responses_by,
     tool_outcomes,
 )
-from rosaos.models.followups import unmet_output
-from rosaos.models.phrases import phrase
-from rosaos.models.plan import Plan, PlanError, decode_plan, fill_state, render_result
 
 # The worker heads each granted device's prompt section "## <instance> (<driver>)".
 NO_PLAN_REPLY = (

@@ -28,10 +28,10 @@ from pydantic_ai.models import Model, ModelRequestParameters, StreamedResponse
 from pydantic_ai.models.wrapper import WrapperModel
 from pydantic_ai.settings import ModelSettings
 
+from rosaos.intents.planning.plan import has_plan
 from rosaos.kernel.events import Event
 from rosaos.kernel.loop import render_event
 from rosaos.models.kernel_model import LocalIntentModel
-from rosaos.models.plan import has_plan
 from rosaos.models.process_model import LocalPlanModel
 
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import AliasChoices, BaseModel, ConfigDict, Field
 
 from rosaos.models.select import ModelSpec
 from rosaos.receipts import Receipt
@@ -55,7 +55,14 @@ class WorkerCallback(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    worker_id: int = Field(ge=1, description="The process id that launch_process returned.")
+    process_id: int = Field(
+        ge=1,
+        description="The process id that launch_process returned.",
+        # ``worker_id`` was this field's old name (it always held a process id): a worker or
+        # script that still posts it to ``POST /event`` is understood. Deprecated: send
+        # ``process_id``; events are stored and shown with ``process_id``.
+        validation_alias=AliasChoices("process_id", "worker_id"),
+    )
     status: ProcessStatus
     output: str | None = None
     error: str | None = None

@@ -242,7 +242,7 @@ class ProcessManager:
         The kernel calls this when it commits a ``worker_callback`` event. A callback for a process
         this manager does not know (from before a restart) is ignored.
         """
-        self._end(callback.worker_id, callback.status)
+        self._end(callback.process_id, callback.status)
 
     async def _worker_ended(self, callback: WorkerCallback, delivered: bool) -> None:
         self.record_callback(callback)

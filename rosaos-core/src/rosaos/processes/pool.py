@@ -338,12 +338,12 @@ class WorkerPool:
     async def _report(self, callback: WorkerCallback, delivered: bool) -> None:
         """Pass a job's end on to ``on_ended`` (the watcher calls this once per job)."""
         if self.on_ended is None:
-            log.info("process %d ended: %s", callback.worker_id, callback.status)
+            log.info("process %d ended: %s", callback.process_id, callback.status)
             return
         try:
             await self.on_ended(callback, delivered)
         except Exception:
-            log.exception("on_ended failed for process %d", callback.worker_id)
+            log.exception("on_ended failed for process %d", callback.process_id)
 
 
 def _rss_bytes(pid: int) -> int | None:

@@ -225,4 +225,4 @@ def describe_exit(returncode: int) -> str:
 
 
 def _ended(job: WorkerJob, status: ProcessStatus, error: str) -> WorkerCallback:
-    return WorkerCallback(worker_id=job.process_id, status=status, error=error, task=job.task)
+    return WorkerCallback(process_id=job.process_id, status=status, error=error, task=job.task)

@@ -39,6 +39,8 @@ from pydantic_ai.models import Model
 from pydantic_ai.toolsets import AbstractToolset
 from pydantic_ai.usage import UsageLimits
 
+from rosaos.intents.planning.plan import Plan, PlanError, decode_plan
+from rosaos.models.process_model import LocalPlanModel
 from rosaos.models.select import ModelError, build_model
 from rosaos.processes.confirming import ConfirmationDeclined, ConfirmingToolset, KernelAsker
 from rosaos.processes.jobs import (
@@ -48,6 +50,7 @@ from rosaos.processes.jobs import (
     WorkerJob,
     callback_idempotency_key,
 )
+from rosaos.processes.plan_runner import run_plan
 from rosaos.processes.prompts import process_system_prompt, tool_prefix
 from rosaos.processes.recording import RecordingToolset
 from rosaos.processes.tool_calls import ToolCallLog, observed
@@ -119,8 +122,10 @@ async def run_job(job: WorkerJob) -> WorkerCallback:
         # The model may have written a polite sentence about it; the device call still failed.
         status, error = "error", f"{failed.device}: {failed.tool} failed: {failed.error}"
     requests, tool_calls = count_usage(messages)
+    if not messages:  # a plan run without an agent (processes/plan_runner.py): no model requests
+        tool_calls = len(calls.calls)
     return WorkerCallback(
-        worker_id=job.process_id,
+        process_id=job.process_id,
         status=status,
         output=output,
         error=error,
@@ -227,6 +232,8 @@ async def _run_agent(job: WorkerJob, calls: ToolCallLog, receipts: list[Receipt]
                 RecordingToolset(guarded, device=device.name, receipts=recorded), device.name, calls
             )
             toolsets.append(toolset.prefixed(tool_prefix(device.name)) if prefixed else toolset)
+        if isinstance(model, LocalPlanModel) and (plan := plan_of(job.task)) is not None:
+            return await run_plan(plan, toolsets, model, model.language)
         agent = Agent(
             model,
             instructions=process_system_prompt(job.base_prompt, job.task, job.devices),
@@ -238,6 +245,14 @@ async def _run_agent(job: WorkerJob, calls: ToolCallLog, receipts: list[Receipt]
         await SESSIONS.forget(job.devices)
         raise
     return str(result.output)
+
+
+def plan_of(task: str) -> Plan | None:
+    """The offline plan in ``task``, if it has a valid one (an invalid one is the agent's to report)."""
+    try:
+        return decode_plan(task)
+    except PlanError:
+        return None
 
 
 async def _connect(device: GrantedDevice, images: int | None = None) -> MCPToolset[Any]:
@@ -300,7 +315,7 @@ def callback_event(callback: WorkerCallback) -> dict[str, Any]:
         "kind": "worker_callback",
         "source": "worker",
         "payload": callback.model_dump(mode="json"),
-        "idempotency_key": callback_idempotency_key(callback.worker_id),
+        "idempotency_key": callback_idempotency_key(callback.process_id),
     }
 
 

@@ -33,8 +33,8 @@ from rosaos.config import DeviceConfig
 from rosaos.device_notices import NoticeBatch, check_notice_specs
 from rosaos.devices.world import DeviceInstance
 from rosaos.drivers import DriverSpec
+from rosaos.intents.grammar.intents_file import IntentsFile, IntentsFileError, load_intents_file
 from rosaos.kernel.notices import notices_url
-from rosaos.models.intents_file import IntentsFile, IntentsFileError, load_intents_file
 from rosaos.plugins import DriverInfo, DriverRegistry
 from rosaos.testing.device_runner import RunningDevice, build_instance, load_all_drivers, run_device
 from rosaos.testing.tool_checks import (

@@ -8,11 +8,11 @@
     assert probe.match("dim the kitchen light") == ("kitchen_light", "adjust_brightness", {"change": -25})
     assert probe.match("turn on the garage light") is None
 
-The probe runs the engine's own code for a driver's templates (:mod:`rosaos.models.readings`):
+The probe runs the engine's own code for a driver's templates (:mod:`rosaos.intents.understanding.readings`):
 the same recognition, the same ``{device}`` names, the same choice among several parses, the same
 slot filling (``"{slot}"`` arguments; whole numbers as ``int``). It reads the file alone, one
 sentence as one command: Home Assistant's templates and skip words (which the engine adds when the
-file maps HA intents), and what :class:`~rosaos.models.matching.IntentMatcher` does around the
+file maps HA intents), and what :class:`~rosaos.intents.understanding.matching.IntentMatcher` does around the
 templates (several commands in one sentence, for one), are not part of the probe.
 """
 
@@ -27,10 +27,10 @@ from hassil import recognize_all
 from hassil.intents import TextSlotList
 
 from rosaos.drivers import DriverSpec
-from rosaos.models.intents_file import IntentsFile
-from rosaos.models.matching import MAX_RESULTS_PER_SOURCE
-from rosaos.models.readings import Reading, ReadingContext, driver_reading
-from rosaos.models.sources import DeviceIntentSource
+from rosaos.intents.grammar.intents_file import IntentsFile
+from rosaos.intents.grammar.vocabulary import DeviceVocabulary
+from rosaos.intents.understanding.matching import MAX_RESULTS_PER_SOURCE
+from rosaos.intents.understanding.readings import Reading, ReadingContext, driver_reading
 
 PROBE_DRIVER = "probe"
 """Driver name the probe's devices get when it reads a bare file (a :class:`DriverSpec` has its own)."""
@@ -56,7 +56,7 @@ class IntentProbe:
     itself when it is in that language.
 
     Raises ``ValueError`` when there is no intents file in that language or ``devices`` is empty,
-    and :class:`~rosaos.models.intents_file.IntentsFileError` when the file does not load.
+    and :class:`~rosaos.intents.grammar.intents_file.IntentsFileError` when the file does not load.
     """
 
     def __init__(
@@ -74,7 +74,7 @@ class IntentProbe:
         for spoken, instance in devices.items():
             aliases.setdefault(instance, []).append(spoken)
         sources = {
-            name: DeviceIntentSource(name=name, driver=driver, aliases=tuple(spoken), intents=path)
+            name: DeviceVocabulary(name=name, driver=driver, aliases=tuple(spoken), intents=path)
             for name, spoken in aliases.items()
         }
         file = next(iter(sources.values())).intents_file(language)

@@ -13,7 +13,7 @@ from rosaos.frontends.voice.pipeline import Heard, KernelHandoff, VoicePipeline,
 from rosaos.frontends.voice.sources import SAMPLE_RATE, AudioChunk, Samples, VoiceError
 from rosaos.frontends.voice.vad import EnergyClassifier, Segmenter
 from rosaos.frontends.voice.wake import WakeGate
-from rosaos.kernel.client import KernelUnavailable
+from rosaos.kernel.api.kernel_client import KernelUnavailable
 
 
 def test_the_idempotency_key_is_stable_for_the_same_utterance() -> None:

@@ -45,7 +45,7 @@ class FakeKernel:
         self.handled.add(COMMAND)
 
     def callback_handled(self) -> None:
-        payload = {"worker_id": PROCESS, "status": "ok"}
+        payload = {"process_id": PROCESS, "status": "ok"}
         self.publish("event", CALLBACK, "process 3: ok", {"kind": "worker_callback", "payload": payload})
         self.publish("kernel_reply", CALLBACK, "Done: turn on the kitchen light.")
         self.handled.add(CALLBACK)

@@ -18,7 +18,7 @@ from rosaos.frontends.voice.robot import (
     doa_to_yaw,
     find_reachy,
 )
-from rosaos.kernel.client import KernelUnavailable
+from rosaos.kernel.api.kernel_client import KernelUnavailable
 
 
 @pytest.mark.parametrize(("doa", "yaw"), [(math.pi / 2, 0.0), (math.pi / 3, 30.0), (2 * math.pi / 3, -30.0)])

@@ -17,8 +17,8 @@ from pathlib import Path
 from typing import Any, Literal
 
 from rosaos.auth import token_path
+from rosaos.cli.console import console as terminal
 from rosaos.config import ConfigError, RosaosConfig, VoiceConfig, load_config
-from rosaos.frontends.console import console as terminal
 from rosaos.frontends.voice.bargein import BargeIn, BargeInSettings
 from rosaos.frontends.voice.pipeline import Heard, KernelHandoff, PipelineStats, VoicePipeline
 from rosaos.frontends.voice.replies import ReplyFollower
@@ -37,7 +37,7 @@ from rosaos.frontends.voice.sources import (
 from rosaos.frontends.voice.stt import OpenAITranscriptionSTT, build_stt
 from rosaos.frontends.voice.vad import EnergyClassifier, FrameClassifier, Segmenter, SileroClassifier
 from rosaos.frontends.voice.wake import EyeContact, HaarFaceDetector, WakeGate
-from rosaos.kernel.client import KernelClient, KernelUnavailable
+from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
 
 EXIT_OK = 0
 EXIT_FAILED = 1

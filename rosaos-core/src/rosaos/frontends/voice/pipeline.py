@@ -35,7 +35,7 @@ from rosaos.frontends.voice.sources import (
 from rosaos.frontends.voice.stt import SpeechToText
 from rosaos.frontends.voice.vad import Segmenter, SpeechSegment
 from rosaos.frontends.voice.wake import EyeContact, WakeGate, is_noise
-from rosaos.kernel.client import KernelClient, KernelUnavailable
+from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
 
 HeardKind = Literal[
     "ready",

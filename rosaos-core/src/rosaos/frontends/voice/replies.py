@@ -23,7 +23,7 @@ from typing import Any
 
 from rosaos.frontends.chat import Conversation
 from rosaos.frontends.voice.robot import RobotLink
-from rosaos.kernel.client import KernelClient, KernelUnavailable
+from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
 
 POLL_SECONDS = 0.1
 QUIET_SECONDS = 0.8

@@ -27,7 +27,7 @@ from typing import Any, Protocol
 
 from rosaos.devices.client import DeviceClient
 from rosaos.drivers import DeviceError
-from rosaos.kernel.client import KernelClient, KernelUnavailable
+from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
 
 log = logging.getLogger(__name__)
 

@@ -121,7 +121,7 @@ function chatLine(update) {
     case "user_said": return { who: "You said", role: "user", text: payload.text };
     case "worker_callback": {
       const result = payload.error || payload.output || "";
-      return { who: `Process ${payload.worker_id} (${payload.status})`, role: "system", text: result };
+      return { who: `Process ${payload.process_id ?? payload.worker_id} (${payload.status})`, role: "system", text: result };
     }
     case "device_notice": return { who: payload.device, role: "system", text: payload.message };
     case "error": return { who: "Error", role: "error", text: payload.message };

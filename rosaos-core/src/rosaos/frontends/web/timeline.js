@@ -69,8 +69,9 @@ export function timelineUpdate(update) {
       step(entry, "launched", update.time, `Launched with ${(data.devices || []).join(", ") || "no device"}`);
     }
     setBadge($(".badge-slot", entry), data.state || "running");
-  } else if (update.kind === "process_ended" && data.worker_id) {
-    const entry = entryFor(data.worker_id, data.task);
+  } else if (update.kind === "process_ended" && (data.process_id ?? data.worker_id)) {
+    // Updates stored before the rename carry worker_id.
+    const entry = entryFor(data.process_id ?? data.worker_id, data.task);
     if ($(".tl-callback", entry)) return; // a replayed update
     for (const receipt of data.receipts || []) {
       const at = receipt.started ? new Date(receipt.started * 1000).toISOString() : update.time;

@@ -1,0 +1,135 @@
+"""``rosaos up``: start the devices, the kernel, the worker pool and the web page; run until Ctrl-C."""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import signal
+from pathlib import Path
+from typing import Any
+
+from rich.console import Console
+
+from rosaos.auth import token_path
+from rosaos.cli.console import console as terminal
+from rosaos.config import ConfigError, RosaosConfig, load_config
+from rosaos.devices.world import build_world
+from rosaos.drivers import DeviceError
+from rosaos.kernel.runtime import Kernel, KernelError
+from rosaos.models.select import ModelError
+from rosaos.plugins import load_drivers
+
+EXIT_CONFIG = 2
+
+
+def model_overrides(
+    model: str | None, process_model: str | None, base_url: str | None, model_name: str | None
+) -> dict[str, Any]:
+    """``--model`` & co. as config overrides for the ``[models]`` table."""
+    models: dict[str, Any] = {}
+    if model:
+        models["kernel"] = model
+    if process_model:
+        models["process"] = process_model
+    if base_url:
+        models["base_url"] = base_url
+    if model_name:
+        models["model_name"] = model_name
+    return models
+
+
+def load_for_cli(config_path: Path | None, **overrides: Any) -> RosaosConfig:
+    """Load the config; CLI overrides win, merged key by key into their tables (pydantic-settings deep-merges)."""
+    return load_config(config_path, **overrides)
+
+
+def up_command(
+    config_path: Path | None,
+    *,
+    host: str | None,
+    port: int | None,
+    pool_size: int | None,
+    models: dict[str, Any],
+) -> int:
+    """Start devices, kernel, pool and web page; run until Ctrl-C."""
+    console = terminal()
+    err = terminal(stderr=True)
+    kernel_overrides: dict[str, Any] = {}
+    if host is not None:
+        kernel_overrides["host"] = host
+    if port is not None:
+        kernel_overrides["port"] = port
+    if pool_size is not None:
+        kernel_overrides["pool_size"] = pool_size
+    overrides: dict[str, Any] = {}
+    if kernel_overrides:
+        overrides["kernel"] = kernel_overrides
+    if models:
+        overrides["models"] = models
+    try:
+        config = load_for_cli(config_path, **overrides)
+        registry = load_drivers()
+        world = build_world(config, registry)
+        kernel = Kernel(config, world)
+    except (ConfigError, ModelError) as error:
+        err.print(f"rosaos up: {error}", markup=False)
+        return EXIT_CONFIG
+    for broken in registry.broken:
+        err.print(
+            f"warning: plugin {broken.plugin} ({broken.package}) is broken: {broken.error}", markup=False
+        )
+    logging.basicConfig(level=logging.WARNING, format="%(levelname)s %(name)s: %(message)s")
+    # The MCP HTTP clients log every request at INFO; health checks would flood the console.
+    for noisy in ("httpx", "httpx2", "mcp", "fastmcp"):
+        logging.getLogger(noisy).setLevel(logging.WARNING)
+    return asyncio.run(_serve(kernel, console, err))
+
+
+async def _serve(kernel: Kernel, console: Console, err: Console) -> int:
+    stop = asyncio.Event()
+    loop = asyncio.get_running_loop()
+    for signum in (signal.SIGINT, signal.SIGTERM):
+        loop.add_signal_handler(signum, stop.set)
+    count = len(kernel.world)
+    console.print(f"Starting rosaOS with {count} device{'' if count == 1 else 's'}…", markup=False)
+    try:
+        url = await kernel.start()
+    except (KernelError, DeviceError, ModelError) as error:
+        err.print(f"rosaos up: {error}", markup=False)
+        return 1
+    try:
+        _print_banner(kernel, url, console)
+        await stop.wait()
+        console.print("Stopping rosaOS…", markup=False)
+    finally:
+        await kernel.stop()
+    console.print("Stopped. Unhandled events stay queued for the next start.", markup=False)
+    return 0
+
+
+def _print_banner(kernel: Kernel, url: str, console: Console) -> None:
+    console.print(f"rosaOS is up at {url}/", style="bold green", markup=False)
+    console.print(
+        f"  Web page:  {kernel.login_link()}   (one-time login link, valid 10 minutes)", markup=False
+    )
+    console.print(
+        f"  Token:     {token_path(kernel.data_dir)}   (bearer token for the API and MCP servers)",
+        markup=False,
+    )
+    console.print(f"  Model:     {kernel.model_description}", markup=False)
+    if kernel.model_notice:
+        console.print(f"  {kernel.model_notice}", style="yellow", markup=False)
+    for entry in kernel.supervisor.directory().values():
+        where = entry.url or "-"
+        console.print(f"  Device:    {entry.name:<20} {entry.status:<16} {where}", markup=False)
+    if latch := kernel.manager.emergency_stop:
+        since = latch.time.astimezone().strftime("%Y-%m-%d %H:%M:%S")
+        console.print(
+            f"EMERGENCY STOP is still latched, since {since}: {latch.reason}", style="bold red", markup=False
+        )
+        console.print(
+            "  No process will run until a person resets it: `rosaos estop --reset`, or the web page.",
+            style="red",
+            markup=False,
+        )
+    console.print("Chat with `rosaos chat`; stop with Ctrl-C.", markup=False)

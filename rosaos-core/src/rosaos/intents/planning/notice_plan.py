@@ -1,0 +1,37 @@
+"""How the offline engine answers a ``[Device notice]``: tell the user when it matters, else nothing.
+
+A ``notify`` notice becomes one process on the user-interface device (the Reachy Mini) that says
+the driver's sentence with its ``speak`` tool. An ``info`` notice gets no reply at all: the web
+page and ``rosaos log`` show it, and nobody is interrupted. Rate limits and deduplication happen
+before the event is queued (:mod:`rosaos.kernel.notices`), so every notice that reaches here is
+worth its one sentence.
+"""
+
+from __future__ import annotations
+
+from pydantic_ai.messages import ModelResponsePart, TextPart, ToolCallPart
+
+from rosaos.intents.planning.plan import Plan, PlanStep, encode_task
+from rosaos.kernel.notice_text import read_notice
+
+SPEAK_TOOL = "speak"
+SILENCE = " "
+"""The reply that says nothing: the kernel loop publishes no blank reply, and pydantic-ai would
+ask an empty response again."""
+
+
+def notice_response(body: str, speaker: str | None, launch: str | None) -> list[ModelResponsePart]:
+    """The kernel's response to a notice ``body``; ``speaker`` is the always-attached device."""
+    notice = read_notice(body)
+    if notice.importance != "notify":
+        return [TextPart(SILENCE)]
+    if speaker is None or launch is None:  # nothing to speak with: the updates stream still shows it
+        return [TextPart(notice.message)]
+    plan = Plan(
+        steps=[PlanStep(device=speaker, tool=SPEAK_TOOL, args={"text": notice.message})],
+        reply=notice.message,
+        ack=notice.message,
+        quiet=True,
+    )
+    summary = f"Tell the user: {notice.message}"
+    return [ToolCallPart(launch, {"task": encode_task(summary, plan), "devices": [speaker]})]

@@ -1,0 +1,176 @@
+"""The plan a kernel task carries: exact tool calls, for the offline process engine and for people.
+
+A task the local-intent engine launches is a readable sentence followed by a fenced block::
+
+    Turn on the kitchen light.
+
+    Planned device calls (rosaOS offline engine; an LLM may follow them too):
+    ```rosaos-plan
+    {"version": 1, "steps": [{"device": "kitchen_light", "tool": "turn_on", "args": {}}],
+     "reply": "Done: turn on the kitchen light.", ...}
+    ```
+
+The process agent's system prompt contains the task, so :class:`~rosaos.models.process_model.
+LocalPlanModel` finds the block there and runs the steps in order; an LLM reading the same task
+sees plain instructions plus the exact calls.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+PLAN_FENCE = "rosaos-plan"
+PLAN_INTRO = "Planned device calls (rosaOS offline engine; an LLM may follow them too):"
+_BLOCK = re.compile(r"```" + PLAN_FENCE + r"[ \t]*\n(?P<body>.*?)\n?```", re.DOTALL)
+RESULT_PLACEHOLDER = "{result}"
+_STATE_FIELD = re.compile(r"\{(\w+)(?::([^{}]*))?\}")
+ERROR_PLACEHOLDER = "{error}"
+
+
+class PlanError(ValueError):
+    """A ``rosaos-plan`` block that is not valid JSON or not a valid :class:`Plan`."""
+
+
+class PlanStep(BaseModel):
+    """One tool call on one device."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    device: str = Field(min_length=1)
+    """Instance name; the process agent's tool is ``<device>_<tool>`` or bare ``<tool>``."""
+    tool: str = Field(min_length=1)
+    args: dict[str, Any] = Field(default_factory=dict)
+
+
+class PlanAnswer(BaseModel):
+    """A yes/no question answered from the state the last step returned."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    when: dict[str, Any] = Field(min_length=1)
+    """State keys and the values that make the answer "yes"."""
+    yes: str
+    no: str
+
+
+class Plan(BaseModel):
+    """What a process does, step by step, and what it says when it is done."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    version: Literal[1] = 1
+    steps: list[PlanStep] = Field(min_length=1)
+    reply: str
+    """Final output when every step succeeded; ``{result}`` becomes the last step's result."""
+    failure: str = "Sorry, that failed: {error}"
+    """Final output when a step failed; ``{error}`` becomes the tool's message."""
+    ack: str = ""
+    """What the kernel says once the process is launched."""
+    answer: PlanAnswer | None = None
+    fills_state: bool = False
+    """Whether ``{key}`` placeholders in the reply (or answer) name keys of the last step's
+    result, to fill in ("Playing {track} by {artist}."): a driver's question template."""
+    quiet: bool = False
+    """The kernel says nothing when this process succeeds (it only told the user something)."""
+    then: FollowUp | None = None
+    """What the kernel launches when this process succeeds ("…, and when you find someone, turn
+    the lamp green"): the next step rides on the callback, so it survives in the event store."""
+
+    @property
+    def devices(self) -> list[str]:
+        """The devices the steps touch, in order of first use."""
+        return list(dict.fromkeys(step.device for step in self.steps))
+
+
+class FollowUpLaunch(BaseModel):
+    """One process of a follow-up: launched as ``encode_task(summary, plan)`` on ``devices``."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    devices: list[str] = Field(min_length=1)
+    summary: str = Field(min_length=1)
+    plan: Plan
+
+
+class FollowUp(BaseModel):
+    """The next step of a plan, launched by the kernel on the callback (see :mod:`rosaos.intents.planning.followups`)."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    launches: list[FollowUpLaunch] = Field(min_length=1)
+    summary: str
+    """What the follow-up does, for replies ("turn the lamp green")."""
+    when: dict[str, Any] | None = None
+    """Result keys a step of this process must return for the follow-up to run (``{"found": true}``);
+    None: the process succeeding is enough ("…, then …")."""
+    unmet: str = ""
+    """The process's output when ``when`` does not hold: the kernel sees it and launches nothing."""
+
+
+Plan.model_rebuild()
+
+
+def encode_task(summary: str, plan: Plan) -> str:
+    """The ``launch_process`` task: the readable ``summary``, then the plan block."""
+    body = json.dumps(plan.model_dump(mode="json", exclude_none=True), ensure_ascii=False)
+    return f"{summary.strip()}\n\n{PLAN_INTRO}\n```{PLAN_FENCE}\n{body}\n```"
+
+
+def has_plan(text: str) -> bool:
+    """Whether ``text`` contains a ``rosaos-plan`` block (valid or not)."""
+    return _BLOCK.search(text) is not None
+
+
+def decode_plan(text: str) -> Plan | None:
+    """The plan in ``text``, or None when there is no block. Raises :class:`PlanError` if it is broken."""
+    match = _BLOCK.search(text)
+    if match is None:
+        return None
+    try:
+        return Plan.model_validate(json.loads(match.group("body")))
+    except (json.JSONDecodeError, ValidationError) as error:
+        raise PlanError(f"the {PLAN_FENCE} block is not a valid plan: {error}") from None
+
+
+def task_summary(text: str) -> str:
+    """The readable part of a task: everything before the plan block and its intro line."""
+    head = text.split(f"```{PLAN_FENCE}", 1)[0]
+    return head.replace(PLAN_INTRO, "").strip()
+
+
+def render_result(result: Any) -> str:
+    """A tool result on one short line, for ``{result}`` in a reply ("on: false, brightness: 100")."""
+    if isinstance(result, dict):
+        return ", ".join(f"{key}: {_scalar(value)}" for key, value in result.items())
+    return _scalar(result)
+
+
+def fill_state(text: str, state: Any) -> str | None:
+    """``text`` with each ``{key}`` or ``{key:spec}`` replaced by that key of ``state``, formatted;
+    ``{result}`` is the whole state on one line. None when a key is missing or will not format."""
+    try:
+        return _STATE_FIELD.sub(lambda match: _state_field(match, state), text)
+    except (KeyError, TypeError, ValueError):
+        return None
+
+
+def _state_field(match: re.Match[str], state: Any) -> str:
+    key, spec = match.group(1), match.group(2) or ""
+    if key == "result" and not spec:
+        return render_result(state)
+    if not isinstance(state, dict):
+        raise TypeError("the result is not a mapping")
+    value = state[key]
+    if value is None:
+        raise ValueError(f"{key} is null")
+    return format(value, spec) if spec else _scalar(value)
+
+
+def _scalar(value: Any) -> str:
+    if isinstance(value, str):
+        return value
+    return json.dumps(value, ensure_ascii=False)

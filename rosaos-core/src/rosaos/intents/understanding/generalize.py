@@ -1,0 +1,94 @@
+"""From the exact reading of a sentence to what an everyday sentence means: the order of attempts.
+
+:meth:`rosaos.intents.understanding.matching.IntentMatcher.match` reads a sentence literally first. When that is
+not an exact command, :func:`understand` tries, in order, and stops at the first that is:
+
+1. **a negation** ("don't turn on the lamp"): when the rest is an exact command, it is refused by
+   name and nothing else is tried (no rephrasing, no guessing);
+2. **rephrasings** (:mod:`rosaos.intents.understanding.rephrase`): fillers dropped, a split name joined, a name
+   said first or last ("dog, a bit closer") taken as the device the command is for;
+3. **the fuzzy model** (:mod:`rosaos.intents.understanding.fuzzy`), only when the literal reading found nothing
+   at all (a question or a refusal stands): a close guess acts; a weaker one asks "Did you mean
+   …?" and does nothing; questions are never guessed into actions.
+
+Everything else keeps the literal result: "which one?", "I don't know …", "not understood".
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable
+
+from rosaos.intents.grammar.phrases import phrase
+from rosaos.intents.understanding.fuzzy import ACT_SCORE, ASK_SCORE, FuzzyMatcher
+from rosaos.intents.understanding.match_result import MatchResult
+from rosaos.intents.understanding.readings import Focus
+from rosaos.intents.understanding.rephrase import negated, rephrasings, strip_fillers
+
+Literal = Callable[[str, Focus], MatchResult]
+QUESTION_START: dict[str, re.Pattern[str]] = {
+    "en": re.compile(
+        r"^(is|are|was|were|what|what's|whats|how|where|who|why|when|which|does|do|did|has|have)\b", re.I
+    ),
+}
+
+
+def understand(
+    text: str,
+    focus: Focus,
+    literal: Literal,
+    names: dict[str, list[str]],
+    fuzzy: FuzzyMatcher | None,
+    language: str,
+    whole: Literal | None = None,
+) -> MatchResult:
+    """What ``text`` means (see the module docstring). ``literal`` reads a sentence exactly as
+    said (whole, split or elided); ``whole`` (default: ``literal``) only as one whole command,
+    which is all a filled-in fuzzy guess needs and is much cheaper."""
+    first = literal(text, focus)
+    if first.is_exact:
+        return first
+    command = negated(text, language)
+    if command is not None:
+        meant = literal(command, focus)
+        if meant.is_exact:
+            clause = command[:1].lower() + command[1:]
+            return MatchResult(
+                "no_match", text, reply=phrase(language, "negated", clause=clause), refusal=True
+            )
+        return first
+    spoken = [(name, frozenset(devices)) for name, devices in names.items()]
+    for rephrased in rephrasings(text, language, spoken):
+        narrowed = rephrased.addressed if focus is None else (rephrased.addressed or focus) & focus
+        found = literal(rephrased.text, narrowed if rephrased.addressed is not None else focus)
+        if found.is_exact:
+            return found
+        if rephrased.addressed is not None and found.kind == "clarify" and first.kind == "no_match":
+            first = found
+    if fuzzy is None or first.kind != "no_match" or first.refusal:
+        return first
+    return _guess(text, first, whole or literal, fuzzy, focus, language)
+
+
+def _guess(
+    text: str,
+    first: MatchResult,
+    literal: Literal,
+    fuzzy: FuzzyMatcher,
+    focus: Focus,
+    language: str,
+) -> MatchResult:
+    plain = strip_fillers(text, language)
+    guess = fuzzy.guess(plain)
+    if guess is None or guess.score < ASK_SCORE:
+        return first
+    meant = literal(guess.sentence, focus)
+    if not meant.is_exact:
+        return first
+    question = QUESTION_START.get(language.split("-")[0])
+    asks = question is not None and question.match(plain) is not None
+    acts = any(step.tool != "get_state" for process in meant.processes for step in process.plan.steps)
+    if guess.score >= ACT_SCORE and not (asks and acts):
+        return meant
+    reply = phrase(language, "did_you_mean", suggestion=guess.sentence)
+    return MatchResult("clarify", text, reply=reply, suggestion=guess.sentence)
