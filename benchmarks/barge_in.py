@@ -52,7 +52,7 @@ from rosaos.frontends.voice.sources import SAMPLE_RATE, WavSource, read_wav
 from rosaos.frontends.voice.stt import MoonshineSTT, wav_bytes
 from rosaos.frontends.voice.vad import Segmenter, SileroClassifier
 from rosaos.frontends.voice.wake import WakeGate
-from rosaos.kernel.client import KernelClient
+from rosaos.kernel.api.kernel_client import KernelClient
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_JSON = HERE / "results" / "barge_in.json"
