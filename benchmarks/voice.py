@@ -103,9 +103,10 @@ def spoken_command(work: Path) -> Path:
     return path
 
 
-async def start_kernel(work: Path) -> tuple[asyncio.subprocess.Process, Any]:
-    """``rosaos up`` in its own process on a free port; returns it once its API answers."""
-    (work / "rosaos.toml").write_text(f'data_dir = "{work / "data"}"\n' + WORLD)
+async def start_kernel(work: Path, world: str = WORLD) -> tuple[asyncio.subprocess.Process, Any]:
+    """``rosaos up`` with ``world`` in its own process on a free port; returns it once its API
+    answers and every device is healthy."""
+    (work / "rosaos.toml").write_text(f'data_dir = "{work / "data"}"\n' + world)
     log = (work / "kernel.log").open("wb")
     process = await asyncio.create_subprocess_exec(
         *(sys.executable, "-m", "rosaos.cli", "up", "--config", str(work / "rosaos.toml"), "--port", "0"),

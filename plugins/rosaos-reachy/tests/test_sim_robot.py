@@ -201,6 +201,7 @@ TOOLS = {
     "get_state", "speak", "stop_speaking", "look", "look_at_point", "reset_head", "rotate_body", "move_antennas",
     "play_emotion", "list_emotions", "dance", "stop_motion", "wake_up", "sleep", "take_picture",
     "describe_image", "detect_faces", "remember_face", "forget_face", "analyze_face", "look_at_face",
+    "set_listening", "follow_face",
 }  # fmt: skip
 
 

@@ -8,7 +8,9 @@
   computer's speaker or a WAV file, and the camera is simulated.
 
 Motion goes through :class:`~rosaos_reachy.motion.MotionController` (one at a time, the
-latest wins); speech through :class:`~rosaos_reachy.speech.Speaker`.
+latest wins); speech through :class:`~rosaos_reachy.speech.Speaker`; the robot's own motion
+between them (breathing, listening, swaying as it speaks, facing people) through
+:class:`~rosaos_reachy.companion.Companion`.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from pathlib import Path
 
 from rosaos.drivers import DeviceBackend, DeviceContext, DeviceError
 from rosaos_reachy.camera import Image, SimCamera, focal_px, grab, pixel_to_angles, save_jpeg
+from rosaos_reachy.companion import Companion
 from rosaos_reachy.daemon import SimDaemon
 from rosaos_reachy.emotions import MoveLibrary, MovesKind, UnknownMove
 from rosaos_reachy.faces import FaceDetector, FaceMemory
@@ -69,6 +72,18 @@ class ReachyBackend(DeviceBackend):
         self.detector: FaceDetector | None = None
         self.sim_camera: SimCamera | None = None
         self.awake = True
+        self.companion = Companion(
+            lambda: self.robot,
+            self.motion,
+            self.speaker,
+            lambda: self.awake,
+            self._companion_frame,
+            lambda: self.detector,
+            self.focal_length,
+            enabled=settings.companion,
+            follow_face=settings.follow_face,
+        )
+        self.motion.before_foreground = self.companion.yield_now
 
     # --- lifecycle ----------------------------------------------------------------------------
 
@@ -94,6 +109,7 @@ class ReachyBackend(DeviceBackend):
             self.awake = self.robot.motors_enabled() and not measured.head.close_to(
                 SLEEP_POSTURE.head, 10.0, 10.0
             )
+        self.companion.start()
 
     async def _take_sim_state(self, sim: SimSettings) -> None:
         self.speaker.last_spoken = sim.last_spoken
@@ -108,6 +124,7 @@ class ReachyBackend(DeviceBackend):
 
     async def close(self) -> None:
         """Stop motion and speech, disconnect, and stop the simulated daemon (sim)."""
+        await self.companion.close()
         with contextlib.suppress(Exception):
             await self.speaker.stop()
         if self.robot.mini is not None:
@@ -119,7 +136,9 @@ class ReachyBackend(DeviceBackend):
             self.daemon = None
 
     async def safe_stop(self) -> None:
-        """Emergency stop: stop moving where it is and stop talking. It stays awake, holding its pose."""
+        """Emergency stop: stop moving where it is and stop talking. It stays awake, holding its pose;
+        the companion keeps still until a motion tool or ``wake_up`` is called."""
+        await self.companion.stop()
         await self.motion.stop()
         await self.speaker.stop()
 
@@ -152,6 +171,8 @@ class ReachyBackend(DeviceBackend):
             if self.robot.has_camera
             else ("simulated" if self.sim_camera is not None else "none"),
             emotions=self.moves.source("emotions"),
+            companion=self.companion.mode,
+            follow_face=self.companion.follow_face,
         )
 
     def report(self, message: str) -> MotionReport:
@@ -171,6 +192,7 @@ class ReachyBackend(DeviceBackend):
     # --- motion -------------------------------------------------------------------------------
 
     async def _ensure_awake(self) -> str:
+        self.companion.resume()  # an owner moves the robot: after an emergency stop, it may again
         if self.awake:
             return ""
         await self.wake_up()
@@ -235,6 +257,7 @@ class ReachyBackend(DeviceBackend):
         return self.report(f"stopped {moving}" if stopped and moving else "nothing was moving")
 
     async def wake_up(self) -> MotionReport:
+        self.companion.resume()
         await self.motion.run("wake up", self.robot.wake_up, NEUTRAL_POSTURE)
         self.awake = True
         return self.report("awake")
@@ -287,6 +310,12 @@ class ReachyBackend(DeviceBackend):
         yaw = _clamp(start.head.yaw - start.body_yaw + d_yaw, MAX_HEAD_YAW)
         pitch = _clamp(start.head.pitch + d_pitch, MAX_HEAD_PITCH)
         return await self.look(yaw, pitch, 0.0, what)
+
+    async def _companion_frame(self, posture: Posture) -> Image | None:
+        """A frame for ``follow_face``: the robot's camera, else the simulated one, else None."""
+        if self.robot.has_camera:
+            return await asyncio.to_thread(self.robot.frame)
+        return self.sim_camera.frame(posture) if self.sim_camera is not None else None
 
     @property
     def images_dir(self) -> Path:

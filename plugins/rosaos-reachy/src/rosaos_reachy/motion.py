@@ -9,6 +9,10 @@ The controller also remembers the *commanded* posture. ``get_state`` reports it 
 measured posture is within a small deadband of it (a head sagging a millimetre under its own
 weight, or MuJoCo's physics settling, is still "at" its target; the SDK's daemon reasons the
 same way about its rest pose), and the measurement otherwise.
+
+Motions are *foreground* (a tool a process called) or *background* (the companion's turns,
+:mod:`rosaos_reachy.companion`): a background motion starts only when nothing moves, and
+:attr:`MotionController.busy` tells the companion to keep still while a foreground one runs.
 """
 
 from __future__ import annotations
@@ -18,7 +22,7 @@ import contextlib
 import logging
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import AsyncIterator, Awaitable, Callable
 from dataclasses import dataclass
 
 from reachy_mini.motion.move import Move
@@ -72,6 +76,30 @@ class MotionController:
         self._task: asyncio.Task[None] | None = None
         self._cancel = threading.Event()
         self._uses_daemon_move = False
+        self._background = False
+        self._foreground = 0
+        self.foreground_ended = 0.0
+        """``time.monotonic()`` when the last foreground motion ended (the companion waits a little)."""
+        self.before_foreground: Callable[[], Awaitable[None]] | None = None
+        """Called before a foreground motion starts: the companion zeroes its offsets."""
+
+    @property
+    def busy(self) -> bool:
+        """A foreground motion is under way (moving, or waiting for the pose to settle)."""
+        running = self._task is not None and not self._task.done() and not self._background
+        return self._foreground > 0 or running
+
+    @contextlib.asynccontextmanager
+    async def _foreground_motion(self) -> AsyncIterator[None]:
+        self._foreground += 1
+        try:
+            if self.before_foreground is not None:
+                with contextlib.suppress(Exception):
+                    await self.before_foreground()
+            yield
+        finally:
+            self._foreground -= 1
+            self.foreground_ended = time.monotonic()
 
     def view(self) -> Reported:
         """The posture to report now (see :func:`settled_view`)."""
@@ -79,18 +107,31 @@ class MotionController:
 
     async def goto(self, target: Posture, duration: float, label: str, *, body: bool = True) -> Reported:
         """Interrupt, move to ``target`` and wait for it (and for the physics to settle)."""
-        task = await self._start(label, lambda: self._goto(target, duration, body), daemon_move=True)
-        await self._wait(task)
-        return await self.settle()
+        async with self._foreground_motion():
+            task = await self._start(label, lambda: self._goto(target, duration, body), daemon_move=True)
+            await self._wait(task)
+            return await self.settle()
+
+    async def goto_in_background(self, target: Posture, duration: float, label: str) -> bool:
+        """Start a background move to ``target`` if nothing moves; False (nothing done) otherwise.
+
+        It does not wait: any foreground motion interrupts it, as the newer request.
+        """
+        async with self._lock:
+            if self.busy or (self._task is not None and not self._task.done()):
+                return False
+            self._begin(label, lambda: self._goto(target, duration, True), daemon_move=True, background=True)
+            return True
 
     async def play(self, move: Move, end: Posture, label: str, *, wait: bool) -> float:
         """Interrupt and stream ``move`` (an emotion or dance), ending at ``end``.
 
         Returns its duration at once, or after it has played when ``wait``.
         """
-        task = await self._start(label, lambda: self._stream(move, end), daemon_move=False)
-        if wait:
-            await self._wait(task)
+        async with self._foreground_motion():
+            task = await self._start(label, lambda: self._stream(move, end), daemon_move=False)
+            if wait:
+                await self._wait(task)
         return float(move.duration)
 
     async def run(self, label: str, action: Callable[[], None], result: Posture) -> Reported:
@@ -100,13 +141,14 @@ class MotionController:
             self.commanded = result
             action()
 
-        task = await self._start(label, body, daemon_move=True)
-        await self._wait(task)
-        return await self.settle()
+        async with self._foreground_motion():
+            task = await self._start(label, body, daemon_move=True)
+            await self._wait(task)
+            return await self.settle()
 
     async def stop(self) -> bool:
         """Stop the running motion where it is. True if something was moving."""
-        async with self._lock:
+        async with self._foreground_motion(), self._lock:
             moving = self._task is not None and not self._task.done()
             await self._interrupt()
             if moving:
@@ -133,12 +175,18 @@ class MotionController:
     async def _start(self, label: str, body: Callable[[], None], *, daemon_move: bool) -> asyncio.Task[None]:
         async with self._lock:
             await self._interrupt()
-            self._cancel = threading.Event()
-            self._uses_daemon_move = daemon_move
-            self.current = label
-            task = asyncio.create_task(self._run(label, body))
-            self._task = task
-            return task
+            return self._begin(label, body, daemon_move=daemon_move, background=False)
+
+    def _begin(
+        self, label: str, body: Callable[[], None], *, daemon_move: bool, background: bool
+    ) -> asyncio.Task[None]:
+        self._cancel = threading.Event()
+        self._uses_daemon_move = daemon_move
+        self._background = background
+        self.current = label
+        task = asyncio.create_task(self._run(label, body))
+        self._task = task
+        return task
 
     async def _run(self, label: str, body: Callable[[], None]) -> None:
         try:
@@ -149,6 +197,8 @@ class MotionController:
         finally:
             if self._task is asyncio.current_task():
                 self.current = None
+                if not self._background:  # a play() that returned at its start ends here
+                    self.foreground_ended = time.monotonic()
 
     async def _interrupt(self) -> None:
         task = self._task

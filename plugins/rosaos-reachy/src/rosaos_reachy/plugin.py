@@ -62,6 +62,7 @@ SPEC: DriverSpec[ReachyBackend] = DriverSpec(
         head(),
         flag("speaking", label="Speaking"),
         text("moving", label="Moving"),
+        text("companion", label="Companion"),
         image(),
         text("mode", label="Mode"),
     ),

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 from reachy_mini import ReachyMini
-from reachy_mini.io.protocol import StopMoveCmd
+from reachy_mini.io.protocol import SetFullTargetCmd, SetSpeechOffsetsCmd, StopMoveCmd
 from reachy_mini.motion.move import Move
 from reachy_mini.reachy_mini import (
     INIT_ANTENNAS_JOINT_POSITIONS,
@@ -201,6 +201,22 @@ class RobotLink:
             )
             cancel.wait(max(0.0, period - (time.monotonic() - start - t)))
         return False
+
+    def set_head_offsets(self, offsets: HeadPose) -> None:
+        """Offsets the daemon adds to whatever head target it has, before its inverse kinematics
+        (the SDK's speech offsets: the daemon's own composition, so they never replace a target)."""
+        o = offsets
+        values = [
+            o.x / 1000.0,
+            o.y / 1000.0,
+            o.z / 1000.0,
+            *(math.radians(a) for a in (o.roll, o.pitch, o.yaw)),
+        ]
+        self.sdk.client.send_command(SetSpeechOffsetsCmd(offsets=values))
+
+    def set_antennas(self, left: float, right: float) -> None:
+        """Set the antenna targets now (no interpolation: the caller streams them)."""
+        self.sdk.client.send_command(SetFullTargetCmd(antennas=antennas_to_sdk(left, right)))
 
     def stop_move(self) -> None:
         """Interrupt whatever move the daemon is playing (the SDK's ``stop_move`` command)."""

@@ -1,7 +1,8 @@
 """The MCP server of one Reachy Mini: state, speech, and the motion and vision tools.
 
 The tools are grouped by role: :mod:`rosaos_reachy.tools.motion` (head, body, antennas,
-emotions, wake and sleep) and :mod:`rosaos_reachy.tools.vision` (camera, faces, vision model).
+emotions, wake and sleep), :mod:`rosaos_reachy.tools.companion` (listening, face following) and
+:mod:`rosaos_reachy.tools.vision` (camera, faces, vision model).
 This module builds the server and holds ``get_state`` and ``speak``.
 """
 
@@ -17,7 +18,7 @@ from rosaos_reachy.annotations import ACT, READ_ONLY, SET
 from rosaos_reachy.backend import ReachyBackend
 from rosaos_reachy.speech import SpeechReport, StopReport
 from rosaos_reachy.state import ReachyState
-from rosaos_reachy.tools import motion, vision
+from rosaos_reachy.tools import companion, motion, vision
 
 SpokenText = Annotated[
     str,
@@ -61,5 +62,6 @@ def build_server(ctx: DeviceContext, backend: ReachyBackend) -> FastMCP:
         return await backend.speaker.stop()
 
     motion.register(mcp, backend)
+    companion.register(mcp, backend)
     vision.register(mcp, backend)
     return mcp

@@ -44,6 +44,17 @@ class ReachySettings(DeviceSettings):
         description="Use the robot's camera and speaker (real backend). False: no camera, speech "
         "plays on this computer.",
     )
+    # --- companion --------------------------------------------------------------------------
+    companion: bool = Field(
+        default=True,
+        description="Move on its own between tasks: breathe when idle, wave the antennas while listening, "
+        "sway while speaking, turn to the speaker. It always yields to a process's motion.",
+    )
+    follow_face: bool = Field(
+        default=True,
+        description="While listening or speaking, keep facing the face the camera sees (the follow_face tool "
+        "switches it at run time).",
+    )
     # --- speech -----------------------------------------------------------------------------
     tts_engines: list[TtsEngineName] = Field(
         default=["elevenlabs", "groq", "openai", "local"],

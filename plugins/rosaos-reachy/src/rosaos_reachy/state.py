@@ -8,6 +8,8 @@ from pydantic import BaseModel, Field
 
 from rosaos_reachy.faces import Face
 
+CompanionMode = Literal["breathing", "listening", "speaking", "asleep", "off"]
+
 
 class HeadState(BaseModel):
     """Head pose relative to the base: mm and degrees (yaw + left, pitch + down, roll + right)."""
@@ -39,6 +41,11 @@ class ReachyState(BaseModel):
     mode: str = Field(description="'real', or which simulation runs: 'sim: MuJoCo' or 'sim: mockup (...)'.")
     camera: Literal["robot", "simulated", "none"]
     emotions: str = Field(description="Where emotions come from: 'built-in' or 'dataset <name>'.")
+    companion: CompanionMode = Field(
+        description="What the robot does on its own between motion tools: breathing (idle), listening "
+        "(antennas wave), speaking (head sways), asleep, or off (disabled, or after an emergency stop)."
+    )
+    follow_face: bool = Field(description="While listening or speaking, it keeps facing the face in view.")
 
 
 class MotionReport(BaseModel):
@@ -50,6 +57,14 @@ class MotionReport(BaseModel):
     body_yaw: float
     awake: bool
     moving: str | None
+
+
+class CompanionReport(BaseModel):
+    """What ``set_listening`` and ``follow_face`` return."""
+
+    companion: CompanionMode
+    follow_face: bool
+    listening: bool
 
 
 class PictureReport(BaseModel):

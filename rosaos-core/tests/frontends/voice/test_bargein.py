@@ -91,3 +91,18 @@ def test_start_forgets_the_last_stretch(tmp_path: Path, user_voice: Samples) -> 
     assert first_barge_in(gate, np.concatenate([silence(1.0), user_voice])) is not None
     gate.start()
     assert gate.take() == [] and gate.onset is None and gate.echo_db == SILENCE_DB
+
+
+@pytest.mark.parametrize("words", ["stop, I have a question", "wait", "no, that is not what I asked"])
+def test_the_users_first_syllables_do_not_raise_the_bar(
+    robot_voice: Samples, words: str, tmp_path: Path
+) -> None:
+    """A user 20 dB over the echo: their first syllables, which the VAD is slow to call speech,
+    and their quieter ones are not learnt as echo, or the bar would climb above their voice."""
+    user = scaled(read_wav(speak(words, tmp_path / "user.wav")), 0.05 * 10 ** (20 / 20))
+    mixed = robot_voice.copy()
+    at = 2 * SAMPLE_RATE
+    mixed[at : at + user.size] += user[: mixed.size - at]
+    gate = BargeIn(SileroClassifier())
+    assert first_barge_in(gate, mixed) is not None, f"echo learnt up to {gate.echo_db:.1f} dB"
+    assert gate.onset is not None and 1.95 <= gate.onset <= 2.3

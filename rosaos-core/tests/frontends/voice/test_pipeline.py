@@ -147,9 +147,14 @@ class Speaking:
 
     def __init__(self) -> None:
         self.woken: list[float | None] = []
+        self.listened_to = 0
 
-    async def woke(self, doa: float | None) -> None:
+    async def woke(self, doa: float | None, seconds: float) -> None:
+        assert seconds > 0
         self.woken.append(doa)
+
+    async def listened(self) -> None:
+        self.listened_to += 1
 
     def muted(self, wall: float) -> bool:
         return 5_000.0 <= wall < 5_001.2
@@ -164,7 +169,7 @@ async def test_while_the_robot_speaks_a_live_source_is_not_heard() -> None:
     sink, heard = await run(["Hello, lights on."], bursts=2, source=ToneSource(audio, live=True), robot=robot)
     assert [text for text, _ in sink.sent] == ["lights on."]
     assert any(h.kind == "muted" for h in heard)
-    assert robot.woken == [None]
+    assert robot.woken == [None] and robot.listened_to == 1  # listening from the wake to the command
 
 
 class FlakyClient:
@@ -218,3 +223,66 @@ def test_chunks_are_sized_from_the_chunk_seconds() -> None:
         chunk_seconds=0.12,
     )
     assert pipeline.chunk_samples == 1920
+
+
+class SpeakingUntilStopped:
+    """A robot that talks until the pipeline stops it (barge-in)."""
+
+    def __init__(self) -> None:
+        self.talking = True
+        self.stops = 0
+
+    async def woke(self, doa: float | None, seconds: float) -> None:
+        return None
+
+    async def listened(self) -> None:
+        return None
+
+    def muted(self, wall: float) -> bool:
+        return self.talking
+
+    def unmute(self) -> None:
+        self.talking = False
+
+    async def stop_speaking(self) -> bool:
+        self.stops += 1
+        return True
+
+    async def follow(self) -> None:
+        return None
+
+
+class SizedToneSource(ToneSource):
+    def __init__(self, samples: Samples) -> None:
+        super().__init__(samples, live=True)
+        self.asked: list[int] = []
+
+    async def chunks(self, chunk_samples: int) -> AsyncIterator[AudioChunk]:
+        self.asked.append(chunk_samples)
+        async for chunk in super().chunks(chunk_samples):
+            yield chunk
+
+
+async def test_a_barge_in_is_heard_frame_by_frame_and_the_segmenter_still_gets_whole_chunks() -> None:
+    from rosaos.frontends.voice.bargein import BargeIn
+
+    classifier = EnergyClassifier()
+    audio = pattern(("silence", 0.5), ("tone", 0.8), ("silence", 1.0))
+    source, robot = SizedToneSource(audio), SpeakingUntilStopped()
+    segmenter = Segmenter(classifier)
+    fed: list[int] = []
+    feed = segmenter.feed
+    segmenter.feed = lambda chunk: (fed.append(chunk.samples.size), feed(chunk))[1]  # type: ignore[method-assign]
+    heard: list[Heard] = []
+    pipeline = VoicePipeline(
+        source, segmenter, ScriptedSTT("stop"), WakeGate(), Collected(), heard.append,
+        robot=robot, barge_in=BargeIn(classifier), chunk_seconds=0.12,
+    )  # fmt: skip
+    stats = await pipeline.run()
+    assert source.asked == [classifier.frame_samples]  # read frame by frame while the robot may speak
+    [barge] = [h for h in heard if h.kind == "barge_in"]
+    assert barge.data["at"] - barge.data["onset"] < 0.12 + 2 * 0.03  # not a whole chunk late
+    assert robot.stops == 1 and stats.interruptions == 1 and stats.sent == 1
+    chunk = round(0.12 * SAMPLE_RATE)
+    # The kept audio goes in as it was read; once the robot is silent, whole chunks again.
+    assert fed[-2] >= chunk, fed

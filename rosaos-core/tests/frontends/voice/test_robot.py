@@ -31,45 +31,41 @@ def test_the_yaw_is_bounded() -> None:
 
 
 def fake_reachy(calls: list[tuple[str, dict[str, Any]]], fail: bool = False) -> FastMCP:
-    """The two tools the voice front end calls, recording their arguments."""
+    """The companion tool the voice front end calls on wake, recording its arguments."""
     mcp = FastMCP("reachy")
 
     @mcp.tool
-    def look(yaw: float = 0.0, pitch: float = 0.0, roll: float = 0.0) -> str:
-        calls.append(("look", {"yaw": yaw, "pitch": pitch, "roll": roll}))
-        return "ok"
-
-    @mcp.tool
-    def move_antennas(left: float, right: float) -> str:
+    def set_listening(on: bool, direction: float | None = None, seconds: float = 10.0) -> str:
         if fail:
-            raise ToolError("antennas are asleep")
-        calls.append(("move_antennas", {"left": left, "right": right}))
+            raise ToolError("the companion is asleep")
+        calls.append(("set_listening", {"on": on, "direction": direction, "seconds": seconds}))
         return "ok"
 
     return mcp
 
 
-async def test_on_wake_the_robot_looks_toward_the_speaker_and_waves() -> None:
+async def test_on_wake_the_robot_listens_turned_toward_the_speaker() -> None:
     calls: list[tuple[str, dict[str, Any]]] = []
-    await ReachyLink(DeviceClient.in_process(fake_reachy(calls))).woke(math.pi / 3)
-    assert calls[0] == ("look", {"yaw": 30.0, "pitch": 0.0, "roll": 0.0})
-    assert [name for name, _ in calls[1:]] == ["move_antennas"] * 3
-    assert calls[-1][1] == {"left": 10.0, "right": 10.0}  # back to rest
+    link = ReachyLink(DeviceClient.in_process(fake_reachy(calls)))
+    await link.woke(math.pi / 3, 8.0)
+    assert calls == [("set_listening", {"on": True, "direction": 30.0, "seconds": 8.0})]
+    await link.listened()
+    assert calls[-1] == ("set_listening", {"on": False, "direction": None, "seconds": 10.0})
 
 
-async def test_without_a_direction_the_robot_only_waves() -> None:
+async def test_without_a_direction_it_listens_where_it_faces() -> None:
     calls: list[tuple[str, dict[str, Any]]] = []
-    await ReachyLink(DeviceClient.in_process(fake_reachy(calls))).woke(None)
-    assert {name for name, _ in calls} == {"move_antennas"}
+    await ReachyLink(DeviceClient.in_process(fake_reachy(calls))).woke(None, 500.0)
+    assert calls == [("set_listening", {"on": True, "direction": None, "seconds": 120.0})]  # bounded
 
 
 async def test_a_failing_gesture_is_logged_once(caplog: pytest.LogCaptureFixture) -> None:
     link = ReachyLink(DeviceClient.in_process(fake_reachy([], fail=True)))
     with caplog.at_level(logging.WARNING):
-        await link.woke(None)
-        await link.woke(None)
+        await link.woke(None, 8.0)
+        await link.woke(None, 8.0)
     ours = [r for r in caplog.records if r.name == "rosaos.frontends.voice.robot"]
-    assert len(ours) == 1 and "move_antennas" in ours[0].getMessage()
+    assert len(ours) == 1 and "set_listening" in ours[0].getMessage()
 
 
 def test_speaking_until_mutes_until_then() -> None:

@@ -6,7 +6,9 @@ robot's own voice out with an echo gate: a frame counts as the user's only when 
 speech *and* it is louder, by ``margin_db``, than the loudest the robot's voice has been at the
 microphones over the last ``echo_window_seconds``. ``min_speech_seconds`` of such frames in a row
 is a barge-in. The first ``learn_seconds`` of each stretch of robot speech only teach the gate
-how loud the echo is.
+how loud the echo is; after that, a frame teaches it only when nothing loud enough to be the user
+came in the :data:`LEARN_HOLD_SECONDS` before (else the user's own first syllables, which the
+VAD is slow to call speech, and quieter ones would raise the bar above their voice).
 
 A microphone array with its own echo cancellation (one that subtracts what its speaker plays)
 makes the echo much quieter, so a normal voice barges in; without one the user has to speak up
@@ -25,6 +27,10 @@ from rosaos.frontends.voice.vad import FrameClassifier
 
 SILENCE_DB = -120.0
 """The level of digital silence (an all-zero frame), instead of minus infinity."""
+LEARN_HOLD_SECONDS = 0.3
+"""Frames within this long after one loud enough to be the user are not learnt as echo."""
+ECHO_RISE_DB_PER_SECOND = 40.0
+"""After the first ``learn_seconds``, how fast the echo's learnt level may climb."""
 KEEP_SECONDS = 1.0
 """Audio kept while the robot speaks, handed on at a barge-in: the onset of what the user says."""
 
@@ -69,6 +75,10 @@ class BargeIn:
         self._pending_start = 0.0
         self._frames = 0
         self._run = 0
+        self._hold_frames = max(1, round(LEARN_HOLD_SECONDS / frame_seconds))
+        self._rise_per_frame = ECHO_RISE_DB_PER_SECOND * frame_seconds
+        self._quiet_frames = self._hold_frames + 1
+        self._loud_start = 0.0
         self.onset: float | None = None
         """Stream seconds where the speech that barged in began (once :meth:`feed` said so)."""
 
@@ -79,6 +89,7 @@ class BargeIn:
         self._kept.clear()
         self._pending = np.zeros(0, np.float32)
         self._frames = self._run = 0
+        self._quiet_frames = self._hold_frames + 1
         self.onset = None
 
     @property
@@ -113,13 +124,27 @@ class BargeIn:
         if self._frames <= self._learn_frames:
             self._echo.append(level)
             return False
-        if speech and level >= self.echo_db + self.settings.margin_db:
+        if level >= self.echo_db + self.settings.margin_db:
+            if (
+                self._quiet_frames > self._hold_frames
+            ):  # after a quiet spell: where the user began, if they did
+                self._loud_start = start
+            self._quiet_frames = 0
+            if not speech:  # the VAD lags at the onset of speech: wait for it, but do not learn this
+                return False
             if self._run == 0:
-                self.onset = start
+                self.onset = self._loud_start
             self._run += 1
             return self._run >= self._min_frames
         self._run = 0
-        self._echo.append(level)  # the robot's own voice (or the room): it raises the bar
+        self._quiet_frames += 1
+        # The robot's own voice (or the room) raises the bar, but not the user's first or quiet
+        # syllables: a frame is learnt only well after the last loud one.
+        if self._quiet_frames > self._hold_frames:
+            # Learnt slowly upward: the user's first syllables rise in a few frames, each below
+            # the bar, and would lift it step by step above their voice; the robot's echo rises
+            # as fast but its loudest lasts, so the bar still gets there within its window.
+            self._echo.append(min(level, self.echo_db + self._rise_per_frame))
         return False
 
     def _keep(self, chunk: AudioChunk) -> None:

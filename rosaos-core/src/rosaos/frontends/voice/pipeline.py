@@ -19,6 +19,8 @@ from collections.abc import AsyncIterator, Callable
 from dataclasses import dataclass, field
 from typing import Any, Literal, Protocol
 
+import numpy as np
+
 from rosaos.frontends.voice.bargein import BargeIn
 from rosaos.frontends.voice.early import EarlyTranscriber
 from rosaos.frontends.voice.replies import ReplyFollower
@@ -217,10 +219,17 @@ class VoicePipeline:
 
     async def _segments(self) -> AsyncIterator[SpeechSegment]:
         muted = False
-        async for chunk in self.source.chunks(self.chunk_samples):
+        read = self.chunk_samples
+        if self.source.live and self.barge_in is not None:
+            # The echo gate hears each VAD frame as it arrives, not a chunk later: a barge-in must
+            # stop the robot within 300 ms. The segmenter still gets whole chunks.
+            read = min(read, self.barge_in.classifier.frame_samples)
+        pieces: list[AudioChunk] = []
+        async for chunk in self.source.chunks(read):
             if self.source.live and self.robot.muted(chunk.wall):
                 if not muted:  # the robot's own voice: drop it, and whatever was half-heard
                     muted = True
+                    pieces.clear()
                     self.segmenter.reset()
                     if self.barge_in is not None:
                         self.barge_in.start()
@@ -232,7 +241,14 @@ class VoicePipeline:
                     yield self._announce(segment)
                 continue
             muted = False
-            for segment in self._finals(self.segmenter.feed(chunk)):
+            pieces.append(chunk)
+            if sum(piece.samples.size for piece in pieces) < self.chunk_samples:
+                continue
+            for segment in self._finals(self.segmenter.feed(_joined(pieces))):
+                yield self._announce(segment)
+            pieces.clear()
+        if pieces:
+            for segment in self._finals(self.segmenter.feed(_joined(pieces))):
                 yield self._announce(segment)
         for segment in self.segmenter.flush():
             yield self._announce(segment)
@@ -293,7 +309,7 @@ class VoicePipeline:
             return
         decision = self.gate.decide(transcript, segment.start, segment.end)
         if decision.woke:
-            self._in_background(self.robot.woke(segment.doa))
+            self._in_background(self.robot.woke(segment.doa, self.gate.awake_until - segment.end))
         if decision.action == "woke":
             self.report(Heard("woke", decision.reason, {**times, "awake_until": self.gate.awake_until}))
             return
@@ -314,6 +330,7 @@ class VoicePipeline:
             self.report(Heard("error", str(error), {**times, "idempotency_key": key}))
             return
         self.stats.sent += 1
+        self._in_background(self.robot.listened())
         if self.replies is not None and not answer.get("duplicate"):
             self.replies.follow(int(answer["id"]))
         data = {
@@ -334,12 +351,21 @@ class VoicePipeline:
                 continue
             if self.gate.open(time.monotonic() - self._t0):
                 self.report(Heard("woke", "eye contact", {"awake_until": self.gate.awake_until}))
-                self._in_background(self.robot.woke(None))
+                self._in_background(self.robot.woke(None, self.gate.follow_up_seconds))
 
     def _in_background(self, work: Any) -> None:
         task = asyncio.ensure_future(work)
         self._background.add(task)
         task.add_done_callback(self._background.discard)
+
+
+def _joined(pieces: list[AudioChunk]) -> AudioChunk:
+    """Consecutive pieces of audio as one chunk (the last direction of arrival given, if any)."""
+    if len(pieces) == 1:
+        return pieces[0]
+    doa = next((piece.doa for piece in reversed(pieces) if piece.doa is not None), None)
+    samples = np.concatenate([piece.samples for piece in pieces])
+    return AudioChunk(samples, pieces[0].start, pieces[0].wall, doa)
 
 
 def _times(segment: SpeechSegment) -> dict[str, Any]:

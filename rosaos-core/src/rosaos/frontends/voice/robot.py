@@ -1,8 +1,14 @@
-"""The Reachy Mini's side of listening: turn toward the speaker and wave on wake; know when it talks.
+"""The Reachy Mini's side of listening: tell it when it listens; know when it talks.
 
 The voice front end uses the robot the way processes do: through the reachy instance's MCP tools
-(``look``, ``move_antennas``, ``speak``, ``get_state``), found through the kernel's ``GET /devices``. Without
-a served reachy instance there is nothing to move; that is logged once and listening goes on.
+(``set_listening``, ``speak``, ``stop_speaking``, ``get_state``), found through the kernel's
+``GET /devices``. Without a served reachy instance there is nothing to move; that is logged once
+and listening goes on.
+
+On the wake phrase, ``set_listening(on=true, direction=...)`` hands the gestures to the driver's
+companion: it turns toward the speaker (the microphone array's direction of arrival, when the
+audio source gives one) and waves its antennas while it listens, as background motion that never
+interrupts a process's; once the command is sent, ``set_listening(on=false)``.
 
 While the robot speaks, its own voice reaches the microphones. :meth:`ReachyLink.muted` says when
 to ignore audio: until ``speaking_until`` (epoch seconds) if ``get_state`` gives it, while
@@ -14,7 +20,6 @@ and :meth:`ReachyLink.stop_speaking` cuts the sentence off with the driver's ``s
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 import math
 import time
@@ -32,15 +37,18 @@ ECHO_TAIL_SECONDS = 0.4
 """Room reverb and playout buffering after the robot's last word."""
 POLL_SECONDS = 0.25
 MAX_YAW_DEGREES = 60.0
-ANTENNA_WAVE = ((-30.0, 40.0), (40.0, -30.0), (10.0, 10.0))
-"""(left, right) degrees: a quick wave that says "I'm listening", ending at the rest pose (about 10)."""
 
 
 class RobotLink(Protocol):
     """What the pipeline asks of the robot. :class:`NoRobot` when there is none."""
 
-    async def woke(self, doa: float | None) -> None:
-        """Someone woke the robot: turn toward ``doa`` (radians, SDK convention) and wave."""
+    async def woke(self, doa: float | None, seconds: float) -> None:
+        """Someone woke the robot: it listens for ``seconds``, turned toward ``doa`` (radians, SDK
+        convention; None: where it faces)."""
+        ...
+
+    async def listened(self) -> None:
+        """The command was heard: the robot stops listening."""
         ...
 
     def muted(self, wall: float) -> bool:
@@ -67,7 +75,10 @@ class RobotLink(Protocol):
 class NoRobot:
     """No reachy instance is served: nothing to move, nothing to ignore."""
 
-    async def woke(self, doa: float | None) -> None:
+    async def woke(self, doa: float | None, seconds: float) -> None:
+        return None
+
+    async def listened(self) -> None:
         return None
 
     def muted(self, wall: float) -> bool:
@@ -106,12 +117,14 @@ class ReachyLink:
         self._unmuted_at = 0.0
         """Wall time of the last barge-in: a ``get_state`` asked before it is stale."""
 
-    async def woke(self, doa: float | None) -> None:
+    async def woke(self, doa: float | None, seconds: float) -> None:
+        args: dict[str, Any] = {"on": True, "seconds": round(max(1.0, min(120.0, seconds)), 1)}
         if doa is not None:
-            await self._call("look", {"yaw": doa_to_yaw(doa), "pitch": 0.0, "roll": 0.0})
-        for left, right in ANTENNA_WAVE:
-            if not await self._call("move_antennas", {"left": left, "right": right}):
-                break
+            args["direction"] = doa_to_yaw(doa)
+        await self._call("set_listening", args)
+
+    async def listened(self) -> None:
+        await self._call("set_listening", {"on": False})
 
     def muted(self, wall: float) -> bool:
         return wall <= self.muted_until
@@ -134,12 +147,22 @@ class ReachyLink:
 
     async def follow(self) -> None:
         while True:
-            asked = time.time()
-            with contextlib.suppress(DeviceError):
-                state = await self.device.get_state()
-                if asked >= self._unmuted_at:  # else it may still show the sentence just cut off
-                    self.observe(state, time.time())
-            await asyncio.sleep(POLL_SECONDS)
+            try:
+                # One MCP session for the whole run, shared by every call meanwhile: a barge-in's
+                # stop_speaking then costs one request, not a new session's handshake first.
+                async with self.device:
+                    while True:
+                        await self._poll()
+                        await asyncio.sleep(POLL_SECONDS)
+            except Exception as error:  # the reachy host restarted: open a new session
+                log.debug("reachy session ended (%s); opening a new one", error)
+                await asyncio.sleep(POLL_SECONDS)
+
+    async def _poll(self) -> None:
+        asked = time.time()
+        state = await self.device.get_state()
+        if asked >= self._unmuted_at:  # else it may still show the sentence just cut off
+            self.observe(state, time.time())
 
     def unmute(self) -> None:
         self._unmuted_at = time.time()
