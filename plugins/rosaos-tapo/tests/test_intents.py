@@ -79,14 +79,36 @@ def test_color_list_holds_exactly_the_named_colours(intents_file: IntentsFile) -
     assert values == list(NAMED_COLORS)
 
 
+UNNAMED_NEEDS = {"TapoNeedLight"}
+"""Intents that may name no bulb: "it's too dark in here" needs light wherever the user is."""
+
+
 def test_every_intent_template_names_its_target(intents_file: IntentsFile) -> None:
-    # A bulb is never "the only one" by default: a template names the device, its area, or all.
+    # A bulb is never "the only one" by default: a template names the device, its area, or all;
+    # only a need for light may name none (then the only bulb, or the engine asks which).
     for name, intent in intents_file.hassil["intents"].items():
         every = intents_file.actions[name].every
         for data in intent["data"]:
             for sentence in data["sentences"]:
                 named = "{device}" in sentence or "{area}" in sentence or (every and "{every}" in sentence)
-                assert named, f"{name}: {sentence!r} names no device"
+                assert named or name in UNNAMED_NEEDS, f"{name}: {sentence!r} names no device"
+
+
+@pytest.mark.parametrize(
+    "sentence",
+    ["I can't see a thing in here", "it's too dark in here", "it's pitch black", "I can't see anything"],
+)
+def test_a_need_for_light_with_no_place_lights_the_only_bulb_or_asks_which(sentence: str) -> None:
+    assert SPEC.intents is not None
+    kitchen = DeviceVocabulary("kitchen_light", "tapo", "Ceiling light in the kitchen", intents=SPEC.intents)
+    bedroom = DeviceVocabulary("bedroom_light", "tapo", "Bedside light in the bedroom", intents=SPEC.intents)
+    alone = IntentMatcher([kitchen], "en").match(sentence)
+    assert [(s.device, s.tool) for p in alone.processes for s in p.plan.steps] == [
+        ("kitchen_light", "turn_on")
+    ]
+    both = IntentMatcher([kitchen, bedroom], "en").match(sentence)
+    assert both.kind == "clarify" and not both.processes
+    assert "kitchen light" in both.reply and "bedroom light" in both.reply
 
 
 # The homeassistant: table — Home Assistant's multilingual intents mapped onto the bulb's tools
