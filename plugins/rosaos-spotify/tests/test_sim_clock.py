@@ -106,5 +106,5 @@ async def test_the_running_simulator_posts_playback_ended_once(tmp_path: Path) -
     assert [n.name for n in notices] == ["playback_ended"]
     assert notices[0].data == {"track": "Clair de Lune", "artist": "Claude Debussy"}
     assert notices[0].importance == "info"
-    assert notices[0].message == "spotify: playback ended after Clair de Lune by Claude Debussy"
+    assert notices[0].message == "playback ended after Clair de Lune by Claude Debussy"
     assert state.is_playing is False

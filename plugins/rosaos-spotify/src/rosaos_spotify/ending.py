@@ -61,7 +61,7 @@ class PlaybackEndNotifier:
         self.notify(
             "playback_ended",
             {"track": track, "artist": artist},
-            message=f"{self.instance}: playback ended after {what}",
+            message=f"playback ended after {what}",
         )
 
 
