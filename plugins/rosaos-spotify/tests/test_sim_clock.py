@@ -7,23 +7,12 @@ import random
 from pathlib import Path
 from typing import Any
 
+from spotify_catalogs import ALBUMS
+
 from rosaos.drivers import DeviceContext, NoticeBoard
 from rosaos_spotify.plugin import SPEC, sim_backend
 from rosaos_spotify.settings import SpotifySettings
 from rosaos_spotify.simulator import SimPlayer, SimSettings
-
-ALBUMS = [
-    {"track": "So What", "artist": "Miles Davis", "album": "Kind of Blue", "genre": "jazz"},
-    {"track": "Freddie Freeloader", "artist": "Miles Davis", "album": "Kind of Blue", "genre": "jazz"},
-    {"track": "Blue in Green", "artist": "Miles Davis", "album": "Kind of Blue", "genre": "jazz"},
-    {"track": "Take Five", "artist": "The Dave Brubeck Quartet", "album": "Time Out", "genre": "jazz"},
-    {
-        "track": "Clair de Lune",
-        "artist": "Claude Debussy",
-        "album": "Suite bergamasque",
-        "genre": "classical",
-    },
-]
 
 
 def clocked(**sim: Any) -> SimPlayer:

@@ -6,23 +6,11 @@ import random
 from typing import Any
 
 import pytest
+from spotify_catalogs import ALBUMS
 
 from rosaos.drivers import DeviceError
 from rosaos_spotify.catalog import DEFAULT_CATALOG
 from rosaos_spotify.simulator import SimPlayer, SimSettings
-
-ALBUMS = [
-    {"track": "So What", "artist": "Miles Davis", "album": "Kind of Blue", "genre": "jazz"},
-    {"track": "Freddie Freeloader", "artist": "Miles Davis", "album": "Kind of Blue", "genre": "jazz"},
-    {"track": "Blue in Green", "artist": "Miles Davis", "album": "Kind of Blue", "genre": "jazz"},
-    {"track": "Take Five", "artist": "The Dave Brubeck Quartet", "album": "Time Out", "genre": "jazz"},
-    {
-        "track": "Clair de Lune",
-        "artist": "Claude Debussy",
-        "album": "Suite bergamasque",
-        "genre": "classical",
-    },
-]
 
 
 def player(**sim: Any) -> SimPlayer:

@@ -20,7 +20,6 @@ A task without a plan gets an answer saying how to configure an LLM for free-for
 
 from __future__ import annotations
 
-import json
 from collections.abc import Sequence
 from typing import Any
 
@@ -31,7 +30,7 @@ from pydantic_ai.tools import ToolDefinition
 
 from rosaos.intents.grammar.phrases import phrase
 from rosaos.intents.planning.followups import unmet_output
-from rosaos.intents.planning.plan import Plan, PlanError, decode_plan, fill_state, render_result
+from rosaos.intents.planning.plan import Plan, PlanError, decode_plan, fill_state, render_result, result_data
 from rosaos.models.conversation import (
     ToolOutcome,
     content_text,
@@ -152,7 +151,7 @@ def _progress(plan: Plan, outcomes: list[ToolOutcome]) -> tuple[int, ToolOutcome
 
 def final_reply(plan: Plan, result: Any) -> str:
     """The plan's reply after its last step returned ``result``."""
-    value = _as_data(result)
+    value = result_data(result)
     if plan.answer is None:
         reply = plan.reply
     elif not isinstance(value, dict):
@@ -165,16 +164,6 @@ def final_reply(plan: Plan, result: Any) -> str:
     # A key this device's state lacks (a robot without a battery) reads the whole state instead.
     filled = fill_state(reply, value)
     return filled if filled is not None else f"{plan.steps[-1].device}: {render_result(value)}"
-
-
-def _as_data(content: Any) -> Any:
-    # MCP tools return structured content (a dict) or its JSON text, depending on the server.
-    if isinstance(content, str):
-        try:
-            return json.loads(content)
-        except json.JSONDecodeError:
-            return content
-    return content
 
 
 def clamp_arguments(args: dict[str, Any], tool: ToolDefinition) -> dict[str, Any]:

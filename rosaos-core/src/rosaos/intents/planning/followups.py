@@ -18,7 +18,6 @@ so it survives a kernel restart (the event store has it).
 
 from __future__ import annotations
 
-import json
 import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -26,7 +25,15 @@ from typing import Any
 
 from pydantic_ai.messages import ModelResponsePart, TextPart, ToolCallPart
 
-from rosaos.intents.planning.plan import FollowUp, FollowUpLaunch, Plan, PlanError, decode_plan, encode_task
+from rosaos.intents.planning.plan import (
+    FollowUp,
+    FollowUpLaunch,
+    Plan,
+    PlanError,
+    decode_plan,
+    encode_task,
+    result_data,
+)
 from rosaos.intents.understanding.match_result import MatchResult, ProcessPlan
 from rosaos.models.conversation import WorkerCallbackEvent
 
@@ -127,7 +134,7 @@ def unmet_output(plan: Plan, results: Sequence[Any]) -> str | None:
         return None
     keys = plan.then.when
     for result in reversed(results):
-        value = _as_data(result)
+        value = result_data(result)
         if isinstance(value, dict) and all(key in value for key in keys):
             return None if all(value[key] == expected for key, expected in keys.items()) else plan.then.unmet
     return plan.then.unmet
@@ -182,12 +189,3 @@ def _you(condition: str) -> str:
 def _unmet(summary: str, language: str) -> str:
     # English only for now; the kernel compares this exact sentence, so it is fixed at planning.
     return f"I did not find anyone, so I did not {summary}."
-
-
-def _as_data(content: Any) -> Any:
-    if isinstance(content, str):
-        try:
-            return json.loads(content)
-        except json.JSONDecodeError:
-            return content
-    return content

@@ -142,6 +142,17 @@ def task_summary(text: str) -> str:
     return head.replace(PLAN_INTRO, "").strip()
 
 
+def result_data(content: Any) -> Any:
+    """A tool result as data: MCP tools return structured content (a dict) or its JSON text,
+    depending on the server; text that is not JSON stays text."""
+    if isinstance(content, str):
+        try:
+            return json.loads(content)
+        except json.JSONDecodeError:
+            return content
+    return content
+
+
 def render_result(result: Any) -> str:
     """A tool result on one short line, for ``{result}`` in a reply ("on: false, brightness: 100")."""
     if isinstance(result, dict):
