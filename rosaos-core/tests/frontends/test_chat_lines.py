@@ -23,6 +23,14 @@ def test_printable_drops_escapes_and_controls_but_keeps_text(raw: str, shown: st
     assert printable(raw) == shown
 
 
+def test_a_device_notice_is_a_line_and_other_events_are_not() -> None:
+    notice = {"kind": "device_notice", "source": "device", "payload": {}}
+    text = "[Device notice] speaker: playback ended after Clair de Lune by Claude Debussy"
+    assert format_update({"kind": "event", "text": text, "data": notice}) == f"  · {text}"
+    typed = {"kind": "event", "text": "[User typed] hi", "data": {"kind": "user_typed"}}
+    assert format_update(typed) is None  # the user's own line is already on the screen
+
+
 def test_a_reply_with_escapes_is_shown_without_them() -> None:
     line = format_update({"kind": "kernel_reply", "text": "Done\x1b[2J: light on"})
     assert line == "rosaos: Done: light on"

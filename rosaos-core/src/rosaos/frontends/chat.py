@@ -57,7 +57,7 @@ def format_update(update: dict[str, Any]) -> str | None:
         return f"rosaos: {text}"
     if kind in ("process_launched", "process_ended", "notice", "error"):
         return f"  · {text}"
-    if kind == "event" and update.get("data", {}).get("kind") == "worker_callback":
+    if kind == "event" and update.get("data", {}).get("kind") in ("worker_callback", "device_notice"):
         return f"  · {text}"
     return None
 
