@@ -15,6 +15,7 @@ from rosaos.config import load_config
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.world import build_world
 from rosaos.kernel.runtime import Kernel
+from rosaos.models.select import ModelSpec
 from rosaos.plugins import load_drivers
 
 
@@ -43,6 +44,38 @@ async def running_kernel(home: Path, world: str, **options: Any) -> AsyncIterato
         yield kernel
     finally:
         await kernel.stop()
+
+
+HERE = Path(__file__).parent
+
+TWO_LIGHTS = """
+[devices.kitchen_light]
+driver = "tapo"
+description = "Ceiling light in the kitchen"
+sim = { on = false }
+
+[devices.living_room_lamp]
+driver = "tapo"
+description = "Floor lamp in the living room"
+sim = { on = true, brightness = 60 }
+"""
+"""Two Tapo simulators: the world of the scripted-model kernel tests."""
+
+
+@contextlib.asynccontextmanager
+async def scripted_kernel(home: Path, world: str = TWO_LIGHTS) -> AsyncIterator[Kernel]:
+    """A kernel whose kernel and process models are the scripted ``FunctionModel``s of
+    ``kernel_scripts.py`` (the workers import it from this folder)."""
+    from kernel_scripts import kernel_model
+
+    async with running_kernel(
+        home,
+        world,
+        kernel_model=kernel_model(),
+        process_model=ModelSpec(model="python:kernel_scripts:worker_model"),
+        worker_env={"PYTHONPATH": str(HERE)},
+    ) as kernel:
+        yield kernel
 
 
 @contextlib.asynccontextmanager

@@ -9,20 +9,16 @@ Bounded: 100 examples per operation (about 1,500 requests), about half a minute 
 from __future__ import annotations
 
 import os
-import re
 import signal
 import subprocess
-import sys
-import time
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
 import pytest
 import schemathesis
+from cli_process import ROSAOS, line_matching
 from hypothesis import HealthCheck, given, settings
 
-ROSAOS = Path(sys.executable).with_name("rosaos")
 EXAMPLES = 100
 
 
@@ -41,20 +37,7 @@ def kernel(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, str]
         text=True,
         env={**os.environ, "COLUMNS": "200"},
     )
-    assert up.stdout is not None
-    url = None
-    deadline = time.monotonic() + 120
-    seen = []
-    while url is None and time.monotonic() < deadline:
-        line = up.stdout.readline()
-        if not line:
-            break
-        seen.append(line)
-        match = re.search(r"rosaOS is up at (http://\S+?)/?$", line.strip())
-        url = match.group(1) if match else None
-    if url is None:
-        up.kill()
-        raise AssertionError("rosaos up did not start:\n" + "".join(seen))
+    url = line_matching(up, r"rosaOS is up at (http://\S+?)/?$").group(1)
     try:
         yield url, (home / "data" / "token").read_text().strip()
     finally:

@@ -14,10 +14,8 @@ from __future__ import annotations
 
 import asyncio
 import os
-import re
 import signal
 import subprocess
-import sys
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -25,26 +23,9 @@ from typing import Any
 
 import httpx
 import pytest
+from cli_process import ROSAOS, line_matching
 
 from rosaos.devices.client import DeviceClient
-
-ROSAOS = Path(sys.executable).with_name("rosaos")
-
-
-def read_line_matching(process: subprocess.Popen[str], pattern: str, timeout: float = 120) -> re.Match[str]:
-    assert process.stdout is not None
-    seen = []
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        line = process.stdout.readline()
-        if not line:
-            break
-        seen.append(line)
-        match = re.search(pattern, line)
-        if match:
-            return match
-    process.kill()
-    raise AssertionError(f"no line matching {pattern!r}:\n" + "".join(seen))
 
 
 def start(*args: str) -> subprocess.Popen[str]:
@@ -68,7 +49,7 @@ def robot(tmp_path: Path) -> Iterator[tuple[str, str]]:
     )
     served = start("serve-device", "dog", "--config", str(config), "--port", "0")
     try:
-        url = read_line_matching(served, r"(http://127\.0\.0\.1:\d+/mcp)").group(1)
+        url = line_matching(served, r"(http://127\.0\.0\.1:\d+/mcp)").group(1)
         yield url, (tmp_path / "robot-data" / "token").read_text().strip()
     finally:
         served.send_signal(signal.SIGINT)
@@ -80,7 +61,7 @@ def robot(tmp_path: Path) -> Iterator[tuple[str, str]]:
 
 def start_kernel(config: Path) -> tuple[subprocess.Popen[str], str]:
     kernel = start("up", "--config", str(config), "--port", "0")
-    url = read_line_matching(kernel, r"rosaOS is up at (http://\S+?)/?$").group(1)
+    url = line_matching(kernel, r"rosaOS is up at (http://\S+?)/?$").group(1)
     return kernel, url
 
 

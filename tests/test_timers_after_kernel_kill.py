@@ -15,7 +15,6 @@ import os
 import re
 import signal
 import subprocess
-import sys
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -23,23 +22,7 @@ from typing import Any
 
 import httpx
 import pytest
-
-ROSAOS = Path(sys.executable).with_name("rosaos")
-
-
-def wait_for_line(process: subprocess.Popen[str], pattern: str, timeout: float = 120) -> re.Match[str]:
-    assert process.stdout is not None
-    seen = []
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        line = process.stdout.readline()
-        if not line:
-            break
-        seen.append(line)
-        if match := re.search(pattern, line):
-            return match
-    process.kill()
-    raise AssertionError(f"no line matching {pattern!r}:\n" + "".join(seen))
+from cli_process import ROSAOS, line_matching
 
 
 def until(check: Callable[[], Any], timeout: float = 60.0, what: str = "condition") -> Any:
@@ -73,7 +56,7 @@ class KernelUnderTest:
             text=True,
             env={**os.environ, "COLUMNS": "200"},
         )
-        self.url = wait_for_line(self.process, r"rosaOS is up at (http://\S+?)/?$").group(1)
+        self.url = line_matching(self.process, r"rosaOS is up at (http://\S+?)/?$").group(1)
         token = (self.data / "token").read_text().strip()
         return httpx.Client(base_url=self.url, headers={"Authorization": f"Bearer {token}"}, timeout=10)
 

@@ -8,44 +8,21 @@ subprocesses, the Tapo simulator over MCP HTTP.
 from __future__ import annotations
 
 from collections.abc import AsyncIterator
-from pathlib import Path
 from typing import Any
 
 import httpx
 import pytest
 import pytest_asyncio
-from e2e_support import device_state, eventually, kernel_api, running_kernel
+from e2e_support import device_state, eventually, kernel_api, scripted_kernel
 
 from rosaos.kernel.runtime import Kernel
-from rosaos.models.select import ModelSpec
 
-HERE = Path(__file__).parent
 pytestmark = pytest.mark.asyncio(loop_scope="module")
-
-WORLD = """
-[devices.kitchen_light]
-driver = "tapo"
-description = "Ceiling light in the kitchen"
-sim = { on = false }
-
-[devices.living_room_lamp]
-driver = "tapo"
-description = "Floor lamp in the living room"
-sim = { on = true, brightness = 60 }
-"""
 
 
 @pytest_asyncio.fixture(scope="module", loop_scope="module")
 async def kernel(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Kernel]:
-    from kernel_scripts import kernel_model
-
-    async with running_kernel(
-        tmp_path_factory.mktemp("timers"),
-        WORLD,
-        kernel_model=kernel_model(),
-        process_model=ModelSpec(model="python:kernel_scripts:worker_model"),
-        worker_env={"PYTHONPATH": str(HERE)},
-    ) as kernel:
+    async with scripted_kernel(tmp_path_factory.mktemp("timers")) as kernel:
         yield kernel
 
 
