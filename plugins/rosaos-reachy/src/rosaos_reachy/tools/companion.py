@@ -21,6 +21,12 @@ ListenSeconds = Annotated[
 ]
 
 
+Listening = Annotated[
+    bool, Field(description="true when someone starts talking to the robot, false once heard.")
+]
+Following = Annotated[bool, Field(description="true: keep facing the person in view; false: stop.")]
+
+
 def register(mcp: FastMCP, backend: ReachyBackend) -> None:
     """Add the tools that steer the companion (the robot's own motion between tasks) to ``mcp``."""
 
@@ -32,7 +38,7 @@ def register(mcp: FastMCP, backend: ReachyBackend) -> None:
 
     @mcp.tool(annotations=SET)
     async def set_listening(
-        on: bool, direction: Yaw = None, seconds: ListenSeconds = 10.0
+        on: Listening, direction: Yaw = None, seconds: ListenSeconds = 10.0
     ) -> CompanionReport:
         """Tell the robot someone is talking to it: the antennas wave while it listens, and it turns
         its head to ``direction`` (degrees, + left, where the voice came from) if given.
@@ -48,7 +54,7 @@ def register(mcp: FastMCP, backend: ReachyBackend) -> None:
         return report()
 
     @mcp.tool(annotations=SET)
-    async def follow_face(on: bool) -> CompanionReport:
+    async def follow_face(on: Following) -> CompanionReport:
         """Keep facing the person in view while listening and speaking (on), or stop (off)."""
         backend.companion.follow_face = on
         return report()
