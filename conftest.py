@@ -1,0 +1,39 @@
+"""Test tiers for the whole workspace, so `./scripts/test --quick` has something to leave out.
+
+Markers are given by where a test lives and what it drives, so a new test file is tiered without
+anyone remembering to mark it:
+
+- ``e2e``: every test in the top-level ``tests/`` folder. They start ``rosaos up`` or the CLI as
+  subprocesses and cross packages; they are the slowest third of the suite.
+- ``browser``: every test in a module that drives headless Chromium through Playwright.
+- ``slow``: marked by hand (building wheels, venvs, the copier template).
+
+``./scripts/test --quick`` runs ``-m "not e2e and not browser and not slow"``; CI runs everything.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).parent
+E2E_DIR = ROOT / "tests"
+
+
+def _drives_a_browser(module: object) -> bool:
+    return any(name.startswith("playwright") for name in getattr(module, "__dict__", {})) or any(
+        getattr(value, "__module__", "").startswith("playwright")
+        for value in getattr(module, "__dict__", {}).values()
+    )
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Mark each collected test with its tier (see the module docstring)."""
+    for item in items:
+        path = Path(str(item.path))
+        if E2E_DIR in path.parents:
+            item.add_marker(pytest.mark.e2e)
+        module = getattr(item, "module", None)
+        if module is not None and _drives_a_browser(module):
+            item.add_marker(pytest.mark.browser)
