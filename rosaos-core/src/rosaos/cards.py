@@ -182,4 +182,6 @@ def card_keys_missing(card: Card, state: Mapping[str, Any]) -> list[str]:
             missing.append(widget.key)
         roles = widget.resolved().get("keys", {})
         missing += [roles[role] for role in REQUIRED_ROLES.get(widget.kind, ()) if roles[role] not in state]
-    return missing
+    # A control's current value (a switch's on/off, a slider's level) must be readable too.
+    missing += [c.key for c in card.controls if c.key is not None and not c.shown_when and c.key not in state]
+    return list(dict.fromkeys(missing))

@@ -54,7 +54,7 @@ async def test_the_timeline_shows_calls_and_asks_yes_or_no(
         {"process_id": 4, "devices": ["kitchen_light"], "state": "running"},
     )
     entry = '#timeline li[data-process="4"]'
-    await page.wait_for_selector(f"{entry} .tl-launched:has-text('Launched with kitchen_light')")
+    await page.wait_for_selector(f"{entry} .tl-launched:has-text('Started with kitchen light')")
 
     question = await runtime.confirmations.ask(
         ConfirmationRequest(process_id=4, device="kitchen_light", tool="turn_off", arguments={})
@@ -102,12 +102,12 @@ async def test_the_timeline_shows_calls_and_asks_yes_or_no(
             "receipts": receipts,
         },
     )
-    await page.wait_for_selector(f"{entry} .tl-callback:has-text('Ended: error')")
+    await page.wait_for_selector(f"{entry} .tl-callback[data-status=error]:has-text('Failed')")
     steps = await page.locator(f"{entry} .tl-step").all_inner_texts()
     assert len(steps) == 4  # launched, two calls, the callback
-    assert "✓ kitchen_light.turn_off()" in steps[1]
-    assert "✗ kitchen_light.set_brightness(brightness=500)" in steps[2]
-    assert '→ {"on": false}' in steps[1]
+    assert "✓ Kitchen light: turn off" in steps[1]
+    assert "✗ Kitchen light: set brightness (500)" in steps[2]
+    assert "off" in steps[1] and "{" not in steps[1]  # the result in words, not JSON
     assert "500 is above 100" in steps[2]
     assert await page.inner_text(f"{entry} .tl-task") == "dim the kitchen light"
     ARTIFACTS.mkdir(parents=True, exist_ok=True)

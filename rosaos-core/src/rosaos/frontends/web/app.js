@@ -63,6 +63,7 @@ async function pollForever(path, render) {
         if (response.ok) render(await response.json());
       } catch (error) {
         if (error instanceof SignedOut) return;
+        if (!(error instanceof TypeError && /fetch/i.test(error.message))) console.error(`drawing ${path} failed:`, error);
       }
     }
     await sleep(POLL_MS);

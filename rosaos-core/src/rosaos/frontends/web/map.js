@@ -38,6 +38,19 @@ function poseOf(device) {
   return { x, y, yaw, docked: state[k.docked] === true, people };
 }
 
+function remember(name, pose) {
+  const robot = robots.get(name) || { trail: [], dock: null };
+  Object.assign(robot, pose);
+  const last = robot.trail[robot.trail.length - 1];
+  if (!last || Math.hypot(last[0] - pose.x, last[1] - pose.y) >= TRAIL_STEP) {
+    robot.trail.push([pose.x, pose.y]);
+    if (robot.trail.length > TRAIL_POINTS) robot.trail.shift();
+  }
+  // The dock is where the robot was last seen docked: the state says whether, not where.
+  if (pose.docked) robot.dock = [pose.x, pose.y];
+  robots.set(name, robot);
+}
+
 function fit() {
   const points = [];
   for (const robot of robots.values()) {
@@ -106,9 +119,11 @@ function people() {
 function labelPlacer() {
   const taken = [];
   const font = 13 * (view.shrink || 1);
-  const box = (x, y, text, bold) => {
-    const width = text.length * font * (bold ? 0.66 : 0.6) + 4;
-    return { left: x - width / 2, right: x + width / 2, top: y - font, bottom: y + font * 0.3 };
+  const widthOf = (text, bold) => text.length * font * (bold ? 0.66 : 0.6) + 4;
+  // The box of a <text> whose baseline is at y, anchored at x (start, middle or end).
+  const box = (x, y, width, anchor) => {
+    const left = anchor === "start" ? x : anchor === "end" ? x - width : x - width / 2;
+    return { left, right: left + width, top: y - font, bottom: y + font * 0.3 };
   };
   const free = (b) => taken.every((t) => b.right < t.left || b.left > t.right || b.bottom < t.top || b.top > t.bottom);
   return {
@@ -117,14 +132,15 @@ function labelPlacer() {
     /** A <text> at the first free spot near (x, y), offset by ``gap`` pixels; null when none is free. */
     place(x, y, gap, text, className, required = false) {
       const step = font * 1.3;
-      const spots = [[0, -gap], [0, gap + font * 0.9], [gap + 4, font * 0.35], [-gap - 4, font * 0.35]];
+      const width = widthOf(text, className === "map-label");
+      // Above, below, right, left of the anchor; then the same, further out.
+      const spots = [[0, -gap - font * 0.35], [0, gap + font * 1.05], [gap + 4, font * 0.35], [-gap - 4, font * 0.35]];
       for (let ring = 1; ring <= (required ? 6 : 1); ring += 1) {
         for (const [dx, dy] of spots) {
           const sx = x + Math.sign(dx) * (Math.abs(dx) + (ring - 1) * step * 2);
           const sy = y + Math.sign(dy) * (Math.abs(dy) + (ring - 1) * step);
           const anchor = dx > 0 ? "start" : dx < 0 ? "end" : "middle";
-          const shift = anchor === "start" ? text.length * font * 0.33 : anchor === "end" ? -text.length * font * 0.33 : 0;
-          const b = box(sx + shift, sy, text, className === "map-label");
+          const b = box(sx, sy, width, anchor);
           if (!free(b)) continue;
           taken.push(b);
           const node = svg("text", { x: sx.toFixed(1), y: sy.toFixed(1), class: className, "text-anchor": anchor });

@@ -105,7 +105,7 @@ export function progressOf(raw) {
   if (!raw || typeof raw !== "object") return null;
   const fraction = typeof raw.progress === "number" && typeof raw.total === "number" && raw.total > 0
     ? raw.progress / raw.total : null;
-  return { fraction, message: raw.message || "" };
+  return { fraction, message: resultLine(raw.message || "") };
 }
 
 function showProgress(entry, process) {
