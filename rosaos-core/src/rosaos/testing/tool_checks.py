@@ -11,7 +11,7 @@ from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-import jsonschema
+import jsonschema  # type: ignore[import-untyped]  # (no stubs are installed; two calls used)
 import mcp_types
 
 from rosaos.card_controls import CardControl
@@ -156,10 +156,14 @@ def control_problems(controls: Sequence[CardControl], tools: Sequence[mcp_types.
             if tool is None:
                 if control.shown_when:
                     continue  # hidden on this instance (e.g. no dock): another profile has the tool
-                problems.append(f"{control.label}: no tool {tool_name!r}; tools: {', '.join(sorted(by_name))}")
+                problems.append(
+                    f"{control.label}: no tool {tool_name!r}; tools: {', '.join(sorted(by_name))}"
+                )
                 continue
             try:
                 jsonschema.validate(arguments, tool.input_schema)
             except jsonschema.ValidationError as error:
-                problems.append(f"{control.label}: {tool_name}({arguments}) is refused by its schema: {error.message}")
+                problems.append(
+                    f"{control.label}: {tool_name}({arguments}) is refused by its schema: {error.message}"
+                )
     return problems

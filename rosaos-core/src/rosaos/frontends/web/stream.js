@@ -141,8 +141,9 @@ function chatLine(update) {
 
 function appendChatLine(update, line) {
   const log = $("#chat-log");
-  const last = [...log.children].slice(-3).reverse().find((item) => item.dataset.line === `${line.who}|${line.text}`);
+  const last = [...log.children].slice(-4).reverse().find((item) => item.dataset.text === line.text);
   if (last && line.role !== "user" && Date.now() - Number(last.dataset.at) < REPEAT_WINDOW_MS) {
+    if (last.dataset.who !== line.who) return; // rosaOS repeating a device's notice: said already
     const count = Number(last.dataset.count || "1") + 1; // "found a person" three times is one line, ×3
     last.dataset.count = String(count);
     $(".repeat", last).textContent = `×${count}`;
@@ -153,7 +154,8 @@ function appendChatLine(update, line) {
   item.className = `msg msg-${line.role}`;
   item.dataset.updateId = update.id;
   item.dataset.role = line.role;
-  item.dataset.line = `${line.who}|${line.text}`;
+  item.dataset.text = line.text || "";
+  item.dataset.who = line.who;
   item.dataset.at = String(Date.now());
   if (line.who) {
     const who = document.createElement("span");

@@ -85,9 +85,10 @@ export function suggestions(devices) {
   for (const device of devices) {
     const kinds = new Set((device.card?.widgets || []).map((w) => w.kind));
     const keys = new Set((device.card?.widgets || []).map((w) => w.key));
+    const state = device.state || {};
     const name = spaced(device.name);
     if (kinds.has("swatch")) found.push(`Turn the ${name} green`);
-    else if (kinds.has("pose")) found.push(keys.has("docked") ? `Undock the ${name}` : `Make the ${name} walk forward`);
+    else if (kinds.has("pose")) found.push("docked" in state ? `Undock the ${name}` : `Make the ${name} walk forward`);
     else if (kinds.has("head")) found.push(`Make the ${name} say hello`);
     else if (keys.has("volume")) found.push("Play some jazz");
   }
