@@ -92,7 +92,10 @@ async def page(home: Home) -> AsyncIterator[Page]:
         opened = await browser.new_page(viewport={"width": 1280, "height": 900})
         errors: list[str] = []
         opened.on("pageerror", lambda error: errors.append(str(error)))
-        opened.on("console", lambda message: errors.append(message.text) if message.type == "error" else None)
+        opened.on(
+            "console",
+            lambda message: errors.append(message.text) if _an_error(message.text, message.type) else None,
+        )
         opened.errors = errors  # type: ignore[attr-defined]
         await opened.goto(home.kernel.login_link())
         await opened.wait_for_selector("#app", state="visible")
@@ -101,11 +104,19 @@ async def page(home: Home) -> AsyncIterator[Page]:
         await browser.close()
 
 
+def _an_error(text: str, kind: str) -> bool:
+    """A console error, except Chromium's note on a refused control (423: the latch is set)."""
+    return kind == "error" and "status of 423 (Locked)" not in text
+
+
 def card(name: str) -> str:
     return f'.device-card[data-device="{name}"]'
 
 
-async def say(page: Page, text: str) -> None:
+async def say(page: Page, text: str, kernel: Kernel) -> None:
+    # A device whose health check timed out (a loaded machine slows the ROS simulator) is not
+    # granted to a process: wait, as a person would wait for the badge to turn healthy again.
+    await eventually(lambda: _all_healthy(kernel), timeout=120)
     await page.fill("#chat-input", text)
     await page.press("#chat-input", "Enter")
     await page.wait_for_selector(f"#chat-log .msg-user:has-text({text!r})")
@@ -121,9 +132,9 @@ async def assert_readable(page: Page) -> None:
         )
 
 
-async def test_the_running_search_is_in_view_with_its_follow_up(page: Page) -> None:
+async def test_the_running_search_is_in_view_with_its_follow_up(page: Page, home: Home) -> None:
     DOCS.mkdir(parents=True, exist_ok=True)
-    await say(page, SEARCH)
+    await say(page, SEARCH, home.kernel)
     run = "#running .run:has(.run-meta:has-text('turtlebot'))"
     await page.wait_for_selector(run, timeout=WAIT)
     assert await page.evaluate("window.scrollY") == 0
@@ -142,7 +153,7 @@ async def test_the_demo_ends_with_the_lamp_green_and_a_quiet_chat(page: Page, ho
     await page.wait_for_selector(f"{card('lamp')} .swatch-name:text-matches('^green, ')", timeout=WAIT)
     # The paper asks this 3 s into the search; on a loaded test machine the ROS simulator answers
     # health checks late while it searches, so here it comes once the lamp is green.
-    await say(page, SECOND)
+    await say(page, SECOND, home.kernel)
     await page.wait_for_selector(
         f"{card('spotify')} [data-widget-key=is_playing] .widget-value:text-is('playing')", timeout=WAIT
     )
@@ -246,3 +257,7 @@ async def test_with_the_latch_set_the_cards_controls_are_refused_and_the_card_sa
 
 async def _none_running(kernel: Kernel) -> bool:
     return not [p for p in await kernel.processes() if p.state == "running"]
+
+
+async def _all_healthy(kernel: Kernel) -> bool:
+    return all(device.status == "healthy" for device in await kernel.devices())

@@ -26,7 +26,8 @@ async def test_the_map_follows_the_robot_and_shows_its_dock_trail_and_people(
         state.update(x=x, docked=False)
         await page.wait_for_selector(f"{marker}[data-x='{x:.3f}']")
     state["people_seen"] = [{"x": 2.5, "y": 1.0, "at": "2026-01-01T00:00:00Z"}]
-    await page.wait_for_selector(f"{marker} .map-person")
+    # People are drawn once for the whole map, whichever robot saw them.
+    await page.wait_for_selector("#floor-map .map-person[data-seen-by~='turtlebot']")
     assert await page.locator(f"{marker} .map-dock").count() == 1  # where it was docked
     assert await page.locator(f"{marker} .map-trail").count() == 1
     summary = await page.inner_text("#map-summary")
