@@ -11,6 +11,7 @@ Activity. Controls (build them with the functions below)::
     choice("Colour", tool="set_color_name", argument="name", options=["warm white", "red", "green"])
     button("Next", tool="next_track")
     button("Dock", tool="dock", shown_when={"docked": False})
+    button("Stop", tool="stop", preempts=True)   # first stops the process driving the robot
     prompt("Say", tool="speak", argument="text", placeholder="Hello!")
 
 ``shown_when`` hides a control unless the state has those values (a missing key hides it too):
@@ -52,6 +53,9 @@ class CardControl(BaseModel):
     options: list[str] = Field(default_factory=list, max_length=40)
     placeholder: str = Field(default="", max_length=80)
     shown_when: dict[str, Any] = Field(default_factory=dict)
+    preempts: bool = False
+    """Stop the processes holding the device first ("Stop" on a robot that is searching):
+    a person's stop must not wait behind the very task it is meant to stop."""
 
     @model_validator(mode="after")
     def _check(self) -> CardControl:
@@ -114,10 +118,17 @@ class CardControl(BaseModel):
 
 
 def button(
-    label: str, tool: str, *, args: dict[str, Any] | None = None, shown_when: dict[str, Any] | None = None
+    label: str,
+    tool: str,
+    *,
+    args: dict[str, Any] | None = None,
+    shown_when: dict[str, Any] | None = None,
+    preempts: bool = False,
 ) -> CardControl:
-    """A button that makes one call."""
-    return CardControl(kind="button", label=label, tool=tool, args=args or {}, shown_when=shown_when or {})
+    """A button that makes one call; ``preempts=True`` first stops whatever process holds the device."""
+    return CardControl(
+        kind="button", label=label, tool=tool, args=args or {}, shown_when=shown_when or {}, preempts=preempts
+    )
 
 
 def toggle(label: str, *, on_tool: str, off_tool: str, key: str) -> CardControl:

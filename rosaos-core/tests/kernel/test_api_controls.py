@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import httpx
-from kernel_support import AUTH, TestRuntime
+from kernel_support import AUTH, Process, TestRuntime
 
 from rosaos.intents.planning.plan import decode_plan
 from rosaos.plugins import load_drivers
@@ -66,3 +66,17 @@ async def test_an_unknown_device_or_control_is_a_404_that_says_where_to_look(
     assert "GET /devices" in (await press(client, 0, True, name="garage_door")).json()["detail"]
     missing = await press(client, 9, True)
     assert missing.status_code == 404 and "has 3 controls" in missing.json()["detail"]
+
+
+async def test_a_robots_stop_first_stops_the_process_driving_it(
+    client: httpx.AsyncClient, runtime: TestRuntime
+) -> None:
+    card = load_drivers().drivers["ros"].spec.card
+    assert card is not None
+    runtime.device_list[0]["card"] = card.view()
+    runtime.process_list = [Process(id=7, task="look around for someone", devices=["kitchen_light"])]
+    stop = next(i for i, c in enumerate(card.controls) if c.label == "Stop")
+    response = await press(client, stop)
+    assert response.status_code == 202, response.text
+    assert runtime.terminated == [7]
+    assert runtime.process_list[-1].task.startswith("Stop on the kitchen light")

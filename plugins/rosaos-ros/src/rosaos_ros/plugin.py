@@ -106,7 +106,7 @@ SPEC: DriverSpec[RosBackend] = DriverSpec(
         gauge("battery", label="Battery", unit="%", max=1.0),
         image(),
         controls=[
-            button("Stop", "stop"),
+            button("Stop", "stop", preempts=True),  # stops the task driving the robot, then the robot
             # Only a robot with a dock has ``docked`` in its state (a TurtleBot 4, not a PuppyPi).
             button("Dock", "dock", shown_when={"docked": False}),
             button("Undock", "undock", shown_when={"docked": True}),

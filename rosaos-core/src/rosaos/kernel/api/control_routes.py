@@ -5,7 +5,8 @@ and the person's value into one tool call, and launches a process whose ``rosaos
 call. So a control is no back door: it takes the device's lease (a device another process holds
 exclusively is refused with the holder named), it is refused while the emergency stop is latched,
 its receipt lands in the activity log (``rosaos log``, the page's Activity), and the kernel says
-nothing when it succeeds (the plan is ``quiet``) but tells the user when it fails.
+nothing when it succeeds (the plan is ``quiet``) but tells the user when it fails. A control
+declared ``preempts`` (a robot's Stop) first terminates the processes holding the device.
 
 Registered on the protected router of :mod:`rosaos.kernel.api.routes` (the bearer token applies).
 """
@@ -71,6 +72,10 @@ async def press_control(
             f"the emergency stop is latched ({latch.reason}): controls are refused until a person "
             "resets it (the Reset button on the page, or `rosaos estop --reset`)",
         )
+    if control.preempts:
+        for process in await runtime.processes():
+            if name in process.devices and process.state == "running":
+                await runtime.terminate(process.id)
     summary = f"{control.describe(value)} on the {name.replace('_', ' ')} (from its card on the web page)."
     plan = Plan(
         steps=[PlanStep(device=name, tool=tool, args=arguments)],
