@@ -12,6 +12,7 @@ takes are the ones ``docs/web.md`` shows.
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import re
 import shutil
@@ -23,6 +24,7 @@ import pytest_asyncio
 from cli_process import ROSAOS
 from e2e_support import device_state, eventually, running_kernel
 from playwright.async_api import Page, async_playwright
+from playwright.async_api import TimeoutError as PlaywrightTimeout
 
 from rosaos.kernel.runtime import Kernel
 
@@ -144,7 +146,15 @@ async def test_the_running_search_is_in_view_with_its_follow_up(page: Page, home
     assert await page.is_visible(f"{run} button[data-terminate]")
     assert "rosaos-plan" not in await page.inner_text(f"{run} .run-task")
     await assert_readable(page)
-    await page.wait_for_timeout(800)  # let the map and cards catch up for the picture
+    # For the picture: the search's own progress message rather than "Working…", if it says one
+    # before it ends (it may not, on a slow machine; the picture is all that waits for it).
+    with contextlib.suppress(PlaywrightTimeout):
+        await page.wait_for_function(
+            f"""() => !document.querySelector("{run}")
+                 || document.querySelector("{run} .run-progress-text").textContent !== "Working…" """,
+            timeout=20_000,
+        )
+    await page.wait_for_timeout(500)  # let the map and cards catch up
     await page.screenshot(path=str(DOCS / "search-1280.png"))
     assert page.errors == []  # type: ignore[attr-defined]
 
