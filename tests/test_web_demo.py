@@ -148,10 +148,11 @@ async def test_the_running_search_is_in_view_with_its_follow_up(page: Page, home
     await assert_readable(page)
     # For the picture: the search's own progress message rather than "Working…", if it says one
     # before it ends (it may not, on a slow machine; the picture is all that waits for it).
+    search = f'#running .run[data-process="{await page.get_attribute(run, "data-process")}"]'
     with contextlib.suppress(PlaywrightTimeout):
         await page.wait_for_function(
-            f"""() => !document.querySelector("{run}")
-                 || document.querySelector("{run} .run-progress-text").textContent !== "Working…" """,
+            f"""() => !document.querySelector('{search}')
+                 || document.querySelector('{search} .run-progress-text').textContent !== "Working…" """,
             timeout=20_000,
         )
     await page.wait_for_timeout(500)  # let the map and cards catch up
