@@ -122,10 +122,10 @@ async def test_a_chat_drives_every_card_the_map_and_the_timeline(page: Page) -> 
 
     # The timeline of the chat: each process, its tool calls with results, and its end.
     picture = "#timeline .tl-process:has(.tl-call[data-tool='take_picture'])"
-    await page.wait_for_selector(f"{picture} .tl-callback:has-text('Ended: ok')", timeout=WAIT)
-    assert "reachy.take_picture()" in await page.inner_text(f"{picture} .tl-call")
+    await page.wait_for_selector(f"{picture} .tl-callback[data-status=ok]", timeout=WAIT)
+    assert "Reachy: take picture" in await page.inner_text(f"{picture} .tl-call")
     drive = "#timeline .tl-process:has(.tl-call[data-tool='move_distance'])"
-    await page.wait_for_selector(f"{drive} .tl-callback:has-text('Ended: ok')", timeout=WAIT)
+    await page.wait_for_selector(f"{drive} .tl-callback[data-status=ok]", timeout=WAIT)
     assert await page.locator("#timeline .tl-process").count() == 4
 
     await page.wait_for_timeout(1500)  # let the last frame and map redraw settle for the picture
@@ -152,13 +152,13 @@ async def test_a_long_search_shows_its_progress_while_a_second_request_finishes(
         f"{card('kitchen_light')} .swatch-name:text-matches('^blue, ')", timeout=WAIT
     )
     light = "#timeline .tl-process:has(.tl-call[data-tool='set_color_name'])"
-    await page.wait_for_selector(f"{light} .tl-callback:has-text('Ended: ok')", timeout=WAIT)
+    await page.wait_for_selector(f"{light} .tl-callback[data-status=ok]", timeout=WAIT)
     # The search still holds the turtlebot and still reports progress.
     running = [p for p in await kernel.processes() if p.state == "running"]
     assert [p.devices for p in running] and all("turtlebot" in p.devices for p in running), running
     assert await page.is_visible(bar)
     assert (await page.inner_text(bar)).strip()  # a percentage or a message, e.g. "turned 90°"
-    task = await page.inner_text(f"#processes tr:has(button[data-terminate='{running[0].id}']) .cell-task")
+    task = await page.inner_text(f"#running .run[data-process='{running[0].id}'] .run-task")
     assert task == "Turtlebot, look around for someone." and "rosaos-plan" not in task
     await page.wait_for_timeout(1000)
     await page.screenshot(path=str(ARTIFACTS / "search-progress.png"), full_page=True)

@@ -15,7 +15,12 @@ Widgets (build them with the functions below)::
         pose(),                              # a mobile robot on the floor map: x, y, yaw
         head(),                              # a robot head: head pose, antennas, body_yaw
         image(),                             # the last camera frame of this device
+        controls=[toggle("Power", on_tool="turn_on", off_tool="turn_off", key="on")],
+        noun="lamp",                         # the subtitle says "simulated lamp"
     )
+
+Controls (:mod:`rosaos.card_controls`) are tool calls a person makes from the card; each runs as a
+one-step process, so it is leased, logged and refused while the emergency stop is latched.
 
 Each compound widget maps its roles to state keys, with defaults that match the built-in drivers;
 pass ``keys={"brightness": "level"}`` to read another key. A key missing from the state is drawn
@@ -28,6 +33,8 @@ from collections.abc import Mapping
 from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from rosaos.card_controls import CardControl
 
 WidgetKind = Literal["swatch", "pose", "gauge", "image", "text", "flag", "head"]
 
@@ -103,20 +110,31 @@ class CardWidget(BaseModel):
 
 
 class Card(BaseModel):
-    """A driver's card: its widgets, top to bottom."""
+    """A driver's card: its widgets, top to bottom, then its controls."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
     widgets: list[CardWidget] = Field(min_length=1, max_length=12)
+    controls: list[CardControl] = Field(default_factory=list, max_length=12)
+    """Buttons, a toggle, sliders...: each a tool call through a process (:mod:`rosaos.card_controls`)."""
+    noun: str | None = Field(default=None, max_length=30)
+    """What the device is, in a person's words ("lamp", "speaker"): the card's subtitle says
+    "simulated lamp" rather than the driver's name."""
 
     @classmethod
-    def of(cls, *widgets: CardWidget) -> Card:
-        """``Card.of(swatch(), text("mode"))``."""
-        return cls(widgets=list(widgets))
+    def of(
+        cls, *widgets: CardWidget, controls: list[CardControl] | None = None, noun: str | None = None
+    ) -> Card:
+        """``Card.of(swatch(), text("mode"), controls=[button("Stop", "stop")], noun="lamp")``."""
+        return cls(widgets=list(widgets), controls=controls or [], noun=noun)
 
     def view(self) -> dict[str, Any]:
         """The JSON the page receives under the device's ``card`` key."""
-        return {"widgets": [widget.resolved() for widget in self.widgets]}
+        return {
+            "widgets": [widget.resolved() for widget in self.widgets],
+            "controls": [control.model_dump() for control in self.controls],
+            "noun": self.noun,
+        }
 
 
 def swatch(keys: dict[str, str] | None = None) -> CardWidget:
@@ -164,4 +182,6 @@ def card_keys_missing(card: Card, state: Mapping[str, Any]) -> list[str]:
             missing.append(widget.key)
         roles = widget.resolved().get("keys", {})
         missing += [roles[role] for role in REQUIRED_ROLES.get(widget.kind, ()) if roles[role] not in state]
-    return missing
+    # A control's current value (a switch's on/off, a slider's level) must be readable too.
+    missing += [c.key for c in card.controls if c.key is not None and not c.shown_when and c.key not in state]
+    return list(dict.fromkeys(missing))

@@ -34,6 +34,18 @@ class ConfigError(Exception):
     """Configuration that cannot be used. The message names the file, the key and the reason."""
 
 
+class MapOrigin(BaseModel):
+    """Where a robot's own odometry frame sits in the shared floor map: its start pose there."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    x: float = 0.0
+    """Metres, in the map's frame."""
+    y: float = 0.0
+    yaw: float = 0.0
+    """Radians: the map heading of the robot's own x axis."""
+
+
 class DeviceConfig(BaseModel):
     """One ``[devices.NAME]`` table. Keys not listed here are the driver's own settings.
 
@@ -59,6 +71,10 @@ class DeviceConfig(BaseModel):
     port: int | None = Field(default=None, ge=1, le=65535)
     """Fixed loopback port for a local instance; a free port is chosen when unset."""
     sim: dict[str, Any] = Field(default_factory=dict)
+    map_origin: MapOrigin | None = None
+    """A mobile robot's pose in the shared floor map (``{x = 2.0, y = -1.0, yaw = 1.57}``): each
+    robot reports positions in its own odometry frame, which starts wherever it was switched on;
+    the web page draws every robot, trail and person in the map frame through this."""
     confirm: list[str] | Literal["destructive", "off"] | None = None
     """Tools that need a person's yes before they run: names, ``"destructive"`` (every tool
     annotated destructiveHint) or ``"off"``. Unset: the global ``confirm``, else on

@@ -74,6 +74,14 @@ class TestRuntime:
                 return process
         raise KeyError(f"no process {process_id}")
 
+    async def launch(self, task: str, devices: list[str]) -> Any:
+        """Records the process as running; the real kernel hands it to a worker."""
+        process = Process(
+            id=max((p.id for p in self.process_list), default=0) + 1, task=task, devices=devices
+        )
+        self.process_list.append(process)
+        return process
+
     async def devices(self) -> Sequence[DeviceView]:
         return [DeviceView.model_validate(device) for device in self.device_list]
 

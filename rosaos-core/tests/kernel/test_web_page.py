@@ -24,7 +24,7 @@ STABLE_IDS = [
     "chat-input",
     "chat-send",
     "chat-log",
-    "processes",
+    "running",
     "events",
     "model-notice",
     "devices",
@@ -87,6 +87,9 @@ async def test_without_a_valid_login_code_the_page_says_where_to_get_one(
     assert runtime.login_codes.redeem(used)
     await p.goto(f"/#login={used}")
     await p.wait_for_selector("#login-error:has-text('already used')")
+    # Said once, in words: the section above says how to get a fresh link.
+    assert "`" not in await p.inner_text("#login-needed")
+    assert "rosaos open" not in await p.inner_text("#login-error")
     assert "rosaos up" in await p.inner_text("#login-needed")
     assert "rosaos open" in await p.inner_text("#login-needed")  # how to get a fresh link
     assert await p.is_hidden("#app")
@@ -118,12 +121,13 @@ async def test_chat_devices_processes_and_events_work_in_a_browser(
     assert (event.kind, event.source) == ("user_typed", "web")
     await updates.publish("kernel_reply", "The kitchen light is on.", event_id=event.id)
     await p.wait_for_selector("#chat-log .msg-kernel:has-text('The kitchen light is on.')")
-    await p.wait_for_selector("#events li[data-kind='kernel_reply']")
+    await p.wait_for_selector("#events li[data-kind='kernel_reply']", state="attached")
+    assert await p.is_hidden("#events")  # the Debug view is closed until someone opens it
     assert await p.input_value("#chat-input") == ""
 
-    # Processes: listed with their devices, and terminated from the page.
-    row = '#processes tr[data-process="3"]'
-    await p.wait_for_selector(f"{row}:has-text('kitchen_light')")
+    # Running now: each running process with its devices, and a Stop button.
+    row = '#running .run[data-process="3"]'
+    await p.wait_for_selector(f"{row}:has-text('kitchen light')")
     await p.click(f'{row} button[data-terminate="3"]')
     await eventually(lambda: runtime.terminated == [3], message="the terminate request")
     await p.wait_for_selector(row, state="detached")

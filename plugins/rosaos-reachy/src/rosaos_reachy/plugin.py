@@ -12,6 +12,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from rosaos import hookimpl
+from rosaos.card_controls import prompt
 from rosaos.cards import Card, flag, head, image, text
 from rosaos.drivers import DemoInstance, DeviceContext, DeviceError, DriverSpec, read_packaged_text
 from rosaos_reachy.backend import ReachyBackend
@@ -65,6 +66,8 @@ SPEC: DriverSpec[ReachyBackend] = DriverSpec(
         text("companion", label="Companion"),
         image(),
         text("mode", label="Mode"),
+        controls=[prompt("Say", tool="speak", argument="text", placeholder="Hello, I am Reachy!")],
+        noun="desk robot",
     ),
     own_process=True,  # the host runs the Reachy daemon (MuJoCo): hundreds of MB, native code
     background_start=True,  # the simulator boots for seconds; everything else need not wait

@@ -9,6 +9,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from rosaos import hookimpl
+from rosaos.card_controls import button
 from rosaos.cards import Card, flag, gauge, image, pose
 from rosaos.drivers import DemoInstance, DeviceContext, DeviceError, DriverSpec, read_packaged_text
 from rosaos_ros.backend import RosBackend
@@ -104,6 +105,13 @@ SPEC: DriverSpec[RosBackend] = DriverSpec(
         flag("docked", label="Dock", on_text="docked", off_text="undocked"),
         gauge("battery", label="Battery", unit="%", max=1.0),
         image(),
+        controls=[
+            button("Stop", "stop", preempts=True),  # stops the task driving the robot, then the robot
+            # Only a robot with a dock has ``docked`` in its state (a TurtleBot 4, not a PuppyPi).
+            button("Dock", "dock", shown_when={"docked": False}),
+            button("Undock", "undock", shown_when={"docked": True}),
+        ],
+        noun="robot",
     ),
     confirm_on_real=True,  # a real robot moves only after a person's yes, unless config says otherwise
     demo={

@@ -9,6 +9,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from rosaos import hookimpl
+from rosaos.card_controls import button, slider, toggle
 from rosaos.cards import Card, flag, gauge, text
 from rosaos.drivers import DemoInstance, DeviceContext, DeviceError, DriverSpec, read_packaged_text
 from rosaos_spotify.backend import SpotifyBackend
@@ -81,6 +82,12 @@ SPEC: DriverSpec[SpotifyBackend] = DriverSpec(
         gauge("volume", label="Volume", unit="%"),
         flag("shuffle", label="Shuffle", on_text="on", off_text="off"),
         text("repeat", label="Repeat"),
+        controls=[
+            toggle("Play", on_tool="resume", off_tool="pause", key="is_playing"),
+            button("Next", "next_track"),
+            slider("Volume", tool="set_volume", argument="volume", key="volume", unit="%"),
+        ],
+        noun="speaker",
     ),
     demo={
         "spotify": DemoInstance(

@@ -11,6 +11,7 @@ from pathlib import Path
 from pydantic import BaseModel, Field
 
 from rosaos import hookimpl
+from rosaos.card_controls import choice, slider, toggle
 from rosaos.cards import Card, swatch
 from rosaos.drivers import (
     DemoInstance,
@@ -63,6 +64,21 @@ def sim_backend(ctx: DeviceContext) -> TapoBackend:
     return backend
 
 
+CARD_COLOURS = [
+    "warm white",
+    "daylight",
+    "red",
+    "orange",
+    "yellow",
+    "green",
+    "teal",
+    "blue",
+    "purple",
+    "pink",
+]
+"""The colours the card offers (``set_color_name`` knows more; the chat can ask for any)."""
+
+
 class UnreachableData(BaseModel):
     """Why the bulb is taken for gone."""
 
@@ -104,7 +120,18 @@ SPEC: DriverSpec[TapoBackend] = DriverSpec(
     intents=Path(__file__).parent / "intents.yaml",
     safe_stop=leave_light_as_is,
     notices=NOTICES,
-    card=Card.of(swatch()),  # the web page draws the bulb's real colour and brightness, named
+    # The web page draws the bulb's real colour and brightness, named, with its usual controls.
+    card=Card.of(
+        swatch(),
+        controls=[
+            toggle("Power", on_tool="turn_on", off_tool="turn_off", key="on"),
+            slider(
+                "Brightness", tool="set_brightness", argument="brightness", key="brightness", min=1, unit="%"
+            ),
+            choice("Colour", tool="set_color_name", argument="name", options=CARD_COLOURS),
+        ],
+        noun="lamp",
+    ),
     demo={
         "kitchen_light": DemoInstance(description="Ceiling light in the kitchen", sim={"on": False}),
         "living_room_lamp": DemoInstance(

@@ -24,7 +24,7 @@ from pydantic import ValidationError
 from pydantic_ai.models import Model
 
 from rosaos.auth import bound_hosts, load_or_create_token
-from rosaos.config import RosaosConfig
+from rosaos.config import MapOrigin, RosaosConfig
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.devices.run_files import write_atomic
 from rosaos.devices.serve import bind_socket
@@ -139,6 +139,16 @@ class Kernel:
     async def terminate(self, process_id: int) -> ProcessInfo:
         return await self.manager.terminate(process_id)
 
+    async def launch(self, task: str, devices: list[str]) -> ProcessInfo:
+        """A process the page launched (a card control), recorded and announced as the kernel's own are."""
+        info = await self.manager.launch(task, devices)
+        await self._launched(info)
+        data = {"process_id": info.id, "devices": info.devices, "state": info.state}
+        await self._updates.publish(
+            "process_launched", f"process {info.id} launched with {', '.join(info.devices)}", data
+        )
+        return info
+
     async def devices(self) -> Sequence[DeviceView]:
         await self.states.wanted()
         running = self.manager.list()
@@ -154,9 +164,14 @@ class Kernel:
                 description=endpoint.description,
                 held_by=[p.id for p in running if endpoint.name in p.devices],
                 card=self._card(endpoint.name),
+                map_origin=self._map_origin(endpoint.name),
             )
             for endpoint in self.endpoints().values()
         ]
+
+    def _map_origin(self, name: str) -> MapOrigin | None:
+        device = self.config.devices.get(name)
+        return device.map_origin if device is not None else None
 
     def _card(self, name: str) -> dict[str, Any] | None:
         """The card its driver declares, as the web page reads it; None draws a key list."""

@@ -39,6 +39,7 @@ from rosaos.plugins import DriverInfo, DriverRegistry
 from rosaos.testing.device_runner import RunningDevice, build_instance, load_all_drivers, run_device
 from rosaos.testing.tool_checks import (
     OutOfRangeCall,
+    control_problems,
     missing_annotations,
     missing_descriptions,
     out_of_range_candidates,
@@ -281,6 +282,17 @@ class DriverConformance:
             f"{call.tool}({call.args}) failed with a message that does not name {' or '.join(call.named)}: {text!r}"
         )
         assert not after.is_error, f"get_state failed after the refused call: {result_text(after)}"
+
+    def test_card_controls_call_real_tools_with_valid_arguments(
+        self, rosaos_driver: DriverInfo, shared_tools: list[mcp_types.Tool]
+    ) -> None:
+        """Every control on the card (``Card.of(..., controls=[...])``) calls a tool the server has,
+        with arguments its input schema accepts: each end of a slider, each option of a choice."""
+        card = rosaos_driver.spec.card
+        if card is None or not card.controls:
+            return  # no controls declared: the card only shows state
+        problems = control_problems(card.controls, shared_tools)
+        assert not problems, f"card controls of driver {rosaos_driver.spec.name!r}:\n" + "\n".join(problems)
 
     def test_intents_name_existing_tools(
         self, rosaos_driver: DriverInfo, shared_tools: list[mcp_types.Tool]

@@ -7,11 +7,14 @@ test lists every offending tool at once instead of stopping at the first.
 from __future__ import annotations
 
 import json
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import jsonschema  # type: ignore[import-untyped]  # (no stubs are installed; two calls used)
 import mcp_types
+
+from rosaos.card_controls import CardControl
 
 TYPING_KEYS = ("type", "anyOf", "oneOf", "allOf", "enum", "const", "$ref")
 """A JSON-schema property with none of these keys accepts anything: the model cannot know what to send."""
@@ -138,3 +141,29 @@ def result_object(result: mcp_types.CallToolResult) -> dict[str, Any]:
             f"expected a JSON object, got {text[:200]!r}; return a dict or a pydantic model from get_state"
         )
     return value
+
+
+def control_problems(controls: Sequence[CardControl], tools: Sequence[mcp_types.Tool]) -> list[str]:
+    """What is wrong with a card's controls (:mod:`rosaos.card_controls`): an unknown tool, or
+    arguments the tool's input schema refuses. A control with ``shown_when`` may name a tool only
+    some instances have (a ROS profile without a dock has no ``dock`` tool, and no ``docked`` key
+    to show "Dock" by): when the instance under test lacks the tool, it is skipped, not failed."""
+    by_name = {tool.name: tool for tool in tools}
+    problems = []
+    for control in controls:
+        for tool_name, arguments in control.example_calls():
+            tool = by_name.get(tool_name)
+            if tool is None:
+                if control.shown_when:
+                    continue  # hidden on this instance (e.g. no dock): another profile has the tool
+                problems.append(
+                    f"{control.label}: no tool {tool_name!r}; tools: {', '.join(sorted(by_name))}"
+                )
+                continue
+            try:
+                jsonschema.validate(arguments, tool.input_schema)
+            except jsonschema.ValidationError as error:
+                problems.append(
+                    f"{control.label}: {tool_name}({arguments}) is refused by its schema: {error.message}"
+                )
+    return problems

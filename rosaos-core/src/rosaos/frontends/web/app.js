@@ -2,15 +2,17 @@
 // Plain JavaScript modules, no framework, no build step. Every value from the server is shown
 // with textContent, never parsed as HTML.
 
-import { renderDevices, renderProcesses, terminate } from "./panels.js";
+import { renderDevices } from "./panels.js";
+import { renderRunning, stopProcess } from "./running.js";
 import {
   $, api, errorText, login, newKey, page, setConnection, setStatus, signOut, SignedOut, sleep, takeLoginCode,
 } from "./session.js";
-import { followUpdates } from "./stream.js";
+import { followUpdates, showChatDetails } from "./stream.js";
 import { renderEmergencyStop, wireEmergencyStop } from "./estop.js";
 import { wireMap } from "./map.js";
 import { cancelTimer, detectTimers } from "./timers.js";
 import { answerConfirmation, renderConfirmations, timelineProcesses } from "./timeline.js";
+import { setMarkedText, suggestions } from "./words.js";
 
 const POLL_MS = 1000;
 
@@ -61,6 +63,7 @@ async function pollForever(path, render) {
         if (response.ok) render(await response.json());
       } catch (error) {
         if (error instanceof SignedOut) return;
+        if (!(error instanceof TypeError && /fetch/i.test(error.message))) console.error(`drawing ${path} failed:`, error);
       }
     }
     await sleep(POLL_MS);
@@ -73,10 +76,26 @@ async function showHealth() {
     const health = await response.json();
     $("#model-name").textContent = health.model;
     const notice = $("#model-notice");
-    notice.textContent = health.model_notice || "";
+    page.modelNotice = health.model_notice || "";
+    setMarkedText(notice, page.modelNotice);
     notice.hidden = !health.model_notice;
   } catch (_) {
     setConnection("offline", "The kernel cannot be reached");
+  }
+}
+
+// The chat box and the offline banner suggest sentences for the devices of this world.
+function suggest(devices) {
+  const examples = suggestions(devices);
+  if (!examples.length || page.suggested === examples.join("|")) return;
+  page.suggested = examples.join("|");
+  $("#chat-input").placeholder = `e.g. ${examples[0]}`;
+  const notice = $("#model-notice");
+  if (page.modelNotice) {
+    // The kernel's notice gives generic examples ("the kitchen light"): use this world's instead.
+    const here = `(for example “${examples.slice(0, 3).join("”, “")}”)`;
+    const generic = /\("[^)]*\)/;
+    setMarkedText(notice, generic.test(page.modelNotice) ? page.modelNotice.replace(generic, here) : `${page.modelNotice} ${here}`);
   }
 }
 
@@ -86,20 +105,18 @@ function start() {
   $("#app").hidden = false;
   $("#sign-out").hidden = false;
   followUpdates();
-  pollForever("/processes", renderProcesses);
+  pollForever("/processes", renderRunning);
   pollForever("/processes?all=true", timelineProcesses);
   pollForever("/confirmations", renderConfirmations);
   detectTimers();
-  pollForever("/devices", renderDevices);
+  pollForever("/devices", (devices) => { renderDevices(devices); suggest(devices); });
   pollForever("/estop", renderEmergencyStop);
 }
 
 async function main() {
   $("#chat-form").addEventListener("submit", sendChat);
-  $("#processes").addEventListener("click", (event) => {
-    const button = event.target.closest("button[data-terminate]");
-    if (button) terminate(button);
-  });
+  $("#running").addEventListener("click", stopProcess);
+  $("#chat-log").addEventListener("click", showChatDetails);
   $("#sign-out").addEventListener("click", () => signOut("Signed out."));
   wireEmergencyStop();
   wireMap();

@@ -1,5 +1,6 @@
 // The emergency-stop control: one button that latches the stop, and a banner with a reset while latched.
 // The latch survives a kernel restart, so the first GET /estop after the page loads may already show it.
+import { controlsLatched } from "./controls.js";
 import { $, api } from "./session.js";
 
 export function renderEmergencyStop(state) {
@@ -10,6 +11,7 @@ export function renderEmergencyStop(state) {
   $("#estop-reason").textContent = state.latched ? state.reason : "";
   time.dateTime = state.latched && state.time ? state.time : "";
   time.textContent = state.latched && state.time ? new Date(state.time).toLocaleString() : "";
+  controlsLatched(state);
 }
 
 async function post(path, json) {

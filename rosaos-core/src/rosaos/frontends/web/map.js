@@ -14,14 +14,28 @@ const MIN_SPAN = 4; // metres: the map never zooms in further than this when fit
 const robots = new Map(); // name -> { x, y, yaw, docked, trail, dock, people }
 const view = { auto: true, cx: 0, cy: 0, span: MIN_SPAN, shrink: 1 };
 
+// A robot reports positions in its own odometry frame, which starts wherever it was switched on;
+// its config's map_origin ({x, y, yaw}) places that frame in the shared map.
+function toMap(origin, x, y) {
+  if (!origin) return [x, y];
+  const c = Math.cos(origin.yaw || 0);
+  const s = Math.sin(origin.yaw || 0);
+  return [(origin.x || 0) + c * x - s * y, (origin.y || 0) + s * x + c * y];
+}
+
 function poseOf(device) {
   const widget = (device.card?.widgets || []).find((w) => w.kind === "pose");
   if (!widget) return null;
   const state = device.state || {};
   const k = widget.keys;
   if (typeof state[k.x] !== "number" || typeof state[k.y] !== "number") return null;
-  const people = Array.isArray(state[k.people]) ? state[k.people].filter((p) => typeof p?.x === "number" && typeof p?.y === "number") : [];
-  return { x: state[k.x], y: state[k.y], yaw: Number(state[k.yaw]) || 0, docked: state[k.docked] === true, people };
+  const origin = device.map_origin || null;
+  const people = (Array.isArray(state[k.people]) ? state[k.people] : [])
+    .filter((p) => typeof p?.x === "number" && typeof p?.y === "number")
+    .map((p) => { const [x, y] = toMap(origin, p.x, p.y); return { x, y }; });
+  const [x, y] = toMap(origin, state[k.x], state[k.y]);
+  const yaw = (Number(state[k.yaw]) || 0) + (origin?.yaw || 0);
+  return { x, y, yaw, docked: state[k.docked] === true, people };
 }
 
 function remember(name, pose) {
@@ -43,6 +57,7 @@ function fit() {
     points.push([robot.x, robot.y], ...robot.trail, ...robot.people.map((p) => [p.x, p.y]));
     if (robot.dock) points.push(robot.dock);
   }
+  for (const layer of layers.values()) points.push(...(layer.points?.() || []));
   if (!points.length) return;
   const xs = points.map((p) => p[0]);
   const ys = points.map((p) => p[1]);
@@ -80,13 +95,65 @@ function grid() {
   return group;
 }
 
-function label(x, y, text, className) {
-  const node = svg("text", { x, y, class: className, "text-anchor": "middle" });
-  node.textContent = text;
-  return node;
+const PERSON_RADIUS = 0.7; // metres: sightings closer than this are one person
+
+// People every robot has seen, merged: one marker per person, with how often they were seen.
+function people() {
+  const found = [];
+  for (const [name, robot] of robots) {
+    for (const seen of robot.people) {
+      const same = found.find((p) => Math.hypot(p.x - seen.x, p.y - seen.y) < PERSON_RADIUS);
+      if (same) {
+        same.count += 1;
+        same.by.add(name);
+      } else {
+        found.push({ x: seen.x, y: seen.y, count: 1, by: new Set([name]) });
+      }
+    }
+  }
+  return found;
 }
 
-function robotGroup(name, robot, index) {
+// Labels never overprint: each takes the first free spot around its anchor, or is left out
+// (a dock's or a person's label; a robot's name always finds a place further out).
+function labelPlacer() {
+  const taken = [];
+  const font = 13 * (view.shrink || 1);
+  const widthOf = (text, bold) => text.length * font * (bold ? 0.66 : 0.6) + 4;
+  // The box of a <text> whose baseline is at y, anchored at x (start, middle or end).
+  const box = (x, y, width, anchor) => {
+    const left = anchor === "start" ? x : anchor === "end" ? x - width : x - width / 2;
+    return { left, right: left + width, top: y - font, bottom: y + font * 0.3 };
+  };
+  const free = (b) => taken.every((t) => b.right < t.left || b.left > t.right || b.bottom < t.top || b.top > t.bottom);
+  return {
+    /** Keep the area of a marker clear of labels. */
+    block(x, y, radius) { taken.push({ left: x - radius, right: x + radius, top: y - radius, bottom: y + radius }); },
+    /** A <text> at the first free spot near (x, y), offset by ``gap`` pixels; null when none is free. */
+    place(x, y, gap, text, className, required = false) {
+      const step = font * 1.3;
+      const width = widthOf(text, className === "map-label");
+      // Above, below, right, left of the anchor; then the same, further out.
+      const spots = [[0, -gap - font * 0.35], [0, gap + font * 1.05], [gap + 4, font * 0.35], [-gap - 4, font * 0.35]];
+      for (let ring = 1; ring <= (required ? 6 : 1); ring += 1) {
+        for (const [dx, dy] of spots) {
+          const sx = x + Math.sign(dx) * (Math.abs(dx) + (ring - 1) * step * 2);
+          const sy = y + Math.sign(dy) * (Math.abs(dy) + (ring - 1) * step);
+          const anchor = dx > 0 ? "start" : dx < 0 ? "end" : "middle";
+          const b = box(sx, sy, width, anchor);
+          if (!free(b)) continue;
+          taken.push(b);
+          const node = svg("text", { x: sx.toFixed(1), y: sy.toFixed(1), class: className, "text-anchor": anchor });
+          node.textContent = text;
+          return node;
+        }
+      }
+      return null;
+    },
+  };
+}
+
+function robotShape(name, robot, index, labels) {
   const group = svg("g", { class: `map-robot hue-${index % 4}`, "data-robot": name });
   group.dataset.x = robot.x.toFixed(3);
   group.dataset.y = robot.y.toFixed(3);
@@ -97,30 +164,42 @@ function robotGroup(name, robot, index) {
   if (robot.dock) {
     const [dx, dy] = toScreen(...robot.dock);
     group.append(svg("rect", { x: dx - 9, y: dy - 9, width: 18, height: 18, class: "map-dock" }));
-    group.append(label(dx, dy + 22, `${name} dock`, "map-dock-label"));
-  }
-  for (const person of robot.people) {
-    const [px, py] = toScreen(person.x, person.y);
-    const mark = svg("g", { class: "map-person", "data-person-of": name });
-    mark.append(svg("circle", { cx: px, cy: py - 6, r: 4 }), svg("path", { d: `M ${px - 7} ${py + 8} Q ${px} ${py - 4} ${px + 7} ${py + 8} Z` }));
-    group.append(mark, label(px, py + 20, "person", "map-person-label"));
   }
   const [sx, sy] = toScreen(robot.x, robot.y);
   // True size, within bounds that stay visible on screen however small the map is drawn.
   const radius = Math.min(14, Math.max(7, 0.17 * scale())) * (view.shrink || 1);
   const marker = svg("g", { class: "map-marker", transform: `translate(${sx.toFixed(1)} ${sy.toFixed(1)}) rotate(${(-robot.yaw * 180) / Math.PI})` });
   marker.append(svg("circle", { r: radius }), svg("path", { d: `M ${radius + 6} 0 L ${radius - 3} -6 L ${radius - 3} 6 Z`, class: "map-heading" }));
-  group.append(marker, label(sx, sy - radius - 6, name, "map-label"));
-  return group;
+  group.append(marker);
+  labels.block(sx, sy, radius + 6);
+  return { group, sx, sy, radius };
 }
 
-function describe() {
+function personShape(person, labels) {
+  const [px, py] = toScreen(person.x, person.y);
+  const mark = svg("g", { class: "map-person", "data-count": person.count, "data-seen-by": [...person.by].join(" ") });
+  mark.append(svg("circle", { cx: px, cy: py - 6, r: 4 }), svg("path", { d: `M ${px - 7} ${py + 8} Q ${px} ${py - 4} ${px + 7} ${py + 8} Z` }));
+  labels.block(px, py, 9);
+  return { mark, px, py };
+}
+
+function describe(found) {
   const lines = [...robots].map(([name, r]) => {
-    const people = r.people.length ? `; ${r.people.length} ${r.people.length === 1 ? "person" : "people"} seen` : "";
-    const where = `${name} at x ${r.x.toFixed(2)} m, y ${r.y.toFixed(2)} m, heading ${Math.round((r.yaw * 180) / Math.PI)}°`;
-    return `${where}${r.docked ? ", docked" : ""}${people}`;
+    const where = `${name.replace(/_/g, " ")} at x ${r.x.toFixed(2)} m, y ${r.y.toFixed(2)} m, heading ${Math.round((r.yaw * 180) / Math.PI)}°`;
+    return `${where}${r.docked ? ", docked" : ""}`;
   });
+  if (found.length) lines.push(`${found.length} ${found.length === 1 ? "person" : "people"} seen`);
   return lines.join(". ");
+}
+
+// Extra layers (named places, a floor plan...): addMapLayer({ name, points, draw }) where
+// points() gives [x, y] map metres to keep in view and draw(context) returns SVG nodes, drawn
+// under the robots. context: { toScreen, scale, shrink, svg, labels } (labels.place/block avoid overprinting).
+const layers = new Map();
+
+/** Add or replace a map layer; the map redraws on the next device poll. */
+export function addMapLayer(layer) {
+  layers.set(layer.name, layer);
 }
 
 function redraw() {
@@ -130,9 +209,37 @@ function redraw() {
   const shrink = map.clientWidth ? WIDTH / map.clientWidth : 1;
   view.shrink = Math.max(1, shrink);
   map.style.setProperty("--map-font", `${Math.round(13 * view.shrink)}px`);
+  const labels = labelPlacer();
   const names = [...robots.keys()];
-  map.replaceChildren(grid(), ...names.map((name, index) => robotGroup(name, robots.get(name), index)));
-  $("#map-summary").textContent = describe();
+  const shapes = names.map((name, index) => robotShape(name, robots.get(name), index, labels));
+  const found = people();
+  const persons = found.map((person) => personShape(person, labels));
+  const context = { toScreen, scale: scale(), shrink: view.shrink, svg, labels };
+  const extra = [...layers.values()].flatMap((layer) => {
+    const group = svg("g", { class: `map-layer map-layer-${layer.name}` });
+    group.append(...(layer.draw(context) || []));
+    return [group];
+  });
+  const texts = svg("g", { class: "map-labels" });
+  // Robots' names first: they always get a place; then docks and people where there is room.
+  shapes.forEach(({ sx, sy, radius }, index) => {
+    const node = labels.place(sx, sy, radius + 6, names[index].replace(/_/g, " "), "map-label", true);
+    if (node) { node.dataset.labelOf = names[index]; texts.append(node); }
+  });
+  names.forEach((name) => {
+    const dock = robots.get(name).dock;
+    if (!dock) return;
+    const [dx, dy] = toScreen(...dock);
+    const node = labels.place(dx, dy, 14, `${name.replace(/_/g, " ")} dock`, "map-dock-label");
+    if (node) texts.append(node);
+  });
+  persons.forEach(({ px, py }, index) => {
+    const count = found[index].count;
+    const node = labels.place(px, py, 14, count > 1 ? `person (seen ${count}×)` : "person", "map-person-label");
+    if (node) texts.append(node);
+  });
+  map.replaceChildren(grid(), ...extra, ...shapes.map((s) => s.group), ...persons.map((p) => p.mark), texts);
+  $("#map-summary").textContent = describe(found);
 }
 
 /** Update the map from the polled device list. */
@@ -150,7 +257,14 @@ export function drawMap(devices) {
   if (!panel.hidden) redraw();
 }
 
+// Zooming from the fitted view centres on the robots, not on the middle of an empty map.
 function zoom(factor) {
+  if (view.auto && robots.size) {
+    const xs = [...robots.values()].map((r) => r.x);
+    const ys = [...robots.values()].map((r) => r.y);
+    view.cx = (Math.min(...xs) + Math.max(...xs)) / 2;
+    view.cy = (Math.min(...ys) + Math.max(...ys)) / 2;
+  }
   view.auto = false;
   view.span = Math.min(500, Math.max(0.5, view.span * factor));
   redraw();

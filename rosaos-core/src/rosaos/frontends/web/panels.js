@@ -1,56 +1,10 @@
-// The processes table and the device cards, redrawn in place from polled JSON.
+// The device cards, redrawn in place from polled JSON.
 
 import { renderCardView, showValue } from "./cards.js";
+import { renderControls } from "./controls.js";
 import { drawMap } from "./map.js";
-import { $, api, errorText, setBadge, setStatus, SignedOut, timeOf } from "./session.js";
-import { taskTitle } from "./timeline.js";
-
-export function renderProcesses(processes) {
-  const root = $("#processes");
-  const table = $("table", root);
-  const body = $("tbody", table);
-  $("[data-empty]", root).hidden = processes.length > 0;
-  table.hidden = processes.length === 0;
-  const wanted = new Set(processes.map((p) => String(p.id)));
-  for (const row of [...body.rows]) if (!wanted.has(row.dataset.process)) row.remove();
-  for (const process of processes) {
-    let row = $(`tr[data-process="${process.id}"]`, body);
-    if (!row) {
-      row = body.insertRow();
-      row.dataset.process = process.id;
-      for (const name of ["id", "task", "devices", "state", "started"]) row.insertCell().className = `cell-${name}`;
-      const button = document.createElement("button");
-      button.type = "button";
-      button.className = "danger";
-      button.dataset.terminate = process.id;
-      button.textContent = "Terminate";
-      button.setAttribute("aria-label", `Terminate process ${process.id}`);
-      row.insertCell().append(button);
-    }
-    row.cells[0].textContent = process.id;
-    row.cells[1].textContent = taskTitle(process.task);  // the plan block is for the worker, not people
-    row.cells[1].title = process.task || "";
-    row.cells[2].textContent = (process.devices || []).join(", ") || "—";
-    setBadge(row.cells[3], process.state);
-    row.cells[4].textContent = process.started_at ? timeOf(process.started_at) : "";
-    $("button", row.cells[5]).hidden = process.state !== "running";
-  }
-}
-
-export async function terminate(button) {
-  const id = button.dataset.terminate;
-  button.disabled = true;
-  const status = $("#chat-status");
-  try {
-    const response = await api(`/processes/${id}/terminate`, { method: "POST" });
-    if (!response.ok) setStatus(status, `Could not terminate process ${id}: ${await errorText(response)}`, "error");
-    else setStatus(status, `Process ${id} terminated.`);
-  } catch (error) {
-    if (!(error instanceof SignedOut)) setStatus(status, `Could not terminate process ${id}: kernel unreachable.`, "error");
-  } finally {
-    button.disabled = false;
-  }
-}
+import { $, setBadge } from "./session.js";
+import { spaced, titled } from "./words.js";
 
 export function renderDevices(devices) {
   const root = $("#devices");
@@ -66,15 +20,21 @@ export function renderDevices(devices) {
       card.dataset.device = device.name;
       card.innerHTML = '<header><h3></h3><span class="badge-slot"></span></header>' +
         '<p class="meta"></p><p class="description"></p><div class="card-view"></div>' +
-        '<details class="raw"><summary>Details</summary><dl></dl></details>';
-      $("h3", card).textContent = device.name;
+        '<div class="card-controls"></div><p class="card-busy" hidden></p>' +
+        '<details class="raw"><summary>Details</summary><p class="tech"></p><dl></dl></details>';
+      $("h3", card).textContent = titled(device.name);
       card.setAttribute("aria-label", `Device ${device.name}`);
       root.append(card);
     }
     setBadge($(".badge-slot", card), device.status);
-    $(".meta", card).textContent = [device.driver, device.backend, device.concurrency].filter(Boolean).join(" · ");
+    $(".meta", card).textContent = kindWords(device);
     $(".description", card).textContent = device.description || "";
+    $(".tech", card).textContent = `Driver ${device.driver}, ${device.backend || "sim"} backend, ${device.concurrency} use, instance ${device.name}`;
     renderCardView($(".card-view", card), device);
+    renderControls($(".card-controls", card), device);
+    const busy = $(".card-busy", card);
+    busy.hidden = !(device.held_by || []).length;
+    busy.textContent = busy.hidden ? "" : `In use by process ${device.held_by.join(", ")} (see Running now).`;
     // Without a declared card the raw state is the card: show it open.
     const raw = $("details.raw", card);
     if (!device.card && !raw.dataset.touched) raw.open = true;
@@ -82,6 +42,13 @@ export function renderDevices(devices) {
     renderState($("dl", card), device.state || {});
   }
   drawMap(devices);
+}
+
+/** "simulated lamp": what the device is, in words, from its card (the driver's noun). */
+function kindWords(device) {
+  const noun = device.card?.noun || spaced(device.driver);
+  if (device.backend === "sim") return `simulated ${noun}`;
+  return device.backend === "real" ? noun : `${noun} (${device.backend || "remote"})`;
 }
 
 function renderState(list, state) {

@@ -66,7 +66,10 @@ export async function login(code) {
     cache: "no-store",
   });
   if (!response.ok) {
-    $("#login-error").textContent = await errorText(response);
+    // The section above already says how to get a fresh link: say only what went wrong.
+    $("#login-error").textContent = response.status === 401
+      ? "This login link was already used, has expired, or is unknown."
+      : `Could not sign in: ${await errorText(response)}`;
     return;
   }
   const body = await response.json();

@@ -3,10 +3,13 @@
 import { $, api, errorText, page, setConnection, SignedOut, sleep, timeOf } from "./session.js";
 import { timelineUpdate } from "./timeline.js";
 import { timersUpdate } from "./timers.js";
+import { setMarkedText, titled } from "./words.js";
 
 const POLL_MS = 1000;
 const MAX_LINES = 300; // keep the DOM small: older chat and event lines are dropped
 const STREAM_FAILURES_BEFORE_POLLING = 3;
+const REPEAT_WINDOW_MS = 120_000; // the same line again within this long is counted, not repeated
+const processesOf = new Map(); // event id -> ids of the processes it launched or that it reported
 
 export async function followUpdates() {
   const canStream = typeof TextDecoderStream === "function" && "body" in Response.prototype;
@@ -84,8 +87,20 @@ function addUpdate(update) {
   appendEventLine(update);
   timelineUpdate(update);
   timersUpdate(update);
+  noteProcesses(update);
   const chat = chatLine(update);
-  if (chat) appendChatLine(update.id, chat);
+  if (chat) appendChatLine(update, chat);
+}
+
+// Which processes an event concerns, so the kernel's reply to it can point at them in Activity.
+function noteProcesses(update) {
+  const data = update.data || {};
+  const id = update.kind === "process_launched" ? data.process_id
+    : update.kind === "event" && data.kind === "worker_callback" ? data.payload?.process_id : null;
+  if (id == null || update.event_id == null) return;
+  const known = processesOf.get(update.event_id) || [];
+  if (!known.includes(id)) known.push(id);
+  processesOf.set(update.event_id, known);
 }
 
 function appendEventLine(update) {
@@ -106,42 +121,80 @@ function appendEventLine(update) {
   appendKeepingScroll(log, item);
 }
 
-// How an update reads in the chat, or null when it belongs only in the event stream.
+// How an update reads in the chat, or null when it belongs only in Activity or the Debug view.
+// The chat is the conversation: what you said, and one line per outcome from rosaOS. Processes
+// starting and ending, tool calls and worker callbacks are in Activity; everything in Debug.
 function chatLine(update) {
   const data = update.data || {};
   if (update.kind === "kernel_reply") return { who: "rosaOS", role: "kernel", text: update.text };
   if (update.kind === "error") return { who: "Error", role: "error", text: update.text };
-  if (update.kind === "process_launched" || update.kind === "process_ended") {
-    return { who: "", role: "system", text: update.text };
-  }
   if (update.kind !== "event") return null;
   const payload = data.payload || {};
   switch (data.kind) {
     case "user_typed": return { who: "You", role: "user", text: payload.text };
     case "user_said": return { who: "You said", role: "user", text: payload.text };
-    case "worker_callback": {
-      const result = payload.error || payload.output || "";
-      return { who: `Process ${payload.process_id ?? payload.worker_id} (${payload.status})`, role: "system", text: result };
-    }
-    case "device_notice": return { who: payload.device, role: "system", text: payload.message };
+    case "device_notice": return { who: titled(payload.device), role: "system", text: payload.message };
     case "error": return { who: "Error", role: "error", text: payload.message };
-    default: return { who: "", role: "system", text: update.text };
+    default: return null;
   }
 }
 
-function appendChatLine(id, line) {
+function appendChatLine(update, line) {
+  const log = $("#chat-log");
+  const last = [...log.children].slice(-4).reverse().find((item) => item.dataset.text === line.text);
+  if (last && line.role !== "user" && Date.now() - Number(last.dataset.at) < REPEAT_WINDOW_MS) {
+    if (last.dataset.who !== line.who) return; // rosaOS repeating a device's notice: said already
+    const count = Number(last.dataset.count || "1") + 1; // "found a person" three times is one line, ×3
+    last.dataset.count = String(count);
+    $(".repeat", last).textContent = `×${count}`;
+    $(".repeat", last).hidden = false;
+    return;
+  }
   const item = document.createElement("li");
   item.className = `msg msg-${line.role}`;
-  item.dataset.updateId = id;
+  item.dataset.updateId = update.id;
   item.dataset.role = line.role;
+  item.dataset.text = line.text || "";
+  item.dataset.who = line.who;
+  item.dataset.at = String(Date.now());
   if (line.who) {
     const who = document.createElement("span");
     who.className = "who";
     who.textContent = `${line.who}:`;
     item.append(who);
   }
-  item.append(document.createTextNode(line.text || ""));
-  appendKeepingScroll($("#chat-log"), item);
+  const text = document.createElement("span");
+  text.className = "msg-text";
+  setMarkedText(text, line.text || "");
+  const repeat = document.createElement("span");
+  repeat.className = "repeat";
+  repeat.hidden = true;
+  item.append(text, repeat);
+  const processes = line.role === "kernel" ? processesOf.get(update.event_id) || [] : [];
+  if (processes.length) {
+    // Details on click: the processes behind this answer, in Activity.
+    const more = document.createElement("button");
+    more.type = "button";
+    more.className = "msg-more quiet";
+    more.textContent = "Details";
+    more.dataset.processes = processes.join(",");
+    more.setAttribute("aria-label", `Show process ${processes.join(", ")} in Activity`);
+    item.append(more);
+  }
+  appendKeepingScroll(log, item);
+}
+
+/** A chat line's Details: bring its processes into view in Activity and mark them. */
+export function showChatDetails(event) {
+  const button = event.target.closest("button.msg-more");
+  if (!button) return;
+  const entries = button.dataset.processes.split(",")
+    .map((id) => document.querySelector(`#timeline > li[data-process="${id}"]`)).filter(Boolean);
+  for (const entry of document.querySelectorAll("#timeline > li.highlight")) entry.classList.remove("highlight");
+  for (const entry of entries) entry.classList.add("highlight");
+  entries[0]?.scrollIntoView({ block: "nearest", behavior: "smooth" });
+  entries[0]?.setAttribute("tabindex", "-1");
+  entries[0]?.focus({ preventScroll: true });
 }
 
 function appendKeepingScroll(list, item) {

@@ -3,6 +3,7 @@
 // the progress a running process reports, and Yes/No buttons for a question waiting on a person.
 
 import { $, api, errorText, setBadge, setStatus, SignedOut, timeOf } from "./session.js";
+import { callLine, resultLine, spaced } from "./words.js";
 
 const MAX_PROCESSES = 30;
 const RESULT_CHARS = 160;
@@ -50,15 +51,14 @@ function step(entry, kind, time, text, detail) {
   return item;
 }
 
+// A process's own words, without markdown marks, on one short line.
 function short(text) {
   if (!text) return "";
-  return text.length > RESULT_CHARS ? `${text.slice(0, RESULT_CHARS)}…` : text;
+  const line = String(text).replace(/`|\*\*|__/g, "").replace(/\s+/g, " ").trim();
+  return line.length > RESULT_CHARS ? `${line.slice(0, RESULT_CHARS)}…` : line;
 }
 
-function callText(receipt) {
-  const args = Object.entries(receipt.arguments || {}).map(([k, v]) => `${k}=${JSON.stringify(v)}`).join(", ");
-  return `${receipt.device}.${receipt.tool}(${args})`;
-}
+const ENDINGS = { ok: "Done", terminated: "Stopped", timeout: "Gave up (took too long)", error: "Failed" };
 
 /** Feed one update of the stream; only process launches and ends concern the timeline. */
 export function timelineUpdate(update) {
@@ -66,7 +66,7 @@ export function timelineUpdate(update) {
   if (update.kind === "process_launched" && data.process_id) {
     const entry = entryFor(data.process_id);
     if (!$(".tl-launched", entry)) {
-      step(entry, "launched", update.time, `Launched with ${(data.devices || []).join(", ") || "no device"}`);
+      step(entry, "launched", update.time, `Started with ${(data.devices || []).map(spaced).join(", ") || "no device"}`);
     }
     setBadge($(".badge-slot", entry), data.state || "running");
   } else if (update.kind === "process_ended" && (data.process_id ?? data.worker_id)) {
@@ -75,13 +75,14 @@ export function timelineUpdate(update) {
     if ($(".tl-callback", entry)) return; // a replayed update
     for (const receipt of data.receipts || []) {
       const at = receipt.started ? new Date(receipt.started * 1000).toISOString() : update.time;
-      const item = step(entry, receipt.ok ? "call" : "call-failed", at, `${receipt.ok ? "✓" : "✗"} ${callText(receipt)}`,
-        receipt.ok ? `→ ${short(receipt.result)}` : `→ ${short(receipt.error)}`);
+      const detail = receipt.ok ? resultLine(receipt.result) : short(receipt.error);
+      const item = step(entry, receipt.ok ? "call" : "call-failed", at, `${receipt.ok ? "✓" : "✗"} ${callLine(receipt)}`, detail);
       item.dataset.tool = receipt.tool;
-      if (receipt.safety) item.append(element("span", "tl-safety", `safety: ${receipt.safety.decision} ${receipt.safety.detail || ""}`.trim()));
+      if (receipt.safety) item.append(element("span", "tl-safety", `Safety: ${spaced(receipt.safety.decision)}${receipt.safety.detail ? `, ${short(receipt.safety.detail)}` : ""}`));
     }
     const result = data.error || data.output || "";
-    step(entry, "callback", update.time, `Ended: ${data.status}`, short(result));
+    const item = step(entry, "callback", update.time, ENDINGS[data.status] || spaced(data.status), short(result));
+    item.dataset.status = data.status;
     setBadge($(".badge-slot", entry), data.status);
     $(".tl-progress", entry).hidden = true;
   }
@@ -104,7 +105,7 @@ export function progressOf(raw) {
   if (!raw || typeof raw !== "object") return null;
   const fraction = typeof raw.progress === "number" && typeof raw.total === "number" && raw.total > 0
     ? raw.progress / raw.total : null;
-  return { fraction, message: raw.message || "" };
+  return { fraction, message: resultLine(raw.message || "") };
 }
 
 function showProgress(entry, process) {

@@ -24,6 +24,7 @@ import rosaos
 from rosaos.auth import BearerAuthMiddleware, HostOriginGuard
 from rosaos.kernel.api import (
     confirmation_routes,  # noqa: F401  (adds its routes to protected)
+    control_routes,  # noqa: F401  (adds its routes to protected)
     frame_routes,  # noqa: F401  (adds its routes to protected)
     timer_routes,  # noqa: F401  (adds its routes to protected)
 )

@@ -11,10 +11,12 @@ from collections.abc import Sequence
 from datetime import datetime
 from typing import Any, Literal, Protocol
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from rosaos.config import MapOrigin
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.login_codes import LoginCodes
+from rosaos.kernel.api.task_words import task_words
 from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.events import EventStore, IdempotencyKey, Source
 from rosaos.kernel.timers import TimerBook
@@ -67,6 +69,9 @@ class KernelRuntime(Protocol):
 
     async def terminate(self, process_id: int) -> ProcessInfo:
         """Terminate a process and return it; raise ``KeyError`` for an unknown id."""
+
+    async def launch(self, task: str, devices: list[str]) -> ProcessInfo:
+        """Launch a process outside the kernel agent (a card control); raise ``LaunchRefused``."""
 
     async def devices(self) -> Sequence[DeviceView]:
         """Every device with its status, live state and the processes holding it."""
@@ -133,6 +138,15 @@ class ProcessView(BaseModel):
     worker_pid: int | None = None
     progress: ProgressView | None = None
     """The latest progress of a long task (a robot's search), while it runs."""
+    summary: str = ""
+    """The task in words, without the plan block or the kernel's notes (filled from ``task``)."""
+    then: str | None = None
+    """What the kernel does when this process succeeds ("turn the lamp green"), if anything."""
+
+    @model_validator(mode="after")
+    def _words(self) -> ProcessView:
+        self.summary, self.then = task_words(self.task)
+        return self
 
 
 class DeviceView(BaseModel):
@@ -152,6 +166,8 @@ class DeviceView(BaseModel):
     """How the web page draws the state (``rosaos.cards``): ``{"widgets": [...]}``; null for a key list."""
     held_by: list[int] = Field(default_factory=list)
     """Ids of the running processes that hold this device (their leases)."""
+    map_origin: MapOrigin | None = None
+    """A robot's pose in the shared floor map (``[devices.NAME] map_origin``); null: at the map's origin."""
 
 
 class EmergencyStopState(BaseModel):
