@@ -49,6 +49,8 @@ from rosaos.kernel.timer_tools import add_timer_tools
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.tools import build_kernel_tools
 from rosaos.kernel.updates import UpdateStream
+from rosaos.memory.store import MemoryStore
+from rosaos.memory.tools import add_memory_tools, memory_summary
 from rosaos.models.defaults import KernelModels, kernel_models
 from rosaos.models.select import ModelSpec
 from rosaos.processes.jobs import WorkerCallback, callback_idempotency_key
@@ -329,12 +331,19 @@ class Kernel:
         self.states = DeviceStateCache(self.endpoints)
         tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._launched)
         add_timer_tools(tools, self.timers)
+        self.memory = MemoryStore.open(self.data_dir)
+        add_memory_tools(tools, self.memory, self.endpoints, self._launch)
+        if self._models.local is not None:
+            self._models.local.memory = self.memory
         agent = build_kernel_agent(self._models.kernel, tools)
         self.loop = KernelLoop(
             self._store,
             self._updates,
             agent,
-            instructions=lambda: kernel_prompt(self.endpoints().values(), self.config.kernel.kernel_prompt),
+            instructions=lambda: (
+                kernel_prompt(self.endpoints().values(), self.config.kernel.kernel_prompt)
+                + memory_summary(self.memory)
+            ),
             model=self._model_for_event,
             history_budget=self.config.kernel.history_messages,
         )
@@ -420,6 +429,12 @@ class Kernel:
         appended = await self._store.append(event)
         if not appended.duplicate:
             await self._updates.publish_event(appended.id, event)
+
+    async def _launch(self, task: str, devices: list[str]) -> ProcessInfo:
+        """Launch a process as ``launch_process`` does (a memory tool's: drive to a place)."""
+        info = await self.manager.launch(task, devices)
+        await self._launched(info)
+        return info
 
     async def _launched(self, info: ProcessInfo) -> None:
         """Keep ids unique across restarts, and remember the process until its end is recorded."""

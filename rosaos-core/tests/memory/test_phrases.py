@@ -1,0 +1,71 @@
+"""The offline engine's sentences about memory: places, facts, aliases, forgetting."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from rosaos.memory.phrases import (
+    Forget,
+    ForgetPlace,
+    GoToPlace,
+    ListPlaces,
+    Recall,
+    RememberNote,
+    RememberPlace,
+    UnknownPlace,
+    read_memory_request,
+    resolve_aliases,
+)
+
+KNOWN = {"kitchen", "charging corner"}
+
+
+@pytest.mark.parametrize(
+    ("said", "expected"),
+    [
+        ("Remember this spot as the kitchen", RememberPlace("the kitchen")),
+        ("save this place as kitchen.", RememberPlace("the kitchen")),
+        ("dog, remember this spot as the doghouse", RememberPlace("the doghouse", robot="dog")),
+        ("The charging corner is at x 2, y -1", RememberPlace("the charging corner", 2.0, -1.0)),
+        (
+            "the porch is at x 1.5 y minus 3 facing 90 degrees",
+            RememberPlace("the porch", 1.5, -3.0, math.pi / 2),
+        ),
+        ("Go to the kitchen", GoToPlace("the kitchen")),
+        ("head to the kitchen please", GoToPlace("the kitchen")),
+        ("drive over to the charging corner", GoToPlace("the charging corner")),
+        ("come back to the kitchen", GoToPlace("the kitchen")),
+        ("turtlebot, go to the kitchen", GoToPlace("the kitchen", "turtlebot")),
+        ("go to the attic", UnknownPlace("the attic")),
+        ("Which places do you know?", ListPlaces()),
+        ("forget the kitchen", ForgetPlace("the kitchen")),
+        ("forget that my name is Sam", Forget("my name is sam")),
+        ("call the dog Rex", RememberNote("alias", "rex", "the dog")),
+        ("the dog is called Rex", RememberNote("alias", "rex", "the dog")),
+        ("my name is Sam", RememberNote("fact", "my name", "Sam")),
+        (
+            "I like my reading light at 40 percent",
+            RememberNote("preference", "my reading light", "40 percent"),
+        ),
+        (
+            "remember that the kids go to bed at 8",
+            RememberNote("fact", "the kids go to bed at 8", "the kids go to bed at 8"),
+        ),
+        ("What do you remember?", Recall()),
+        ("turn on the kitchen light", None),
+    ],
+)
+def test_a_sentence_reads_as_its_memory_request(said: str, expected: object) -> None:
+    assert read_memory_request(said, KNOWN) == expected
+
+
+def test_go_to_an_unknown_place_is_left_alone_when_no_place_is_known() -> None:
+    assert read_memory_request("go to sleep", set()) is None
+
+
+def test_an_alias_is_replaced_as_a_whole_word_in_any_case() -> None:
+    aliases = {"rex": "the dog"}
+    assert resolve_aliases("Rex, walk forward one metre", aliases) == "the dog, walk forward one metre"
+    assert resolve_aliases("turn on the rexroth lamp", aliases) == "turn on the rexroth lamp"
