@@ -50,7 +50,7 @@ from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.tools import build_kernel_tools
 from rosaos.kernel.updates import UpdateStream
 from rosaos.memory.store import MemoryStore
-from rosaos.memory.tools import add_memory_tools, memory_summary
+from rosaos.memory.memory_tools import add_memory_tools, memory_summary
 from rosaos.models.defaults import KernelModels, kernel_models
 from rosaos.models.select import ModelSpec
 from rosaos.processes.jobs import WorkerCallback, callback_idempotency_key

@@ -1,8 +1,8 @@
 """The offline kernel model's memory turns: places, facts and aliases, without an LLM.
 
 :class:`rosaos.models.kernel_model.LocalIntentModel` asks :func:`memory_turn` after the timers.
-It answers user text that is a memory request (:mod:`rosaos.memory.phrases`) with one call to
-a memory tool (:mod:`rosaos.memory.tools`), and those tools' results with one sentence. The
+It answers user text that is a memory request (:mod:`rosaos.memory.memory_phrases`) with one call to
+a memory tool (:mod:`rosaos.memory.memory_tools`), and those tools' results with one sentence. The
 ``go_to_place`` process's callback is a planned process's like any other: its plan words it.
 Anything else is left to the engine (None).
 """
@@ -16,7 +16,7 @@ from pydantic_ai.messages import ModelMessage, ModelRequest, ModelResponsePart, 
 
 from rosaos.intents.planning.plan import result_data
 from rosaos.intents.understanding.match_result import MatchResult
-from rosaos.memory.phrases import (
+from rosaos.memory.memory_phrases import (
     Forget,
     ForgetPlace,
     GoToPlace,
@@ -30,7 +30,7 @@ from rosaos.memory.phrases import (
     resolve_aliases,
 )
 from rosaos.memory.store import MemoryStore
-from rosaos.memory.tools import MEMORY_TOOL_NAMES
+from rosaos.memory.memory_tools import MEMORY_TOOL_NAMES
 from rosaos.models.conversation import (
     ToolOutcome,
     content_text,

@@ -43,7 +43,7 @@ from rosaos.intents.planning.notice_plan import SILENCE, notice_response
 from rosaos.intents.planning.plan import PlanError, decode_plan, has_plan
 from rosaos.intents.planning.timer_plan import is_timer_sentence, timer_turn
 from rosaos.intents.understanding.matching import IntentMatcher, MatchResult
-from rosaos.memory.phrases import resolve_aliases
+from rosaos.memory.memory_phrases import resolve_aliases
 from rosaos.memory.store import MemoryStore
 from rosaos.memory.turn import is_memory_sentence, memory_turn
 from rosaos.models.conversation import (

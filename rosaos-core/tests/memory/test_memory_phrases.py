@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from rosaos.memory.phrases import (
+from rosaos.memory.memory_phrases import (
     Forget,
     ForgetPlace,
     GoToPlace,
