@@ -49,8 +49,8 @@ from rosaos.kernel.timer_tools import add_timer_tools
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.tools import build_kernel_tools
 from rosaos.kernel.updates import UpdateStream
-from rosaos.memory.store import MemoryStore
 from rosaos.memory.memory_tools import add_memory_tools, memory_summary
+from rosaos.memory.store import MemoryStore
 from rosaos.models.defaults import KernelModels, kernel_models
 from rosaos.models.select import ModelSpec
 from rosaos.processes.jobs import WorkerCallback, callback_idempotency_key

@@ -29,8 +29,8 @@ from rosaos.memory.memory_phrases import (
     read_memory_request,
     resolve_aliases,
 )
-from rosaos.memory.store import MemoryStore
 from rosaos.memory.memory_tools import MEMORY_TOOL_NAMES
+from rosaos.memory.store import MemoryStore
 from rosaos.models.conversation import (
     ToolOutcome,
     content_text,
