@@ -33,6 +33,7 @@ KNOWN = {"kitchen", "charging corner"}
             "the porch is at x 1.5 y minus 3 facing 90 degrees",
             RememberPlace("the porch", 1.5, -3.0, math.pi / 2),
         ),
+        ("the attic stairs are at x 1, y 1", RememberPlace("the attic stairs", 1.0, 1.0)),
         ("Go to the kitchen", GoToPlace("the kitchen")),
         ("head to the kitchen please", GoToPlace("the kitchen")),
         ("drive over to the charging corner", GoToPlace("the charging corner")),

@@ -27,7 +27,7 @@ _REMEMBER_HERE = re.compile(
     rf"|^(?:{_SPOT}|here) is (?P<name2>.+)$"
 )
 _REMEMBER_AT = re.compile(
-    rf"^(?:remember that )?(?P<name>.+?) is at (?:x )?(?P<x>{_NUMBER}),? (?:and )?(?:y )?(?P<y>{_NUMBER})"
+    rf"^(?:remember that )?(?P<name>.+?) (?:is|are) at (?:x )?(?P<x>{_NUMBER}),? (?:and )?(?:y )?(?P<y>{_NUMBER})"
     rf"(?:,? (?:facing|yaw|heading) (?P<yaw>{_NUMBER})(?: degrees)?)?$"
 )
 _GO_TO = re.compile(rf"^{_ROBOT}(?:please )?{_GO} to (?P<name>.+?)(?: please)?$")
