@@ -9,9 +9,11 @@ import pytest
 from rosaos.memory.memory_phrases import (
     Forget,
     ForgetPlace,
+    ForgetSightings,
     GoToPlace,
     ListPlaces,
     Recall,
+    RecallSightings,
     RememberNote,
     RememberPlace,
     UnknownPlace,
@@ -55,6 +57,9 @@ KNOWN = {"kitchen", "charging corner"}
             RememberNote("fact", "the kids go to bed at 8", "the kids go to bed at 8"),
         ),
         ("What do you remember?", Recall()),
+        ("Where did you last see someone?", RecallSightings()),
+        ("has anyone been in the kitchen today?", RecallSightings("the kitchen", today=True)),
+        ("forget what you saw", ForgetSightings()),
         ("turn on the kitchen light", None),
     ],
 )

@@ -185,15 +185,22 @@ class RosBackend(DeviceBackend):
         return report, image
 
     async def detect_people(self, timeout: float) -> dict[str, Any]:
-        """Take a picture and find the people in it, placed in the world by the pose it was taken at."""
+        """Take a picture and find the people in it, placed by the pose it was taken at (in get_pose's frame)."""
         report, image = await self.capture_frame(timeout)
-        try:
-            odometry = self.state.latest_odometry()
-            pose: tuple[float, float, float] | None = (odometry.x, odometry.y, odometry.yaw)
-        except DeviceError:  # no odometry: bearing and distance only
-            pose = None
-        people = await self.sightings.detect(image, pose)
-        where = {"x": round(pose[0], 3), "y": round(pose[1], 3), "yaw": round(pose[2], 3)} if pose else None
+        try:  # on the map when the robot is localized on one, else on odometry
+            framed = await self.navigator.pose()
+            pose: tuple[float, float, float] | None = (framed.x, framed.y, framed.yaw)
+            frame = {"frame": framed.frame, "anchor": framed.anchor}
+        except DeviceError:  # no pose: bearing and distance only
+            pose, frame = None, {}
+        people = [
+            person | frame if "x" in person else person for person in await self.sightings.detect(image, pose)
+        ]
+        where = (
+            {"x": round(pose[0], 3), "y": round(pose[1], 3), "yaw": round(pose[2], 3)} | frame
+            if pose
+            else None
+        )
         return {"found": bool(people), "count": len(people), "people": people, **report, "pose": where}
 
     # Motion

@@ -50,6 +50,7 @@ from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.tools import build_kernel_tools
 from rosaos.kernel.updates import UpdateStream
 from rosaos.memory.memory_tools import add_memory_tools, memory_summary
+from rosaos.memory.sightings import SightingLog
 from rosaos.memory.store import MemoryStore
 from rosaos.models.defaults import KernelModels, kernel_models
 from rosaos.models.select import ModelSpec
@@ -169,6 +170,7 @@ class Kernel:
         self.manager.record_callback(callback)
         await self._live.ended(callback.process_id)
         await self._activity.record(event_id, callback.process_id, callback.receipts)
+        self.sightings.record_receipts(callback.receipts)  # the people its robots saw
         if callback.process_id in self._ended_published:
             return
         self._ended_published.add(callback.process_id)
@@ -332,7 +334,8 @@ class Kernel:
         tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._launched)
         add_timer_tools(tools, self.timers)
         self.memory = MemoryStore.open(self.data_dir)
-        add_memory_tools(tools, self.memory, self.endpoints, self._launch)
+        self.sightings = SightingLog(self.memory)
+        add_memory_tools(tools, self.memory, self.endpoints, self._launch, self.sightings)
         if self._models.local is not None:
             self._models.local.memory = self.memory
         agent = build_kernel_agent(self._models.kernel, tools)

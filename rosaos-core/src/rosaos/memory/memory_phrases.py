@@ -43,6 +43,14 @@ _ALIAS_IS = re.compile(
 _MY_NAME = re.compile(r"^(?:my name is|call me|i am called|i'm called) (?P<name>[\w -]+)$")
 _PREFERENCE = re.compile(r"^i (?:like|prefer|want) (?P<key>my [\w ]+?) (?:at|to be|on) (?P<value>.+)$")
 _REMEMBER_THAT = re.compile(r"^(?:please )?remember that (?P<fact>.+)$")
+_LAST_SEEN = re.compile(
+    r"^where (?:did|have) you (?:last )?(?:see|seen) (?:someone|somebody|anyone|anybody|a person|people)(?: last)?$"
+    r"|^when did you last see (?:someone|somebody|anyone|anybody|a person)$"
+)
+_BEEN_IN = re.compile(
+    r"^(?:has|have) (?:anyone|anybody|someone|somebody) been (?:in|at|near) (?P<place>.+?)(?P<today> today)?$"
+)
+_FORGET_SEEN = re.compile(r"^forget (?:what|everything|who) (?:you(?:'ve| have)? )?(?:saw|seen)$")
 _RECALL = re.compile(
     r"^what do you (?:remember|know)(?: about (?P<about>.+))?$|^what(?:'s| is) my name$|^who am i$"
 )
@@ -93,6 +101,19 @@ class Forget:
 
 
 @dataclass(frozen=True)
+class RecallSightings:
+    """ "Where did you last see someone?" (no place), "has anyone been in the kitchen today?"."""
+
+    place: str | None = None
+    today: bool = False
+
+
+@dataclass(frozen=True)
+class ForgetSightings:
+    pass
+
+
+@dataclass(frozen=True)
 class UnknownPlace:
     """ "Go to X" with no place X: the reply names the places there are."""
 
@@ -100,7 +121,16 @@ class UnknownPlace:
 
 
 MemoryRequest = (
-    RememberPlace | GoToPlace | ListPlaces | ForgetPlace | RememberNote | Recall | Forget | UnknownPlace
+    RememberPlace
+    | GoToPlace
+    | ListPlaces
+    | ForgetPlace
+    | RememberNote
+    | Recall
+    | Forget
+    | UnknownPlace
+    | RecallSightings
+    | ForgetSightings
 )
 
 
@@ -114,6 +144,12 @@ def read_memory_request(text: str, places: Collection[str]) -> MemoryRequest | N
     said = normalize(text)
     if _LIST.match(said):
         return ListPlaces()
+    if _LAST_SEEN.match(said):
+        return RecallSightings()
+    if found := _BEEN_IN.match(said):
+        return RecallSightings(_name(found["place"]), bool(found["today"]))
+    if _FORGET_SEEN.match(said):
+        return ForgetSightings()
     if found := _REMEMBER_AT.match(said):
         yaw = math.radians(_number(found["yaw"])) if found["yaw"] else None
         return RememberPlace(_name(found["name"]), _number(found["x"]), _number(found["y"]), yaw)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Awaitable, Callable
+from datetime import datetime
 from typing import Annotated, Any
 
 from fastmcp import FastMCP
@@ -20,6 +21,7 @@ from pydantic import Field
 
 from rosaos.drivers import CHANGES, DELETES, READ_ONLY
 from rosaos.memory.robots import Endpoints, choose_robot, frame_refusal, go_to_task, read_pose
+from rosaos.memory.sightings import SightingLog, ago
 from rosaos.memory.store import NAME_MAX, MemoryRequestError, MemoryStore, NoteKind, Place
 from rosaos.processes.manager import LaunchRefused, ProcessInfo
 
@@ -31,6 +33,8 @@ MEMORY_TOOL_NAMES = (
     "remember",
     "recall",
     "forget",
+    "recall_sightings",
+    "forget_sightings",
 )
 
 PlaceName = Annotated[
@@ -53,8 +57,34 @@ def place_data(place: Place) -> dict[str, Any]:
     }
 
 
-def add_memory_tools(server: FastMCP, store: MemoryStore, endpoints: Endpoints, launch: Launch) -> None:
+def add_memory_tools(
+    server: FastMCP, store: MemoryStore, endpoints: Endpoints, launch: Launch, sightings: SightingLog
+) -> None:
     """Register the memory tools on the kernel's tool server."""
+
+    @server.tool(annotations=READ_ONLY)
+    async def recall_sightings(
+        place: Annotated[
+            str | None, Field(max_length=NAME_MAX, description="Only near this named place ('the kitchen').")
+        ] = None,
+        today: Annotated[bool, Field(description="Only since midnight (local time).")] = False,
+    ) -> dict[str, Any]:
+        """Who the robots saw, newest first: when ('ago'), which robot, where (x, y, frame), the nearest
+        named place, and the picture (relative to the images folder)."""
+        known = store.place(place) if place else None
+        named = known.name if known is not None else place
+        midnight = datetime.now().astimezone().replace(hour=0, minute=0, second=0, microsecond=0)
+        since = midnight.timestamp() if today else None
+        found = sightings.recent(named, since)
+        return {
+            "sightings": [s.model_dump(mode="json") | {"ago": ago(s.at)} for s in found],
+            "kept_days": sightings.keep_days,
+        }
+
+    @server.tool(annotations=DELETES)
+    async def forget_sightings() -> dict[str, Any]:
+        """Forget everything the robots saw (the pictures stay in the images folder)."""
+        return {"forgotten": sightings.clear()}
 
     @server.tool(annotations=CHANGES)
     async def remember_place(

@@ -9,6 +9,7 @@ One file, ``memory.db``, owner-only like the rest of the data directory, next to
 - **notes**: what people said, by kind: ``fact`` ("my name is Sam"), ``alias`` ("call the dog
   Rex": ``rex`` means ``the dog``) and ``preference``. Keyed by (kind, key); saying it again
   replaces it.
+- **sightings**: what the robots saw (:mod:`rosaos.memory.sightings`).
 
 The calls are synchronous: each is one small local transaction (well under a millisecond), and
 both the kernel and the CLI use the file, the CLI while the kernel runs (WAL mode).
@@ -50,6 +51,18 @@ CREATE TABLE IF NOT EXISTS notes (
     said TEXT NOT NULL,
     saved_at REAL NOT NULL,
     PRIMARY KEY (kind, key)
+);
+CREATE TABLE IF NOT EXISTS sightings (
+    id INTEGER PRIMARY KEY,
+    what TEXT NOT NULL,
+    device TEXT NOT NULL,
+    at REAL NOT NULL,
+    x REAL,
+    y REAL,
+    frame TEXT,
+    anchor TEXT,
+    place TEXT,
+    image TEXT
 );
 """
 
@@ -104,7 +117,7 @@ class MemoryStore:
         self.path = path
         path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
         fresh = not path.exists()
-        with self._connect() as db:
+        with self.connect() as db:
             db.execute("PRAGMA journal_mode=WAL")
             db.executescript(_SCHEMA)
         if fresh:
@@ -116,7 +129,7 @@ class MemoryStore:
         return cls(data_dir / MEMORY_FILE)
 
     @contextmanager
-    def _connect(self) -> Iterator[sqlite3.Connection]:
+    def connect(self) -> Iterator[sqlite3.Connection]:
         db = sqlite3.connect(self.path, timeout=5)
         db.row_factory = sqlite3.Row
         try:
@@ -131,7 +144,7 @@ class MemoryStore:
         """Store ``place``, replacing one of the same name."""
         if not place.key:
             raise MemoryRequestError("a place needs a name, e.g. 'the kitchen'")
-        with self._connect() as db:
+        with self.connect() as db:
             db.execute(
                 "INSERT OR REPLACE INTO places VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
                 (place.key, place.name, place.device, place.frame, place.anchor, place.x, place.y, place.yaw,
@@ -141,13 +154,13 @@ class MemoryStore:
 
     def place(self, name: str) -> Place | None:
         """The place called ``name`` (any case, with or without "the"), or None."""
-        with self._connect() as db:
+        with self.connect() as db:
             row = db.execute("SELECT * FROM places WHERE key = ?", (place_key(name),)).fetchone()
         return _place(row) if row is not None else None
 
     def places(self) -> list[Place]:
         """Every place, by name."""
-        with self._connect() as db:
+        with self.connect() as db:
             return [_place(row) for row in db.execute("SELECT * FROM places ORDER BY key")]
 
     def rename_place(self, name: str, new_name: str) -> Place:
@@ -160,14 +173,14 @@ class MemoryStore:
                 f"there is already a place called {new_name!r}; forget it first or pick another name"
             )
         renamed = place.model_copy(update={"name": new_name.strip()})
-        with self._connect() as db:
+        with self.connect() as db:
             db.execute("DELETE FROM places WHERE key = ?", (place.key,))
         return self.save_place(renamed)
 
     def forget_place(self, name: str) -> Place:
         """Delete a place; :class:`MemoryRequestError` names the known places when there is none."""
         place = self.require_place(name)
-        with self._connect() as db:
+        with self.connect() as db:
             db.execute("DELETE FROM places WHERE key = ?", (place.key,))
         return place
 
@@ -190,7 +203,7 @@ class MemoryStore:
         if not key or not value.strip():
             raise MemoryRequestError("there is nothing to remember in that")
         note = Note(kind=kind, key=key, value=value.strip(), said=said.strip(), saved_at=time.time())
-        with self._connect() as db:
+        with self.connect() as db:
             db.execute(
                 "INSERT OR REPLACE INTO notes VALUES (?, ?, ?, ?, ?)",
                 (note.kind, note.key, note.value, note.said, note.saved_at),
@@ -202,7 +215,7 @@ class MemoryStore:
         query, args = "SELECT * FROM notes ORDER BY saved_at", ()
         if kind is not None:
             query, args = "SELECT * FROM notes WHERE kind = ? ORDER BY saved_at", (kind,)  # type: ignore[assignment]
-        with self._connect() as db:
+        with self.connect() as db:
             return [Note(**dict(row)) for row in db.execute(query, args)]
 
     def forget_notes(self, matching: str) -> list[Note]:
@@ -213,7 +226,7 @@ class MemoryStore:
             for note in self.notes()
             if words and all(word in f"{note.key} {note.value} {note.said}".lower() for word in words)
         ]
-        with self._connect() as db:
+        with self.connect() as db:
             for note in gone:
                 db.execute("DELETE FROM notes WHERE kind = ? AND key = ?", (note.kind, note.key))
         return gone
@@ -223,10 +236,11 @@ class MemoryStore:
         return {note.key: note.value for note in self.notes("alias")}
 
     def clear(self) -> tuple[int, int]:
-        """Forget everything; returns how many places and notes were deleted."""
-        with self._connect() as db:
+        """Forget everything (sightings too); returns how many places and notes were deleted."""
+        with self.connect() as db:
             places = db.execute("DELETE FROM places").rowcount
             notes = db.execute("DELETE FROM notes").rowcount
+            db.execute("DELETE FROM sightings")
         return places, notes
 
 

@@ -19,10 +19,12 @@ from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.memory.memory_phrases import (
     Forget,
     ForgetPlace,
+    ForgetSightings,
     GoToPlace,
     ListPlaces,
     MemoryRequest,
     Recall,
+    RecallSightings,
     RememberNote,
     RememberPlace,
     UnknownPlace,
@@ -101,6 +103,11 @@ def _calls(
     if isinstance(request, RememberNote):
         args = {"kind": request.kind, "key": request.key, "value": request.value, "said": said.strip()}
         return _call(tools, "remember", args)
+    if isinstance(request, RecallSightings):
+        args = {"place": request.place, "today": request.today} if request.place else {}
+        return _call(tools, "recall_sightings", args)
+    if isinstance(request, ForgetSightings):
+        return _call(tools, "forget_sightings", {})
     if isinstance(request, Recall):
         return _call(tools, "recall", {"about": request.about} if request.about else {})
     assert isinstance(request, Forget)
@@ -148,9 +155,32 @@ def _reply(outcome: ToolOutcome) -> str:
         return f"I'll remember that: {result['said']}."
     if tool == "recall" and isinstance(result, dict):
         return _recalled(result)
+    if tool == "recall_sightings" and isinstance(result, dict):
+        return _seen(result["sightings"], args, result.get("kept_days", 7))
+    if tool == "forget_sightings" and isinstance(result, dict):
+        return f"Forgotten: {result['forgotten']} sightings."
     if tool == "forget" and isinstance(result, list):
         return "Forgotten: " + "; ".join(note["said"] for note in result) + "."
     return content_text(outcome.content)
+
+
+def _seen(sightings: list[dict[str, Any]], args: dict[str, Any], kept_days: float) -> str:
+    place = args.get("place")
+    when = " today" if args.get("today") else f" in the last {kept_days:g} days"
+    if not sightings:
+        return f"No, nobody was seen in {place}{when}." if place else f"I haven't seen anyone{when}."
+    last = sightings[0]
+    if last.get("place"):
+        where = f"in {last['place']}"
+    elif last.get("x") is not None:
+        where = f"at x {last['x']:.1f}, y {last['y']:.1f} ({last.get('frame') or 'odom'} frame)"
+    else:
+        where = "somewhere I can't place"
+    seen = f"{where}, {last['ago']}, seen by the {last['device']}"
+    if place:
+        more = f" ({len(sightings)} times)" if len(sightings) > 1 else ""
+        return f"Yes: last {seen}{more}."
+    return seen[0].upper() + seen[1:] + "."
 
 
 def _recalled(result: dict[str, Any]) -> str:
