@@ -334,7 +334,7 @@ class Kernel:
         tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._launched)
         add_timer_tools(tools, self.timers)
         self.memory = MemoryStore.open(self.data_dir)
-        self.sightings = SightingLog(self.memory)
+        self.sightings = SightingLog(self.memory, self.config.memory.sightings_days)
         add_memory_tools(tools, self.memory, self.endpoints, self._launch, self.sightings)
         if self._models.local is not None:
             self._models.local.memory = self.memory

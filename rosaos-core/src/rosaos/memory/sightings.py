@@ -6,8 +6,8 @@ x, y in the robot's frame, and the picture) and a ``search`` that found someone.
 A sighting keeps its frame, and the nearest named place is looked up among the places of the
 same frame anchor only (a place on another map says nothing about where this was).
 
-Sightings are kept :data:`KEEP_DAYS` days by default (``[memory] sightings_days`` is not a key
-yet: :class:`SightingLog` takes the number), and "forget what you saw" clears them.
+Sightings are kept ``[memory] sightings_days`` days (default :data:`KEEP_DAYS`), and "forget
+what you saw" clears them.
 """
 
 from __future__ import annotations
