@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pytest
 
@@ -75,3 +76,17 @@ def test_an_alias_is_replaced_as_a_whole_word_in_any_case() -> None:
     aliases = {"rex": "the dog"}
     assert resolve_aliases("Rex, walk forward one metre", aliases) == "the dog, walk forward one metre"
     assert resolve_aliases("turn on the rexroth lamp", aliases) == "turn on the rexroth lamp"
+
+
+def test_a_command_the_engine_understands_is_not_read_as_an_alias(tmp_path: Path) -> None:
+    from rosaos.intents.understanding.match_result import MatchResult
+    from rosaos.memory.store import MemoryStore
+    from rosaos.memory.turn import memory_request
+
+    store = MemoryStore.open(tmp_path)
+    asks = MatchResult(text="call the turtlebot back", kind="clarify", reply="Which robot?")
+    nothing = MatchResult(text="call the dog rex", kind="no_match", reply="Sorry")
+    assert memory_request("call the turtlebot back", store, lambda text: asks) is None
+    assert memory_request("call the dog Rex", store, lambda text: nothing) == RememberNote(
+        "alias", "rex", "the dog"
+    )

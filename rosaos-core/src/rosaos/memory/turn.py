@@ -48,11 +48,13 @@ Match = Callable[[str], MatchResult]
 
 
 def memory_request(text: str, store: MemoryStore, match: Match) -> MemoryRequest | None:
-    """The memory request in ``text`` (aliases resolved), or None; "go to X" for an unknown X only
-    when the engine does not understand the sentence otherwise ("go to sleep" stays the Reachy's)."""
+    """The memory request in ``text`` (aliases resolved), or None; "go to X" for an unknown X, and
+    a fact or alias, only when the engine does not understand the sentence otherwise."""
     said = resolve_aliases(text, store.aliases())
     request = read_memory_request(said, {place.key for place in store.places()})
-    if isinstance(request, UnknownPlace) and match(said).is_exact:
+    # "Go to sleep", "call the turtlebot back": a command the engine understands wins over a
+    # reading as an unknown place or an alias.
+    if isinstance(request, UnknownPlace | RememberNote) and match(said).kind in ("plans", "clarify"):
         return None
     return request
 
