@@ -6,12 +6,13 @@ import asyncio
 from typing import Any
 
 
-async def test_list_actions_shows_the_dock_actions(open_robot: Any) -> None:
+async def test_list_actions_shows_the_dock_and_navigation_actions(open_robot: Any) -> None:
     async with open_robot() as robot:
         actions = {a["name"]: a["type"] for a in (await robot.call("list_actions"))["actions"]}
     assert actions == {
         "/dock": "irobot_create_msgs/action/Dock",
         "/undock": "irobot_create_msgs/action/Undock",
+        "/navigate_to_pose": "nav2_msgs/action/NavigateToPose",
     }
 
 

@@ -19,7 +19,10 @@ def test_the_turtlebot4_profile_maps_docking_and_battery_and_names_its_actions()
     profile = load_profile("turtlebot4")
     assert (profile.state["docked"].field, profile.state["battery"].field) == ("is_docked", "percentage")
     assert profile.actions["dock"].type == "irobot_create_msgs/action/Dock"
-    assert profile.allow.actions == ["/dock", "/undock"] and "/cmd_vel" not in profile.allow.publish
+    assert (
+        profile.allow.actions == ["/dock", "/undock", "/navigate_to_pose"]
+        and "/cmd_vel" not in profile.allow.publish
+    )
 
 
 def test_a_namespace_prefixes_every_name_and_glob() -> None:

@@ -141,6 +141,15 @@ class ModelConfig(BaseModel):
     """Longest side, in pixels, of a picture sent to a model (a JPEG of at most ~400 kB)."""
 
 
+class MemoryConfig(BaseModel):
+    """``[memory]``: how long what the robots saw is kept (places and what people said stay until forgotten)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    sightings_days: float = Field(default=7.0, gt=0, le=3650)
+    """Days a sighting (a person a robot's camera found) is kept."""
+
+
 class VoiceConfig(BaseModel):
     """``[voice]``: the voice front end, ``rosaos voice``: audio source, VAD, wake, speech-to-text.
 
@@ -229,6 +238,7 @@ class RosaosConfig(BaseSettings):
     kernel: KernelConfig = Field(default_factory=KernelConfig)
     models: ModelConfig = Field(default_factory=ModelConfig)
     voice: VoiceConfig = Field(default_factory=VoiceConfig)
+    memory: MemoryConfig = Field(default_factory=MemoryConfig)
 
     @classmethod
     def settings_customise_sources(

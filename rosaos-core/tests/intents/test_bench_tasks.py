@@ -15,6 +15,10 @@ of home.yaml), or when it expects no change at all (ambiguous, unknown, question
 - a task that expects no change must not actuate: either it is not an exact match (the engine
   asks or refuses), or its plans only read state;
 - a ``reply`` regex must match some reply (the kernel's, or a process output), by ``rosaos.bench``'s rule.
+
+A task that is a conversation (several sentences: "the kitchen is at x 3.5, y 0", then "go to the
+kitchen") needs the kernel between its sentences (memory, processes), so it runs the way
+``rosaos bench`` runs it: on a real kernel over the simulators, and must pass.
 """
 
 from __future__ import annotations
@@ -29,7 +33,9 @@ from pydantic_ai import Agent
 from pydantic_ai.mcp import MCPToolset
 
 from rosaos.bench.expect import device_differences, reply_matches
-from rosaos.bench.tasks import BenchTask, TaskFile, load_task_file
+from rosaos.bench.results import TrialResult
+from rosaos.bench.runner import run_file
+from rosaos.bench.tasks import BenchTask, TaskFile, TaskSelection, load_task_file
 from rosaos.config import DeviceConfig, RosaosConfig
 from rosaos.devices.serve import open_device
 from rosaos.devices.world import build_world
@@ -118,8 +124,28 @@ def _match(world: TaskFile, task: BenchTask) -> Any:
     return result, devices, initial
 
 
+class _Quiet:
+    def started(self, task_id: str, trial: int) -> None:
+        pass
+
+    def finished(self, task_id: str, result: TrialResult | None) -> None:
+        pass
+
+
+async def _converse(world: TaskFile, task: BenchTask, tmp_path: Path) -> None:
+    """Run a conversation task on a kernel, as ``rosaos bench`` does; it must pass."""
+    if (reason := _covered(world, task, REGISTRY)) is not None:
+        pytest.skip(reason)
+    config = RosaosConfig(data_dir=tmp_path / "data")
+    result = await run_file(TaskSelection(world, [task]), config, REGISTRY, 1, _Quiet())
+    [trial] = result.tasks[0].trials
+    assert trial.status == "pass", f"{task.said!r}: {trial.reason}; replies: {trial.replies}"
+
+
 @pytest.mark.parametrize(("world", "task"), _tasks())
 def test_bench_sentence_plans_the_expected_devices(world: TaskFile, task: BenchTask) -> None:
+    if len(task.utterances) > 1:
+        pytest.skip("a conversation: test_bench_task_runs_on_simulators runs it on a kernel")
     _match(world, task)
 
 
@@ -127,6 +153,9 @@ def test_bench_sentence_plans_the_expected_devices(world: TaskFile, task: BenchT
 async def test_bench_task_runs_on_simulators(world: TaskFile, task: BenchTask, tmp_path: Path) -> None:
     if task.id in TASK_FILE_ISSUES:
         pytest.xfail(TASK_FILE_ISSUES[task.id])
+    if len(task.utterances) > 1:
+        await _converse(world, task, tmp_path)
+        return
     result, devices, initial = _match(world, task)
     replies = [result.reply]
     for process in result.processes:

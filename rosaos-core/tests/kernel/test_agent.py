@@ -86,3 +86,10 @@ def test_the_default_prompt_tells_the_model_about_every_timer_tool_and_timer_eve
     prompt = kernel_prompt([])
     assert all(name in prompt for name in TIMER_TOOL_NAMES)
     assert "[Timer fired]" in prompt and "late" in prompt
+
+
+def test_the_default_prompt_tells_the_model_about_every_memory_tool() -> None:
+    from rosaos.memory.memory_tools import MEMORY_TOOL_NAMES
+
+    prompt = kernel_prompt([])
+    assert all(name in prompt for name in MEMORY_TOOL_NAMES)

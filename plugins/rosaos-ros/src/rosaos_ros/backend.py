@@ -28,6 +28,7 @@ from rosaos_ros.deadman import DeadmanWatchdog
 from rosaos_ros.goals import FeedbackCallback, GoalTracker
 from rosaos_ros.messages import COMPRESSED_IMAGE, IMAGE, normalize_type, summarize, twist, twist_speeds
 from rosaos_ros.motion import MotionController, MotionResult
+from rosaos_ros.navigation import Navigator
 from rosaos_ros.notices import Notify, RobotNotices
 from rosaos_ros.profiles import Profile
 from rosaos_ros.rosapi import Rosapi
@@ -84,6 +85,7 @@ class RosBackend(DeviceBackend):
             instance, self._send_twist, self.state, self.deadman, self.limits.angular / 2
         )
         self.bridge.on_disconnect(self.motion.abort)
+        self.navigator = Navigator(self)
         self.sightings = Sightings(settings.camera_fov)
         self.notices = RobotNotices(instance, notify)
         self.state.on_field = self.notices.field_changed
@@ -109,6 +111,7 @@ class RosBackend(DeviceBackend):
             self.profile.cmd_vel.topic, self.profile.cmd_vel.type
         )  # before the watchdog needs it
         self.state.start()
+        self.navigator.start()
 
     async def close(self) -> None:
         """Stop the robot, cancel goals, disconnect, stop the simulator."""
@@ -182,15 +185,22 @@ class RosBackend(DeviceBackend):
         return report, image
 
     async def detect_people(self, timeout: float) -> dict[str, Any]:
-        """Take a picture and find the people in it, placed in the world by the pose it was taken at."""
+        """Take a picture and find the people in it, placed by the pose it was taken at (in get_pose's frame)."""
         report, image = await self.capture_frame(timeout)
-        try:
-            odometry = self.state.latest_odometry()
-            pose: tuple[float, float, float] | None = (odometry.x, odometry.y, odometry.yaw)
-        except DeviceError:  # no odometry: bearing and distance only
-            pose = None
-        people = await self.sightings.detect(image, pose)
-        where = {"x": round(pose[0], 3), "y": round(pose[1], 3), "yaw": round(pose[2], 3)} if pose else None
+        try:  # on the map when the robot is localized on one, else on odometry
+            framed = await self.navigator.pose()
+            pose: tuple[float, float, float] | None = (framed.x, framed.y, framed.yaw)
+            frame = {"frame": framed.frame, "anchor": framed.anchor}
+        except DeviceError:  # no pose: bearing and distance only
+            pose, frame = None, {}
+        people = [
+            person | frame if "x" in person else person for person in await self.sightings.detect(image, pose)
+        ]
+        where = (
+            {"x": round(pose[0], 3), "y": round(pose[1], 3), "yaw": round(pose[2], 3)} | frame
+            if pose
+            else None
+        )
         return {"found": bool(people), "count": len(people), "people": people, **report, "pose": where}
 
     # Motion
@@ -204,20 +214,35 @@ class RosBackend(DeviceBackend):
                 "max_drive_duration), so a lost client cannot leave the robot moving; call drive again to go on, "
                 "or use move_distance"
             )
-        await self._check_may_move()
+        await self.check_may_move()
         return await self.motion.drive(linear, angular, duration, wait)
 
     async def move_distance(self, meters: float, speed: float | None) -> MotionResult:
         """Straight, closed loop on odometry."""
         speed = self._speed(speed, self.profile.speeds.linear, "linear")
-        await self._check_may_move()
+        await self.check_may_move()
         return await self.motion.move_distance(meters, speed)
 
     async def rotate(self, degrees: float, speed: float | None) -> MotionResult:
         """In place, closed loop on odometry; positive degrees turn left (counter-clockwise)."""
         speed = self._speed(speed, self.profile.speeds.angular, "angular")
-        await self._check_may_move()
+        await self.check_may_move()
         return await self.motion.rotate(math.radians(degrees), speed)
+
+    async def get_pose(self) -> dict[str, Any]:
+        """Where the robot is, with the frame and its anchor (what a saved place keeps)."""
+        return (await self.navigator.pose()).as_dict()
+
+    async def go_to(
+        self,
+        x: float,
+        y: float,
+        yaw: float | None,
+        anchor: str | None,
+        on_feedback: FeedbackCallback | None,
+    ) -> dict[str, Any]:
+        """Drive to a pose: Nav2 on the map when the profile has it, else on odometry (see navigation)."""
+        return await self.navigator.go_to(x, y, yaw, anchor, on_feedback)
 
     async def search(
         self,
@@ -234,7 +259,7 @@ class RosBackend(DeviceBackend):
             )
         if self.search_run is not None:
             raise Refused(f"refused: {self.instance} is already searching; stop it first")
-        await self._check_may_move()
+        await self.check_may_move()
         await self.state.wait_for_messages(sources={"odom"})
         self.search_run = SearchRun(self, max_seconds, max_distance, progress, alive)
         try:
@@ -253,7 +278,8 @@ class RosBackend(DeviceBackend):
         self.limits.check(asked if kind == "linear" else 0.0, asked if kind == "angular" else 0.0)
         return asked
 
-    async def _check_may_move(self) -> None:
+    async def check_may_move(self) -> None:
+        """Refuse motion while the profile's ``refuse_motion_while`` key holds (docked)."""
         key = self.profile.refuse_motion_while
         if not key:
             return
@@ -297,7 +323,7 @@ class RosBackend(DeviceBackend):
         msg_type = msg_type or await self.rosapi.require_topic_type(topic)
         if velocity:  # a raw velocity message gets the limits, the docked rule and the deadman too
             self.limits.check(*twist_speeds(msg))
-            await self._check_may_move()
+            await self.check_may_move()
             if not duration:  # one message, lasting RAW_TWIST_LIFETIME, then the zero twist
                 duration, rate = RAW_TWIST_LIFETIME, 1 / RAW_TWIST_LIFETIME
             result = await self.motion.stream(

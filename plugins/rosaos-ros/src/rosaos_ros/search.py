@@ -190,7 +190,7 @@ class SearchRun:
         if person is not None:
             report |= {
                 key: person[key]
-                for key in ("x", "y", "distance_m", "bearing_deg", "direction")
+                for key in ("x", "y", "frame", "anchor", "distance_m", "bearing_deg", "direction")
                 if key in person
             }
         report |= {

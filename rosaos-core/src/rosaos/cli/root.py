@@ -13,6 +13,7 @@ import typer
 
 from rosaos import __version__
 from rosaos.cli.devices_app import devices_app
+from rosaos.cli.memory_app import memory_app, places_app
 from rosaos.cli.options import (
     BaseUrlOption,
     ConfigOption,
@@ -31,6 +32,8 @@ app = typer.Typer(
     pretty_exceptions_enable=False,
 )
 app.add_typer(devices_app, name="devices")
+app.add_typer(places_app, name="places")
+app.add_typer(memory_app, name="memory")
 
 
 def _version(value: bool) -> None:

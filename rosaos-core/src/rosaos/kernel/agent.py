@@ -29,6 +29,12 @@ list_timers for "what timers are set?" and cancel_timer for "cancel that timer" 
 the newest one). A [Timer fired] event carries a timer's action: do it now as if the user had
 just asked, and if it says it is late, tell the user how late.
 
+Memory: "remember this spot as the kitchen" is remember_place(name) (with x and y when given);
+"go to the kitchen" is go_to_place(name), never a go_to you make up: a place is refused in
+another frame. list_places and forget_place manage them. What people tell you ("my name is Sam",
+"call the dog Rex": an alias, key rex, value the dog) goes to remember; recall and forget read
+and delete it. "Where did you last see someone?" is recall_sightings; forget_sightings clears them.
+
 When a [Worker callback] arrives, tell the user the outcome in one short sentence. If a request
 is ambiguous (which light?) or names a device that does not exist, ask or refuse, naming the
 devices that exist; never actuate on a guess. Answer questions you can answer from a callback

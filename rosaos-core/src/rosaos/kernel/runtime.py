@@ -49,6 +49,9 @@ from rosaos.kernel.timer_tools import add_timer_tools
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.tools import build_kernel_tools
 from rosaos.kernel.updates import UpdateStream
+from rosaos.memory.memory_tools import add_memory_tools, memory_summary
+from rosaos.memory.sightings import SightingLog
+from rosaos.memory.store import MemoryStore
 from rosaos.models.defaults import KernelModels, kernel_models
 from rosaos.models.select import ModelSpec
 from rosaos.processes.jobs import WorkerCallback, callback_idempotency_key
@@ -182,6 +185,7 @@ class Kernel:
         self.manager.record_callback(callback)
         await self._live.ended(callback.process_id)
         await self._activity.record(event_id, callback.process_id, callback.receipts)
+        self.sightings.record_receipts(callback.receipts)  # the people its robots saw
         if callback.process_id in self._ended_published:
             return
         self._ended_published.add(callback.process_id)
@@ -344,12 +348,20 @@ class Kernel:
         self.states = DeviceStateCache(self.endpoints)
         tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._launched)
         add_timer_tools(tools, self.timers)
+        self.memory = MemoryStore.open(self.data_dir)
+        self.sightings = SightingLog(self.memory, self.config.memory.sightings_days)
+        add_memory_tools(tools, self.memory, self.endpoints, self._launch, self.sightings)
+        if self._models.local is not None:
+            self._models.local.memory = self.memory
         agent = build_kernel_agent(self._models.kernel, tools)
         self.loop = KernelLoop(
             self._store,
             self._updates,
             agent,
-            instructions=lambda: kernel_prompt(self.endpoints().values(), self.config.kernel.kernel_prompt),
+            instructions=lambda: (
+                kernel_prompt(self.endpoints().values(), self.config.kernel.kernel_prompt)
+                + memory_summary(self.memory)
+            ),
             model=self._model_for_event,
             history_budget=self.config.kernel.history_messages,
         )
@@ -435,6 +447,12 @@ class Kernel:
         appended = await self._store.append(event)
         if not appended.duplicate:
             await self._updates.publish_event(appended.id, event)
+
+    async def _launch(self, task: str, devices: list[str]) -> ProcessInfo:
+        """Launch a process as ``launch_process`` does (a memory tool's: drive to a place)."""
+        info = await self.manager.launch(task, devices)
+        await self._launched(info)
+        return info
 
     async def _launched(self, info: ProcessInfo) -> None:
         """Keep ids unique across restarts, and remember the process until its end is recorded."""

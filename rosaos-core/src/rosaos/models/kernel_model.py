@@ -17,6 +17,8 @@ handled (see :func:`rosaos.kernel.loop.render_event`) and answers:
 - ``[Error]``: acknowledged in one sentence.
 - timers ("… in ten minutes", "what timers are set?", "cancel that timer") and ``[Timer fired]``:
   :mod:`rosaos.intents.planning.timer_plan`, asked first.
+- memory ("remember this spot as the kitchen", "go to the kitchen", "call the dog Rex"):
+  :mod:`rosaos.memory.turn`, asked next; aliases people gave are resolved before any match.
 """
 
 from __future__ import annotations
@@ -41,6 +43,9 @@ from rosaos.intents.planning.notice_plan import SILENCE, notice_response
 from rosaos.intents.planning.plan import PlanError, decode_plan, has_plan
 from rosaos.intents.planning.timer_plan import is_timer_sentence, timer_turn
 from rosaos.intents.understanding.matching import IntentMatcher, MatchResult
+from rosaos.memory.memory_phrases import resolve_aliases
+from rosaos.memory.store import MemoryStore
+from rosaos.memory.turn import is_memory_sentence, memory_turn
 from rosaos.models.conversation import (
     ToolOutcome,
     content_text,
@@ -74,6 +79,8 @@ class LocalIntentModel(Model):
         self.matcher = IntentMatcher(devices, language)
         self.speaker = speaker
         """The always-attached device that speaks to the user (the Reachy Mini), if any."""
+        self.memory: MemoryStore | None = None
+        """What people told rosaOS (aliases, places); the kernel sets it once its store is open."""
 
     @property
     def model_name(self) -> str:
@@ -87,6 +94,8 @@ class LocalIntentModel(Model):
 
     def match(self, text: str) -> MatchResult:
         """What ``text`` asks for: processes to launch, or the reply instead (see ``IntentMatcher``)."""
+        if self.memory is not None:  # "Rex, sit" means "the dog, sit" once someone said so
+            text = resolve_aliases(text, self.memory.aliases())
         return self.matcher.match(text)
 
     def handles_text(self, rendered_event: str) -> bool:
@@ -96,7 +105,10 @@ class LocalIntentModel(Model):
         A bare choice ("the kitchen light") is not: it may answer the LLM's "which light?".
         """
         event = parse_event(rendered_event)
-        if (event.tag in USER_TAGS or event.tag is None) and is_timer_sentence(event.body, self.match):
+        if (event.tag in USER_TAGS or event.tag is None) and (
+            is_timer_sentence(event.body, self.match)
+            or is_memory_sentence(event.body, self.memory, self.match)
+        ):
             return True
         if event.tag in USER_TAGS or event.tag is None:
             return self.match(event.body).is_exact and not self.matcher.choice(event.body)
@@ -131,6 +143,9 @@ class LocalIntentModel(Model):
         timers = timer_turn(messages, tools, self.match, self._command, self._acknowledge)
         if timers is not None:  # set/list/cancel timers, or a [Timer fired] event's action
             return timers
+        memory = memory_turn(messages, tools, self.memory, self.match)
+        if memory is not None:  # places, facts, aliases
+            return memory
         turn = current_turn(messages)
         outcomes = tool_outcomes(turn)
         if outcomes:

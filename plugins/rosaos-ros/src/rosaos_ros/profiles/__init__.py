@@ -21,7 +21,18 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_valida
 
 BUILTIN_DIR = Path(__file__).parent
 NAMED_ACTION_RESERVED = frozenset(
-    {"get_state", "safe_stop", "stop", "drive", "move_distance", "rotate", "capture_image", "send_goal"}
+    {
+        "get_state",
+        "get_pose",
+        "safe_stop",
+        "stop",
+        "drive",
+        "move_distance",
+        "rotate",
+        "go_to",
+        "capture_image",
+        "send_goal",
+    }
 )
 """Tool names a profile's named action may not take (they are the driver's own tools)."""
 
@@ -60,6 +71,21 @@ class NamedAction(_Strict):
     """State keys the action leaves when it succeeds (``undock`` → ``{docked: false}``). The driver
     waits until the state topics show them before it answers, so the next motion is not refused
     on a status message that was already on its way when the action ended."""
+
+
+class Navigation(_Strict):
+    """Navigation to a pose on a map (Nav2): what ``go_to`` sends, and where the robot is on the map."""
+
+    action: str = "/navigate_to_pose"
+    type: str = "nav2_msgs/action/NavigateToPose"
+    frame: str = "map"
+    """The frame goals are given in, and places are stored in."""
+    pose: TopicRef = TopicRef(topic="/amcl_pose", type="geometry_msgs/msg/PoseWithCovarianceStamped")
+    """The robot's pose on the map, from localization (AMCL publishes it)."""
+    map_param: str | None = "/map_server:yaml_filename"
+    """A parameter naming the map (``/node:param``): places saved on one map are not used on another."""
+    timeout: Annotated[float, Field(gt=0, le=3600)] = 300.0
+    """Seconds a goal may take at most."""
 
 
 class Limits(_Strict):
@@ -121,6 +147,8 @@ class Profile(_Strict):
     refuse_motion_while: str | None = None
     """A boolean state key (e.g. ``docked``) during which motion tools refuse."""
     actions: dict[str, NamedAction] = Field(default_factory=dict)
+    navigation: Navigation | None = None
+    """Nav2 on a map: ``go_to`` sends NavigateToPose. Without it ``go_to`` drives on odometry."""
     allow: AccessLists = AccessLists()
     deny: AccessLists = AccessLists()
     sim: SimSpec = SimSpec()
@@ -172,6 +200,17 @@ class Profile(_Strict):
                     key: value.model_copy(update={"action": name(value.action)})
                     for key, value in self.actions.items()
                 },
+                "navigation": None
+                if self.navigation is None
+                else self.navigation.model_copy(
+                    update={
+                        "action": name(self.navigation.action),
+                        "pose": ref(self.navigation.pose),
+                        "map_param": None
+                        if self.navigation.map_param is None
+                        else name(self.navigation.map_param),
+                    }
+                ),
                 "allow": globs(self.allow),
                 "deny": globs(self.deny),
                 "sim": sim,

@@ -16,6 +16,7 @@ from rosaos_ros.messages import header, quaternion_from_yaw, twist_command, yaw_
 from rosaos_ros.profiles import Profile
 from rosaos_ros.sim.graph import ActionAborted, ActionGoal, ActionServer, Message, RosGraph, ServiceFailure
 from rosaos_ros.sim.images import compressed_image_message, raw_image_message, render
+from rosaos_ros.sim.navigation import PathPilot, PlanningError, path_length, plan_path
 from rosaos_ros.sim.world import Autopilot, DiffDriveWorld, SimState
 
 RATE_HZ = 50
@@ -64,6 +65,13 @@ class SimulatedRobot:
             graph.add_service(
                 f"{prefix}/reset_pose", "irobot_create_msgs/srv/ResetPose", base, self._reset_pose
             )
+        navigation = profile.navigation
+        if navigation is not None:
+            graph.add_publisher(navigation.pose.topic, navigation.pose.type, "/amcl")
+            graph.add_action(
+                navigation.action,
+                ActionServer(navigation.type, "/bt_navigator", self._navigate, _navigation_result),
+            )
         if sim.dock:
             result = self._dock_result
             if "dock" in profile.actions:
@@ -91,6 +99,7 @@ class SimulatedRobot:
         if self._ticks % STATE_EVERY == 0:
             self._publish_dock_status()
             self._publish_battery()
+            self._publish_map_pose()
         if self._ticks % CAMERA_EVERY == 0:
             self._publish_cameras()
 
@@ -111,6 +120,7 @@ class SimulatedRobot:
         if odom is None:
             return
         zero36 = [0.0] * 36
+        x, y, yaw = world.odometry_pose()
         self.graph.publish(
             odom.topic,
             {
@@ -118,8 +128,8 @@ class SimulatedRobot:
                 "child_frame_id": "base_link",
                 "pose": {
                     "pose": {
-                        "position": {"x": world.x, "y": world.y, "z": 0.0},
-                        "orientation": quaternion_from_yaw(world.yaw),
+                        "position": {"x": x, "y": y, "z": 0.0},
+                        "orientation": quaternion_from_yaw(yaw),
                     },
                     "covariance": zero36,
                 },
@@ -132,6 +142,22 @@ class SimulatedRobot:
                 },
             },
         )
+
+    def _publish_map_pose(self) -> None:
+        """Where the robot is on the map (the world frame), as AMCL reports it."""
+        navigation = self.profile.navigation
+        if navigation is not None:
+            msg = {
+                "header": header(navigation.frame),
+                "pose": {"pose": self._map_pose(), "covariance": [0.0] * 36},
+            }
+            self.graph.publish(navigation.pose.topic, msg)
+
+    def _map_pose(self) -> Message:
+        return {
+            "position": {"x": self.world.x, "y": self.world.y, "z": 0.0},
+            "orientation": quaternion_from_yaw(self.world.yaw),
+        }
 
     def _publish_dock_status(self) -> None:
         field = self.profile.state.get("docked")
@@ -197,6 +223,52 @@ class SimulatedRobot:
 
     # Actions
 
+    async def _navigate(self, goal: ActionGoal) -> Message:
+        """NavigateToPose: plan around the pillars, follow the plan, report the distance left."""
+        navigation, world = self.profile.navigation, self.world
+        assert navigation is not None
+        stamped = goal.goal.get("pose") or {}
+        frame = str((stamped.get("header") or {}).get("frame_id") or navigation.frame)
+        if frame != navigation.frame:
+            raise ActionAborted(
+                _navigation_result(f"goals are in the {navigation.frame} frame, not {frame}", 1)
+            )
+        pose = stamped.get("pose") or {}
+        position = pose.get("position") or {}
+        target = (float(position.get("x", 0.0)), float(position.get("y", 0.0)))
+        orientation = pose.get("orientation")
+        yaw = yaw_from_quaternion(orientation) if orientation else None
+        try:
+            waypoints = plan_path((world.x, world.y), target)
+        except PlanningError as error:
+            raise ActionAborted(_navigation_result(str(error), 2)) from None
+        speeds, limits = self.profile.speeds, world.hardware_limits
+        pilot = PathPilot(
+            waypoints, yaw, min(speeds.linear, limits.linear), min(speeds.angular, limits.angular)
+        )
+        timeout = path_length((world.x, world.y), waypoints) / pilot.speed * 3 + 30
+        world.autopilot = pilot
+        started = time.monotonic()
+        try:
+            while world.autopilot is pilot:
+                elapsed = time.monotonic() - started
+                if world.e_stop or elapsed > timeout:
+                    reason = "the e-stop is on" if world.e_stop else f"not there after {timeout:.0f} s"
+                    raise ActionAborted(_navigation_result(reason, 3))
+                goal.feedback(
+                    {
+                        "current_pose": {"header": header(navigation.frame), "pose": self._map_pose()},
+                        "navigation_time": {"sec": int(elapsed), "nanosec": 0},
+                        "number_of_recoveries": 0,
+                        "distance_remaining": round(pilot.remaining(world), 3),
+                    }
+                )
+                await asyncio.sleep(FEEDBACK_PERIOD)
+        finally:
+            if world.autopilot is pilot:
+                world.autopilot = None
+        return _navigation_result("", 0)
+
     def _dock_result(self) -> Message:
         return {"is_docked": self.world.docked}
 
@@ -234,3 +306,8 @@ class SimulatedRobot:
             await asyncio.sleep(FEEDBACK_PERIOD / 2)
         self.world.docked = False
         return {"is_docked": False}
+
+
+def _navigation_result(error: str = "", code: int = 0) -> Message:
+    """NavigateToPose's result (Jazzy's fields; Humble's is empty): an error code and message."""
+    return {"error_code": code, "error_msg": error}

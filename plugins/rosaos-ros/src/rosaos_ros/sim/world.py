@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass, field
-from typing import Annotated, Any
+from typing import Annotated, Any, Protocol
 
 from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
 
@@ -65,6 +65,9 @@ class SimState(BaseModel):
     docked: bool = False
     battery: Annotated[float, Field(ge=0, le=1)] = 0.9
     dock: DockPose | None = None
+    odom_origin: DockPose | None = None
+    """Where odometry starts, in the world (map) frame; default the world's origin. A real base
+    starts its odometry where it boots: change this to model a robot that booted elsewhere."""
     people: Annotated[list[PersonSpot], Field(max_length=50)] = Field(default_factory=list)
 
     @field_validator("linear", "angular")
@@ -85,11 +88,20 @@ class SimState(BaseModel):
         return self
 
 
+class Pilot(Protocol):
+    """Something that drives the base by itself (docking, navigation) instead of /cmd_vel."""
+
+    def command(self, world: DiffDriveWorld) -> tuple[float, float] | None:
+        """The twist to apply now, or None once it is done."""
+        ...
+
+
 @dataclass
 class Autopilot:
     """Drives the base to a pose by itself (docking): turn, drive straight, turn to the final heading.
 
-    It backs up when the target is behind, as the Create 3 does onto its dock.
+    It backs up when the target is behind, as the Create 3 does onto its dock, unless
+    ``forward_only`` (a navigation leg: it turns to face the target first).
     """
 
     x: float
@@ -98,6 +110,7 @@ class Autopilot:
     speed: float
     turn_speed: float
     phase: str = "align"
+    forward_only: bool = False
 
     def command(self, world: DiffDriveWorld) -> tuple[float, float] | None:
         """The twist to apply now, or None once the target pose is reached."""
@@ -111,7 +124,7 @@ class Autopilot:
                 return None
             return 0.0, _toward(error, self.turn_speed)
         bearing = math.atan2(dy, dx)
-        reverse = abs(wrap_angle(bearing - world.yaw)) > math.pi / 2
+        reverse = not self.forward_only and abs(wrap_angle(bearing - world.yaw)) > math.pi / 2
         heading = wrap_angle(bearing + math.pi) if reverse else bearing
         error = wrap_angle(heading - world.yaw)
         if self.phase == "align":
@@ -140,13 +153,14 @@ class DiffDriveWorld:
     docked: bool = False
     battery: float = 0.9
     dock: DockPose = field(default_factory=DockPose)
+    odom_origin: DockPose = field(default_factory=DockPose)
     cmd_timeout: float = CMD_TIMEOUT
     linear: float = 0.0
     """Actual forward speed, m/s."""
     angular: float = 0.0
     """Actual yaw rate, rad/s (positive: counter-clockwise)."""
     e_stop: bool = False
-    autopilot: Autopilot | None = None
+    autopilot: Pilot | None = None
     commanded: tuple[float, float] = (0.0, 0.0)
     last_command_at: float = -math.inf
     stopped_by: str = "start"
@@ -170,6 +184,7 @@ class DiffDriveWorld:
             docked=state.docked,
             battery=state.battery,
             dock=dock,
+            odom_origin=state.odom_origin or DockPose(),
             people=[(person.x, person.y) for person in state.people],
         )
 
@@ -239,6 +254,13 @@ class DiffDriveWorld:
     def dock_in_sight(self) -> bool:
         """Whether the dock's IR beacon would be seen: within 1.5 m."""
         return math.hypot(self.x - self.dock.x, self.y - self.dock.y) < 1.5
+
+    def odometry_pose(self) -> tuple[float, float, float]:
+        """The pose as odometry reports it: relative to :attr:`odom_origin`."""
+        origin = self.odom_origin
+        dx, dy = self.x - origin.x, self.y - origin.y
+        cos, sin = math.cos(origin.yaw), math.sin(origin.yaw)
+        return dx * cos + dy * sin, -dx * sin + dy * cos, wrap_angle(self.yaw - origin.yaw)
 
     def reset_pose(self, x: float, y: float, yaw: float) -> None:
         """Odometry reset (the ``reset_pose`` service): the robot is told where it is."""

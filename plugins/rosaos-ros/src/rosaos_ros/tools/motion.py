@@ -6,13 +6,18 @@ state its limits), and FastMCP must evaluate them where they are defined.
 
 from typing import Annotated, Any
 
-from fastmcp import FastMCP
+from fastmcp import Context, FastMCP
 from pydantic import Field
 
 from rosaos.receipts import safety_report
 from rosaos_ros.backend import RosBackend
 from rosaos_ros.motion import MotionResult
-from rosaos_ros.tools import MOVES, STOPS
+from rosaos_ros.tools import MOVES, READ_ONLY, STOPS, progress_reporter
+
+Coordinate = Annotated[
+    float,
+    Field(ge=-1000, le=1000, allow_inf_nan=False, description="Metres in the frame get_pose reports."),
+]
 
 
 def register(mcp: FastMCP, backend: RosBackend) -> None:
@@ -111,6 +116,53 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
         """Turn in place by an angle, measured on odometry, then stop. 90 is a quarter turn left, -90 right."""
         fired = backend.deadman.fired
         return await with_state(await backend.rotate(degrees, speed), fired)
+
+    @mcp.tool(annotations=READ_ONLY)
+    async def get_pose() -> dict[str, Any]:
+        """Where the robot is: x, y (m), yaw (rad), the frame (map or odom) and its anchor.
+
+        The anchor names the frame's instance: the map's file, or this driver run's odometry. A
+        pose saved with it can be given back to go_to, which refuses it in any other frame.
+        """
+        return await backend.get_pose()
+
+    @mcp.tool(annotations=MOVES)
+    async def go_to(
+        x: Coordinate,
+        y: Coordinate,
+        ctx: Context,
+        yaw: Annotated[
+            float | None,
+            Field(
+                ge=-2 * 3.1416,
+                le=2 * 3.1416,
+                allow_inf_nan=False,
+                description="Final heading in radians (0 along +x, counter-clockwise); omit to arrive "
+                "facing the way the robot drove.",
+            ),
+        ] = None,
+        frame_anchor: Annotated[
+            str | None,
+            Field(
+                max_length=300,
+                description="The anchor get_pose gave when the goal was saved: go_to refuses the goal "
+                "if the robot is in another frame now. Omit for coordinates in the current frame.",
+            ),
+        ] = None,
+    ) -> dict[str, Any]:
+        """Go to a pose: on a map with Nav2 it plans around obstacles; feedback streams as progress.
+
+        Without a map (no Nav2 in the profile) it turns, drives straight on odometry and turns,
+        avoiding nothing. stop cancels it. Returns the pose reached and how far from the goal.
+        """
+        fired = backend.deadman.fired
+        result = await backend.go_to(x, y, yaw, frame_anchor, progress_reporter(ctx))
+        report = {**result, "state": await backend.get_state()}
+        if backend.deadman.fired > fired:
+            report |= safety_report(
+                "deadman_stop", "deadman", "the command stream went quiet; the robot was stopped"
+            )
+        return report
 
     @mcp.tool(annotations=STOPS)
     async def stop() -> dict[str, Any]:

@@ -1,0 +1,233 @@
+"""The kernel's memory tools: named places, and what people told it.
+
+Added to the kernel's own FastMCP server next to the process and timer tools, so the offline
+engine and an LLM kernel use the same ones:
+
+- ``remember_place``, ``list_places``, ``forget_place``, ``go_to_place`` (it launches a process
+  that calls the robot's ``go_to`` with the place's frame anchor; the callback says how it went);
+- ``remember``, ``recall``, ``forget``: facts, aliases and preferences.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Awaitable, Callable
+from datetime import datetime
+from typing import Annotated, Any
+
+from fastmcp import FastMCP
+from fastmcp.exceptions import ToolError
+from pydantic import Field
+
+from rosaos.drivers import CHANGES, DELETES, READ_ONLY
+from rosaos.memory.robots import Endpoints, choose_robot, frame_refusal, go_to_task, read_pose
+from rosaos.memory.sightings import SightingLog, ago
+from rosaos.memory.store import NAME_MAX, MemoryRequestError, MemoryStore, NoteKind, Place
+from rosaos.processes.manager import LaunchRefused, ProcessInfo
+
+MEMORY_TOOL_NAMES = (
+    "remember_place",
+    "list_places",
+    "forget_place",
+    "go_to_place",
+    "remember",
+    "recall",
+    "forget",
+    "recall_sightings",
+    "forget_sightings",
+)
+
+PlaceName = Annotated[
+    str, Field(min_length=1, max_length=NAME_MAX, description="The place's name, e.g. 'the kitchen'.")
+]
+Device = Annotated[
+    str | None,
+    Field(
+        max_length=100, description="The robot's instance name; omit when there is only one robot on a map."
+    ),
+]
+Coordinate = Annotated[float | None, Field(ge=-1000, le=1000, allow_inf_nan=False)]
+Launch = Callable[[str, list[str]], Awaitable[ProcessInfo]]
+
+
+def place_data(place: Place) -> dict[str, Any]:
+    """A place as the tools return it."""
+    return place.model_dump(mode="json") | {
+        "saved": time.strftime("%Y-%m-%d %H:%M", time.localtime(place.saved_at))
+    }
+
+
+def add_memory_tools(
+    server: FastMCP, store: MemoryStore, endpoints: Endpoints, launch: Launch, sightings: SightingLog
+) -> None:
+    """Register the memory tools on the kernel's tool server."""
+
+    @server.tool(annotations=READ_ONLY)
+    async def recall_sightings(
+        place: Annotated[
+            str | None, Field(max_length=NAME_MAX, description="Only near this named place ('the kitchen').")
+        ] = None,
+        today: Annotated[bool, Field(description="Only since midnight (local time).")] = False,
+    ) -> dict[str, Any]:
+        """Who the robots saw, newest first: when ('ago'), which robot, where (x, y, frame), the nearest
+        named place, and the picture (relative to the images folder)."""
+        known = store.place(place) if place else None
+        named = known.name if known is not None else place
+        midnight = datetime.now().astimezone().replace(hour=0, minute=0, second=0, microsecond=0)
+        since = midnight.timestamp() if today else None
+        found = sightings.recent(named, since)
+        return {
+            "sightings": [s.model_dump(mode="json") | {"ago": ago(s.at)} for s in found],
+            "kept_days": sightings.keep_days,
+        }
+
+    @server.tool(annotations=DELETES)
+    async def forget_sightings() -> dict[str, Any]:
+        """Forget everything the robots saw (the pictures stay in the images folder)."""
+        return {"forgotten": sightings.clear()}
+
+    @server.tool(annotations=CHANGES)
+    async def remember_place(
+        name: PlaceName,
+        device: Device = None,
+        x: Annotated[
+            Coordinate, Field(description="Metres; omit x and y for where the robot is now.")
+        ] = None,
+        y: Coordinate = None,
+        yaw: Annotated[
+            float | None, Field(ge=-7, le=7, allow_inf_nan=False, description="Heading in radians, optional.")
+        ] = None,
+    ) -> dict[str, Any]:
+        """Save a named place: where the robot is now, or the x, y given (in the robot's current frame).
+
+        The place keeps its frame (map or odometry) and is never used in another one.
+        """
+        if (x is None) != (y is None):
+            raise ToolError("give both x and y, or neither (then the robot's current spot is saved)")
+        try:
+            robot, pose = await choose_robot(endpoints, device)
+            given = x is not None and y is not None
+            place = Place(
+                name=name.strip(),
+                device=robot,
+                frame=pose["frame"],
+                anchor=pose["anchor"],
+                x=x if x is not None else float(pose["x"]),
+                y=y if y is not None else float(pose["y"]),
+                yaw=yaw if given else (yaw if yaw is not None else pose.get("yaw")),
+                saved_at=time.time(),
+            )
+            return place_data(store.save_place(place))
+        except MemoryRequestError as error:
+            raise ToolError(str(error)) from None
+
+    @server.tool(annotations=READ_ONLY)
+    async def list_places() -> list[dict[str, Any]]:
+        """List the named places: name, robot, frame, x, y, yaw, when saved."""
+        return [place_data(place) for place in store.places()]
+
+    @server.tool(annotations=DELETES)
+    async def forget_place(name: PlaceName) -> dict[str, Any]:
+        """Delete a named place."""
+        try:
+            return place_data(store.forget_place(name))
+        except MemoryRequestError as error:
+            raise ToolError(str(error)) from None
+
+    @server.tool(annotations=CHANGES)
+    async def go_to_place(name: PlaceName, device: Device = None) -> dict[str, Any]:
+        """Send a robot to a named place (the one that saved it, by default); returns the process id.
+
+        Refused at once when the robot is in another frame than the place (another map, or
+        odometry that restarted). The result arrives later as a [Worker callback].
+        """
+        try:
+            place = store.require_place(name)
+            robot = device or place.device
+            refusal = frame_refusal(place, await read_pose(endpoints, robot), robot)
+        except MemoryRequestError as error:
+            raise ToolError(str(error)) from None
+        if refusal is not None:
+            raise ToolError(refusal)
+        try:
+            info = await launch(go_to_task(place, robot), [robot])
+        except LaunchRefused as refused:
+            raise ToolError(str(refused)) from None
+        return {"process_id": info.id, "devices": info.devices, "place": place_data(place)}
+
+    @server.tool(annotations=CHANGES)
+    async def remember(
+        kind: Annotated[
+            NoteKind,
+            Field(
+                description="fact ('my name is Sam'), alias (a name for a device: key 'rex', value "
+                "'the dog') or preference ('reading light': '40 percent')."
+            ),
+        ],
+        key: Annotated[
+            str, Field(min_length=1, max_length=100, description="What it is about: 'name', 'rex'.")
+        ],
+        value: Annotated[str, Field(min_length=1, max_length=500, description="What to remember about it.")],
+        said: Annotated[
+            str | None, Field(max_length=500, description="The person's sentence, to read back later.")
+        ] = None,
+    ) -> dict[str, Any]:
+        """Remember something a person told you; the same kind and key again replaces it.
+
+        An alias is used when sentences are understood: after key 'rex', value 'the dog',
+        "Rex, sit" names the dog.
+        """
+        try:
+            note = store.save_note(kind, key, value, said or f"{key}: {value}")
+        except MemoryRequestError as error:
+            raise ToolError(str(error)) from None
+        return note.model_dump(mode="json")
+
+    @server.tool(annotations=READ_ONLY)
+    async def recall(
+        about: Annotated[
+            str | None, Field(max_length=200, description="Words to look for; omit for everything.")
+        ] = None,
+    ) -> dict[str, Any]:
+        """What you remember: facts, aliases and preferences people told you, and the named places."""
+        words = (about or "").lower().split()
+
+        def hit(text: str) -> bool:
+            return all(word in text.lower() for word in words)
+
+        notes = [
+            n.model_dump(mode="json") for n in store.notes() if hit(f"{n.kind} {n.key} {n.value} {n.said}")
+        ]
+        places = [place_data(p) for p in store.places() if hit(p.name)]
+        return {"notes": notes, "places": places}
+
+    @server.tool(annotations=DELETES)
+    async def forget(
+        matching: Annotated[
+            str,
+            Field(
+                min_length=1, max_length=200, description="Words of the thing to forget ('my name is Sam')."
+            ),
+        ],
+    ) -> list[dict[str, Any]]:
+        """Forget what people told you that contains all these words; returns what was forgotten."""
+        gone = store.forget_notes(matching)
+        if not gone:
+            raise ToolError(f"I don't remember anything about {matching!r}; recall lists what I know")
+        return [note.model_dump(mode="json") for note in gone]
+
+
+def memory_summary(store: MemoryStore, limit: int = 2000) -> str:
+    """What the kernel knows, for an LLM's prompt: places and notes, at most ``limit`` characters."""
+    lines = [f"- {note.kind} {note.key}: {note.value}" for note in store.notes()]
+    lines += [f"- place {p.name} ({p.device}, {p.frame})" for p in store.places()]
+    if not lines:
+        return ""
+    text, kept = "", 0
+    for line in lines:
+        if len(text) + len(line) + 1 > limit:
+            break
+        text += line + "\n"
+        kept += 1
+    more = f"- … and {len(lines) - kept} more (call recall)\n" if kept < len(lines) else ""
+    return "\n\nWhat you remember (from the memory tools):\n" + text + more
