@@ -45,6 +45,8 @@ from rosaos.kernel.events import DeviceNoticeEvent, Event, EventStore, StoreClos
 from rosaos.kernel.loop import KernelLoop
 from rosaos.kernel.notices import NoticeWatcher
 from rosaos.kernel.orphans import LiveProcesses, recover_orphans
+from rosaos.kernel.stop_tools import add_stop_tools
+from rosaos.kernel.stopping import Stopper
 from rosaos.kernel.timer_tools import add_timer_tools
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.tools import build_kernel_tools
@@ -329,6 +331,10 @@ class Kernel:
         self.states = DeviceStateCache(self.endpoints)
         tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._launched)
         add_timer_tools(tools, self.timers)
+        self.stopper = Stopper(
+            self.manager, self.endpoints, lambda name: self.world.instances[name].spec.halts
+        )
+        add_stop_tools(tools, self.stopper, self.manager, self.endpoints)
         agent = build_kernel_agent(self._models.kernel, tools)
         self.loop = KernelLoop(
             self._store,
