@@ -41,6 +41,7 @@ def test_a_bare_stop_said_any_way_stops_everything(said: str, refs: DeviceRefs) 
         ("stop the robots", ("turtlebot", "dog")),
         ("stop the robot", ("turtlebot", "dog")),  # shared: a stop never waits to ask which
         ("stop the music", ("speaker",)),
+        ("dog, don't move", ("dog",)),
     ],
 )
 def test_a_stop_that_names_devices_stops_those(said: str, devices: tuple[str, ...], refs: DeviceRefs) -> None:
@@ -50,7 +51,7 @@ def test_a_stop_that_names_devices_stops_those(said: str, devices: tuple[str, ..
 @pytest.mark.parametrize(
     "said",
     ["don't stop the music", "stop at the kitchen", "walk forward then stop", "stop shuffling",
-     "turn on the kitchen light", "stop following my face", "drive until you see the door and stop there"],
+     "turn on the kitchen light", "stop following my face", "don't move the dog", "drive until you see the door and stop there"],
 )  # fmt: skip
 def test_sentences_that_are_not_a_stop_are_left_to_the_engine(said: str, refs: DeviceRefs) -> None:
     assert read_stop(said, refs) is None

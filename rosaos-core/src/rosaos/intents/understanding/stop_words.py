@@ -135,9 +135,11 @@ FILLERS = frozenset(
 )
 """Words that carry no command: ignored around a stop."""
 
+_NEGATED_MOVES = ("don't move", "do not move", "dont move")
 NEGATIONS = ("don't", "dont", "do not", "never", "not", "no need to", "doesn't")
 _CLAUSES = re.compile(r"\s*(?:[,;.!?]+|\band then\b|\bthen\b|\band\b)\s*")
-_WORD = re.compile(r"[a-z0-9']+")
+_WORD = re.compile(r"[a-z0-9']+|[,;.!?]")
+"""Words, and the punctuation that ends a clause."""
 
 
 @dataclass(frozen=True)
@@ -199,6 +201,8 @@ def read_stop(text: str, refs: DeviceRefs) -> StopRequest | None:
     stops = 0
     for clause in filter(None, _CLAUSES.split(said)):
         found, rest = refs.take(_strip_stops(clause.split()))
+        if found and any(f" {phrase} " in f" {clause} " for phrase in _NEGATED_MOVES):
+            return None  # "don't move the dog" refuses a command; "dog, don't move" is a stop
         stops += _count_stops(clause)
         leftover = [word for word in rest if word not in FILLERS and word not in DOING]
         if leftover:
@@ -211,7 +215,7 @@ def read_stop(text: str, refs: DeviceRefs) -> StopRequest | None:
 
 def _words(text: str) -> list[str]:
     cleaned = text.lower().replace("’", "'")
-    return _WORD.findall(re.sub(r"([,;.!?])", r" \1 ", cleaned)) if cleaned else []
+    return _WORD.findall(cleaned)
 
 
 def _strip_stops(words: list[str]) -> list[str]:
