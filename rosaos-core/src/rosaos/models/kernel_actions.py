@@ -189,7 +189,11 @@ def _about(question: Question, reading: dict[str, Any]) -> str | None:
 def help_text(devices: Sequence[DeviceVocabulary], language: str = "en") -> str:
     """A few things to say, built from this world's devices and their drivers' sentences."""
     examples: list[str] = []
+    drivers: set[str] = set()
     for device in devices:
+        if device.driver in drivers:  # one per driver: "undock the dog" fits a turtlebot only
+            continue
+        drivers.add(device.driver)
         example = _example(device, language)
         if example and example not in examples:
             examples.append(example)
@@ -222,7 +226,13 @@ def _example(device: DeviceVocabulary, language: str) -> str | None:
                 while (chosen := _CHOICE.sub(r"\1", text)) != text:
                     text = chosen
                 text = text.replace("{device}", f"the {device.display_name}")
-                if "{" in text or "<" in text or "[" in text or "(" in text:
+                if (
+                    "{" in text
+                    or "<" in text
+                    or "[" in text
+                    or "(" in text
+                    or device.display_name not in text
+                ):
                     continue
                 return " ".join(text.split())
     return None
