@@ -85,3 +85,17 @@ def test_state_questions_name_a_topic_and_the_devices_asked_about(
 )
 def test_commands_and_unknown_devices_are_not_state_questions(said: str, refs: DeviceRefs) -> None:
     assert read_question(said, refs) is None
+
+
+@pytest.mark.parametrize(
+    ("said", "stop"),
+    [
+        ("stop the dog and turn on the kitchen light", StopRequest(("dog",), "turn on the kitchen light")),
+        ("turn on the kitchen light, and stop the dog", StopRequest(("dog",), "turn on the kitchen light")),
+        ("stop, then turn off the lamp", StopRequest((), "turn off the lamp")),
+    ],
+)
+def test_a_stop_among_other_commands_stops_first_and_keeps_the_rest(
+    said: str, stop: StopRequest, refs: DeviceRefs
+) -> None:
+    assert read_stop(said, refs) == stop

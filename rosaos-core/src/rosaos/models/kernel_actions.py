@@ -79,14 +79,25 @@ def kernel_action_turn(
         return None
     if outcomes:
         launched = [outcome for outcome in outcomes if outcome.call.tool_name == _tool(tools, LAUNCH_TOOL)]
+        if stop is not None:
+            stops = [outcome for outcome in outcomes if outcome.call.tool_name == stop_tool]
+            replies = [_stop_reply(stops)]
+            if launched:
+                replies.append(acknowledge(launched))
+            elif stop.rest:  # the rest was not understood, or asked which one: say so
+                replies += [part.content for part in command(stop.rest, tools) if isinstance(part, TextPart)]
+            return [TextPart(" ".join(replies))]
         if launched:
             return [TextPart(acknowledge(launched))]
-        if stop is not None:
-            return [TextPart(_stop_reply(outcomes))]
         assert question is not None
         return _answer(question, outcomes, event.body, tools, command)
-    if stop is not None:
-        return [ToolCallPart(stop_tool, {"devices": list(stop.devices)})]
+    if stop is not None:  # the stop first, then the sentence's other commands
+        then = (
+            [part for part in command(stop.rest, tools) if isinstance(part, ToolCallPart)]
+            if stop.rest
+            else []
+        )
+        return [ToolCallPart(stop_tool, {"devices": list(stop.devices)}), *then]
     assert question is not None
     if question.topic == "help":
         return [TextPart(help_text(devices))]

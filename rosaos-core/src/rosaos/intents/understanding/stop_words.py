@@ -8,7 +8,9 @@ Not a list of sentences: a sentence means stop when it is made of clauses (split
   kinds and plurals (:class:`DeviceRefs`),
 - what the device is doing ("walking", "talking") and fillers ("okay", "real quick", "please").
 
-with at least one stop word. "Okay, enough, halt the dog", "dog, stop", "stop everything" and
+with at least one stop word. Other clauses are kept as the rest of the sentence, run after the
+stop ("stop the dog and turn on the light"), unless a bare stop follows a command: "walk forward,
+then stop" is how that walk ends. "Okay, enough, halt the dog", "dog, stop", "stop everything" and
 "freeze!" are stops; "stop at the kitchen" (a place) and "walk forward then stop" (a command
 that ends by itself) are not. A stop word right after a negation ("don't stop the music") is not
 a stop. A name several devices share ("the robot") means all of them: a stop is never held back
@@ -147,6 +149,8 @@ class StopRequest:
     """A sentence that means stop: the devices it names (empty: a bare "stop", everything)."""
 
     devices: tuple[str, ...]
+    rest: str = ""
+    """Other commands in the sentence ("stop the dog and turn on the light"): run after the stop."""
 
 
 class DeviceRefs:
@@ -197,20 +201,32 @@ def read_stop(text: str, refs: DeviceRefs) -> StopRequest | None:
     said = " ".join(_words(text))
     if not said or _negated(said):
         return None
-    devices: list[str] = []
-    stops = 0
-    for clause in filter(None, _CLAUSES.split(said)):
+    clauses: list[tuple[str, str, list[str]]] = []  # (kind, clause, devices): stop, name or other
+    for clause in filter(None, (piece.strip() for piece in _CLAUSES.split(said))):
         found, rest = refs.take(_strip_stops(clause.split()))
         if found and any(f" {phrase} " in f" {clause} " for phrase in _NEGATED_MOVES):
             return None  # "don't move the dog" refuses a command; "dog, don't move" is a stop
-        stops += _count_stops(clause)
-        leftover = [word for word in rest if word not in FILLERS and word not in DOING]
-        if leftover:
-            return None
-        devices += found
-    if not stops:
+        if [word for word in rest if word not in FILLERS and word not in DOING]:
+            clauses.append(("other", clause, found))
+        else:
+            clauses.append(("stop" if _count_stops(clause) else "name", clause, found))
+    if not any(kind == "stop" for kind, _, _ in clauses):
         return None
-    return StopRequest(tuple(dict.fromkeys(devices)))
+    first = next((index for index, (kind, _, _) in enumerate(clauses) if kind == "other"), len(clauses))
+    if any(kind == "stop" and not found for kind, _, found in clauses[first:]):
+        return None  # "walk forward, then stop": the end of that command, not a stop of its own
+    devices = [
+        name
+        for index, (kind, _, found) in enumerate(clauses)
+        if kind == "stop" or (kind == "name" and index < first)
+        for name in found
+    ]
+    rest = [
+        clause
+        for index, (kind, clause, _) in enumerate(clauses)
+        if kind == "other" or (kind == "name" and index > first)
+    ]
+    return StopRequest(tuple(dict.fromkeys(devices)), " and ".join(rest))
 
 
 def _words(text: str) -> list[str]:
