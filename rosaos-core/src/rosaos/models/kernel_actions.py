@@ -9,6 +9,8 @@ matches a command. It answers:
   ``device_state`` calls, and their results with the answer, yes or no first. "Does the
   turtlebot see anyone?" on a robot nobody holds launches its driver's look (a fresh picture) as
   a command instead; while a search holds it, the answer comes from what it has seen so far;
+- a driver's own question template (a plan that only reads ``get_state``: "how bright is the
+  lamp?") with ``device_state`` too, and the template's reply filled from the state;
 - "what can you do?" with example sentences built from this world's devices;
 - the callback of a process a stop terminated with silence: the stop already said so.
 
@@ -26,6 +28,7 @@ from pydantic_ai.messages import ModelMessage, ModelRequest, ModelResponsePart, 
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.planning.notice_plan import SILENCE
 from rosaos.intents.planning.plan import result_data
+from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.intents.understanding.questions import Question, read_question
 from rosaos.intents.understanding.stop_words import DeviceRefs, read_stop
 from rosaos.kernel.state_words import battery, doing, people_seen, position
@@ -39,6 +42,7 @@ from rosaos.models.conversation import (
     tool_outcomes,
     user_text,
 )
+from rosaos.models.process_model import final_reply
 
 USER_TAGS = frozenset({"User said", "User typed"})
 CALLBACK_TAG = "Worker callback"
@@ -49,6 +53,7 @@ MAX_EXAMPLES = 6
 
 Command = Callable[[str, Sequence[str]], list[ModelResponsePart]]
 Acknowledge = Callable[[list[ToolOutcome]], str]
+Match = Callable[[str], MatchResult]
 
 
 def kernel_action_turn(
@@ -58,6 +63,7 @@ def kernel_action_turn(
     devices: Sequence[DeviceVocabulary],
     command: Command,
     acknowledge: Acknowledge,
+    match: Match,
 ) -> list[ModelResponsePart] | None:
     """The response parts for a stop, a state question or a callback a stop caused; else None."""
     stop_tool, state_tool = _tool(tools, STOP_TOOL), _tool(tools, STATE_TOOL)
@@ -76,7 +82,7 @@ def kernel_action_turn(
     stop = read_stop(event.body, refs)
     question = None if stop is not None else read_question(event.body, refs)
     if stop is None and question is None:
-        return None
+        return _template_question(match(event.body), outcomes, state_tool)
     if outcomes:
         launched = [outcome for outcome in outcomes if outcome.call.tool_name == _tool(tools, LAUNCH_TOOL)]
         if stop is not None:
@@ -104,6 +110,30 @@ def kernel_action_turn(
     if not question.devices:
         return [ToolCallPart(state_tool, {})]
     return [ToolCallPart(state_tool, {"device": name}) for name in question.devices]
+
+
+def _template_question(
+    result: MatchResult, outcomes: list[ToolOutcome], state_tool: str
+) -> list[ModelResponsePart] | None:
+    """A driver's question template ("how bright is the lamp?": plans that only read get_state),
+    answered through ``device_state`` instead of a process; None for anything else."""
+    if not result.is_exact or not all(
+        step.tool == "get_state" for process in result.processes for step in process.plan.steps
+    ):
+        return None
+    plans = [process.plan for process in result.processes]
+    if not outcomes:
+        return [ToolCallPart(state_tool, {"device": plan.steps[-1].device}) for plan in plans]
+    replies = []
+    for plan, outcome in zip(plans, outcomes, strict=False):
+        data = result_data(outcome.content)
+        if not outcome.ok or not isinstance(data, dict) or not isinstance(data.get("state"), dict):
+            said = data.get("said") if isinstance(data, dict) else None
+            error = " ".join(said) if said else content_text(outcome.content)
+            replies.append(plan.failure.replace("{error}", error))
+            continue
+        replies.append(final_reply(plan, data["state"]))
+    return [TextPart(" ".join(replies))]
 
 
 def handles(text: str, refs: DeviceRefs) -> bool:

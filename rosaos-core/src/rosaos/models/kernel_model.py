@@ -142,7 +142,7 @@ class LocalIntentModel(Model):
         if timers is not None:  # set/list/cancel timers, or a [Timer fired] event's action
             return timers
         actions = kernel_actions.kernel_action_turn(
-            messages, tools, self.refs, self.devices, self._command, self._acknowledge
+            messages, tools, self.refs, self.devices, self._command, self._acknowledge, self.match
         )
         if actions is not None:  # stop, a question about state, "what can you do?": no lease
             return actions
