@@ -37,6 +37,8 @@ async def kernel(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Kern
 @pytest_asyncio.fixture(loop_scope="module")
 async def api(kernel: Kernel) -> AsyncIterator[httpx.AsyncClient]:
     async with kernel_api(kernel) as client:
+        # A launch on a device that is not healthy yet is refused: wait (the simulator boots slowly when busy).
+        await eventually(lambda: _all_healthy(client), timeout=120)
         yield client
 
 
@@ -66,7 +68,7 @@ async def test_the_llm_kernel_stops_the_held_dog_with_the_stop_tool(
     api: httpx.AsyncClient, kernel: Kernel
 ) -> None:
     await chat(api, 'dog: call move_distance {"meters": 2}')
-    walk = await eventually(lambda: walking(api, kernel), timeout=60)
+    walk = await eventually(lambda: walking(api, kernel), timeout=120)
 
     stop = await chat(api, "stop: dog")
     await eventually(lambda: handled(api, stop), timeout=20)
@@ -90,3 +92,7 @@ async def test_the_llm_kernel_reads_state_without_a_process(api: httpx.AsyncClie
     assert not any(u["kind"] == "process_launched" for u in said)
     reply = next(u["text"] for u in said if u["kind"] == "kernel_reply")
     assert "where it started" in reply and "rad" not in reply.replace("radians", "")
+
+
+async def _all_healthy(api: httpx.AsyncClient) -> bool:
+    return all(device["status"] == "healthy" for device in (await api.get("/devices")).json())
