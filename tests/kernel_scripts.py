@@ -5,7 +5,8 @@ this folder on ``PYTHONPATH``.
 
 Kernel script: user text ``DEVICES: TASK; DEVICES: TASK`` launches one process per clause
 (``kitchen_light,living_room_lamp: call turn_off {}``); ``slow SECONDS`` sleeps and answers;
-``turn on the kitchen light`` is the one natural sentence it knows. A worker callback gets the
+``turn on the kitchen light`` is the one natural sentence it knows. ``stop`` or ``stop: DEVICES``
+calls the ``stop`` tool; ``state DEVICE`` calls ``device_state``. A worker callback gets the
 reply ``process N: STATUS``. Timers, as an LLM would use the tools: ``timer SECONDS: DEVICES:
 TASK`` calls ``set_timer`` with the rest as its action, ``list timers`` and ``cancel timer``
 call ``list_timers`` and ``cancel_timer``; a ``[Timer fired]`` event runs its action line as above.
@@ -78,6 +79,11 @@ def kernel_model() -> FunctionModel:
             )
         if body.strip() in ("list timers", "cancel timer"):
             return ModelResponse(parts=[ToolCallPart(body.strip().replace(" ", "_"), {})])
+        if body.startswith("stop"):  # "stop" or "stop: dog, spotify": the lease-free stop tool
+            names = [name.strip() for name in body.partition(":")[2].split(",") if name.strip()]
+            return ModelResponse(parts=[ToolCallPart("stop", {"devices": names})])
+        if body.startswith("state "):  # "state turtlebot": the read-only device_state tool
+            return ModelResponse(parts=[ToolCallPart("device_state", {"device": body.split()[1]})])
         body = SENTENCES.get(body.strip().lower(), body)
         if body.startswith("slow "):
             await asyncio.sleep(float(body.split()[1]))

@@ -22,6 +22,7 @@ from e2e_support import device_state, eventually, kernel_api, scripted_kernel
 from playwright.async_api import async_playwright
 
 from rosaos.kernel.runtime import Kernel, KernelError, _bind_or_explain
+from rosaos.kernel.stop_tools import STOP_TOOL_NAMES
 from rosaos.kernel.timer_tools import TIMER_TOOL_NAMES
 from rosaos.kernel.tools import KERNEL_TOOL_NAMES
 from rosaos.memory.memory_tools import MEMORY_TOOL_NAMES
@@ -91,14 +92,17 @@ async def test_chat_turns_on_the_kitchen_light_through_a_process(
     assert any(u["kind"] == "process_ended" and u["data"]["process_id"] == process_id for u in updates)
 
 
-async def test_the_kernel_is_offered_its_process_timer_and_memory_tools_and_no_device_tool(
+async def test_the_kernel_is_offered_its_process_timer_stop_and_memory_tools_and_no_device_tool(
     kernel: Kernel, api: httpx.AsyncClient
 ) -> None:
     from kernel_scripts import KERNEL_TOOLS_SEEN
 
     await chat(api, "slow 0")
     await eventually(lambda: settled(api))
-    assert set(KERNEL_TOOL_NAMES) | set(TIMER_TOOL_NAMES) | set(MEMORY_TOOL_NAMES) == KERNEL_TOOLS_SEEN
+    assert (
+        set(KERNEL_TOOL_NAMES) | set(TIMER_TOOL_NAMES) | set(STOP_TOOL_NAMES) | set(MEMORY_TOOL_NAMES)
+        == KERNEL_TOOLS_SEEN
+    )
 
 
 async def test_a_second_kernel_on_the_same_port_says_what_is_running(kernel: Kernel) -> None:

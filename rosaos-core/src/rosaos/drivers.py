@@ -39,6 +39,9 @@ Concurrency = Literal["exclusive", "shared"]
 
 BackendName = Literal["sim", "real"]
 
+Halt = Literal["motion", "speech", "sound"]
+"""What a device's ``safe_stop`` ends, in the order a bare "stop" ends them (``DriverSpec.halts``)."""
+
 DRIVER_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 
 
@@ -168,6 +171,10 @@ class DriverSpec(BaseModel, Generic[BackendT]):
     """Optional hassil-format ``intents.yaml`` mapping sentence templates to tool calls."""
     safe_stop: Callable[[BackendT], Awaitable[None]] = no_safe_stop
     """Awaitable called with the backend on an emergency stop: stop motion, cancel goals."""
+    halts: tuple[Halt, ...] = ()
+    """What ``safe_stop`` ends on this device, of what a person's "stop" is about: ``motion`` (a
+    robot), ``speech``, ``sound`` (music). A bare "stop" ends what moves first, then what speaks,
+    then what plays (:mod:`rosaos.kernel.stopping`); () for a device with nothing to halt (a bulb)."""
     confirm_on_real: bool = False
     """Ask a person before destructive tools of a ``real`` instance unless config says otherwise."""
     demo: Mapping[str, DemoInstance] = Field(default_factory=dict)

@@ -93,3 +93,11 @@ def test_the_default_prompt_tells_the_model_about_every_memory_tool() -> None:
 
     prompt = kernel_prompt([])
     assert all(name in prompt for name in MEMORY_TOOL_NAMES)
+
+
+def test_the_default_prompt_says_stop_preempts_and_questions_read_state_without_a_lease() -> None:
+    from rosaos.kernel.stop_tools import STOP_TOOL_NAMES
+
+    prompt = kernel_prompt([])
+    assert all(f"{name}(" in prompt for name in STOP_TOOL_NAMES)
+    assert "never launch_process" in prompt and "no lease" in prompt and "never radians" in prompt

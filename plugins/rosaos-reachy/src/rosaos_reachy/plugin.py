@@ -59,6 +59,7 @@ SPEC: DriverSpec[ReachyBackend] = DriverSpec(
     backends={"sim": sim_backend, "real": real_backend},
     intents=Path(__file__).parent / "intents.yaml",
     safe_stop=stop_moving_and_talking,
+    halts=("motion", "speech"),
     card=Card.of(
         head(),
         flag("speaking", label="Speaking"),

@@ -99,6 +99,7 @@ SPEC: DriverSpec[RosBackend] = DriverSpec(
     backends={"sim": sim_backend, "real": real_backend},
     intents=Path(__file__).parent / "intents.yaml",
     safe_stop=stop_robot,
+    halts=("motion",),
     notices=NOTICES,
     card=Card.of(
         pose(),

@@ -74,6 +74,7 @@ SPEC: DriverSpec[SpotifyBackend] = DriverSpec(
     backends={"sim": sim_backend, "real": real_backend},
     intents=Path(__file__).parent / "intents.yaml",
     safe_stop=pause_music,
+    halts=("sound",),
     notices=NOTICES,
     card=Card.of(
         text("track", label="Track"),

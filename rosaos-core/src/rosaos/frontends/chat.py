@@ -69,6 +69,8 @@ class Conversation:
     event_id: int
     replies: list[str] = field(default_factory=list)
     errors: list[str] = field(default_factory=list)
+    refusals: list[str] = field(default_factory=list)
+    """Kernel tool calls refused for this message (a launch on a held device): not done."""
     processes: dict[int, dict[str, Any]] = field(default_factory=dict)
     callback_events: dict[int, int] = field(default_factory=dict)
     """callback event id → process id"""
@@ -93,6 +95,8 @@ class Conversation:
         ours = event_id == self.event_id or event_id in self.callback_events
         if not ours:
             return False
+        if kind == "notice" and data.get("refused"):
+            self.refusals.append(update["text"])  # a refused launch, a stop not confirmed
         if kind == "process_launched" and "process_id" in data:
             process_id = int(data["process_id"])
             self.processes.setdefault(process_id, {})
@@ -111,7 +115,7 @@ class Conversation:
     @property
     def succeeded(self) -> bool:
         statuses = [p.get("status") for p in self.processes.values()]
-        return not self.errors and all(status == "ok" for status in statuses)
+        return not self.errors and not self.refusals and all(status == "ok" for status in statuses)
 
     def summary(self) -> dict[str, Any]:
         return {
@@ -119,6 +123,7 @@ class Conversation:
             "ok": self.succeeded,
             "replies": self.replies,
             "errors": self.errors,
+            "refusals": self.refusals,
             "processes": [{"id": pid, **info} for pid, info in self.processes.items()],
         }
 

@@ -183,18 +183,41 @@ def tool_activity(messages: list[ModelMessage]) -> list[Output]:
             if isinstance(part, ToolCallPart):
                 text = f"{part.tool_name}({part.args_as_json_str()})"
                 outputs.append(("tool_call", text, {"tool": part.tool_name, "args": part.args_as_dict()}))
+            elif isinstance(part, ToolReturnPart) and part.tool_name == "stop":
+                outputs += _stop_activity(part)
             elif isinstance(part, ToolReturnPart) and part.tool_name == "launch_process":
                 if part.outcome != "success":
-                    outputs.append(("notice", f"launch refused: {part.model_response_str()}", {}))
+                    text = f"launch refused: {part.model_response_str()}"
+                    outputs.append(("notice", text, {"refused": "launch_process"}))
                     continue
                 launched = _as_dict(part.content)
                 if "process_id" in launched:
                     devices = ", ".join(launched.get("devices", [])) or "no devices"
                     text = f"process {launched['process_id']} launched with {devices}"
                     outputs.append(("process_launched", text, launched))
-            elif isinstance(part, RetryPromptPart) and part.tool_name == "launch_process":
-                outputs.append(("notice", f"launch refused: {part.model_response()}", {}))
+            elif isinstance(part, RetryPromptPart) and part.tool_name in ("launch_process", "stop"):
+                what = "launch" if part.tool_name == "launch_process" else "stop"
+                outputs.append(
+                    ("notice", f"{what} refused: {part.model_response()}", {"refused": part.tool_name})
+                )
     return outputs
+
+
+def _stop_activity(part: ToolReturnPart) -> list[Output]:
+    """A failed stop, or one whose device did not confirm its safe_stop, as a notice that says so.
+
+    ``rosaos chat --wait`` reads ``refused`` in its data: what was asked was not (surely) done.
+    """
+    if part.outcome != "success":
+        return [("notice", f"stop refused: {part.model_response_str()}", {"refused": "stop"})]
+    report = _as_dict(part.content)
+    unconfirmed = [
+        d["device"] for d in report.get("devices", []) if isinstance(d, dict) and not d.get("safe_stop")
+    ]
+    if not unconfirmed:
+        return []
+    text = f"stop NOT confirmed on {', '.join(unconfirmed)}: see the reply"
+    return [("notice", text, {"refused": "stop", "devices": unconfirmed})]
 
 
 def _as_dict(content: Any) -> dict[str, Any]:

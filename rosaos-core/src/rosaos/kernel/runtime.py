@@ -45,6 +45,8 @@ from rosaos.kernel.events import DeviceNoticeEvent, Event, EventStore, StoreClos
 from rosaos.kernel.loop import KernelLoop
 from rosaos.kernel.notices import NoticeWatcher
 from rosaos.kernel.orphans import LiveProcesses, recover_orphans
+from rosaos.kernel.stop_tools import add_stop_tools
+from rosaos.kernel.stopping import Stopper
 from rosaos.kernel.timer_tools import add_timer_tools
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.tools import build_kernel_tools
@@ -353,6 +355,10 @@ class Kernel:
         add_memory_tools(tools, self.memory, self.endpoints, self._launch, self.sightings)
         if self._models.local is not None:
             self._models.local.memory = self.memory
+        self.stopper = Stopper(
+            self.manager, self.endpoints, lambda name: self.world.instances[name].spec.halts
+        )
+        add_stop_tools(tools, self.stopper, self.manager, self.endpoints)
         agent = build_kernel_agent(self._models.kernel, tools)
         self.loop = KernelLoop(
             self._store,

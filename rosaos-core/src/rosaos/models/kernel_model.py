@@ -16,9 +16,12 @@ handled (see :func:`rosaos.kernel.loop.render_event`) and answers:
   ``speak``); ``info`` ones get no reply (:mod:`rosaos.intents.planning.notice_plan`).
 - ``[Error]``: acknowledged in one sentence.
 - timers ("… in ten minutes", "what timers are set?", "cancel that timer") and ``[Timer fired]``:
-  :mod:`rosaos.intents.planning.timer_plan`, asked first.
+  :mod:`rosaos.intents.planning.timer_plan`, asked first;
+- "stop" however it is said, questions about a device's state and "what can you do?": the
+  kernel's lease-free ``stop`` and ``device_state`` tools (:mod:`rosaos.models.kernel_actions`),
+  asked next;
 - memory ("remember this spot as the kitchen", "go to the kitchen", "call the dog Rex"):
-  :mod:`rosaos.memory.turn`, asked next; aliases people gave are resolved before any match.
+  :mod:`rosaos.memory.turn`, asked after them; aliases people gave are resolved before any match.
 """
 
 from __future__ import annotations
@@ -43,9 +46,11 @@ from rosaos.intents.planning.notice_plan import SILENCE, notice_response
 from rosaos.intents.planning.plan import PlanError, decode_plan, has_plan
 from rosaos.intents.planning.timer_plan import is_timer_sentence, timer_turn
 from rosaos.intents.understanding.matching import IntentMatcher, MatchResult
+from rosaos.intents.understanding.stop_words import DeviceRefs
 from rosaos.memory.memory_phrases import resolve_aliases
 from rosaos.memory.store import MemoryStore
 from rosaos.memory.turn import is_memory_sentence, memory_turn
+from rosaos.models import kernel_actions
 from rosaos.models.conversation import (
     ToolOutcome,
     content_text,
@@ -77,6 +82,9 @@ class LocalIntentModel(Model):
         super().__init__()
         self.language = language
         self.matcher = IntentMatcher(devices, language)
+        self.devices = list(devices)
+        self.refs = DeviceRefs(devices, language)
+        """Device references for "stop" and state questions (:mod:`rosaos.models.kernel_actions`)."""
         self.speaker = speaker
         """The always-attached device that speaks to the user (the Reachy Mini), if any."""
         self.memory: MemoryStore | None = None
@@ -109,6 +117,8 @@ class LocalIntentModel(Model):
             is_timer_sentence(event.body, self.match)
             or is_memory_sentence(event.body, self.memory, self.match)
         ):
+            return True
+        if (event.tag in USER_TAGS or event.tag is None) and kernel_actions.handles(event.body, self.refs):
             return True
         if event.tag in USER_TAGS or event.tag is None:
             return self.match(event.body).is_exact and not self.matcher.choice(event.body)
@@ -143,6 +153,11 @@ class LocalIntentModel(Model):
         timers = timer_turn(messages, tools, self.match, self._command, self._acknowledge)
         if timers is not None:  # set/list/cancel timers, or a [Timer fired] event's action
             return timers
+        actions = kernel_actions.kernel_action_turn(
+            messages, tools, self.refs, self.devices, self._command, self._acknowledge, self.match
+        )
+        if actions is not None:  # stop, a question about state, "what can you do?": no lease
+            return actions
         memory = memory_turn(messages, tools, self.memory, self.match)
         if memory is not None:  # places, facts, aliases
             return memory

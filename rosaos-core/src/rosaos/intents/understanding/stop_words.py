@@ -1,0 +1,271 @@
+"""Recognising "stop" however it is said, and the devices a sentence refers to.
+
+Not a list of sentences: a sentence means stop when it is made of clauses (split at commas,
+"and", "then") that each hold only
+
+- a stop word or phrase (:data:`STOP_PHRASES`: stop, halt, freeze, hold it, enough, don't move…),
+- words naming devices ("the dog", "the robots", "everything"), resolved from the world's names,
+  kinds and plurals (:class:`DeviceRefs`),
+- what the device is doing ("walking", "talking") and fillers ("okay", "real quick", "please").
+
+with at least one stop word. Other clauses are kept as the rest of the sentence, run after the
+stop ("stop the dog and turn on the light"), unless a bare stop follows a command: "walk forward,
+then stop" is how that walk ends. "Okay, enough, halt the dog", "dog, stop", "stop everything" and
+"freeze!" are stops; "stop at the kitchen" (a place) and "walk forward then stop" (a command
+that ends by itself) are not. A stop word right after a negation ("don't stop the music") is not
+a stop. A name several devices share ("the robot") means all of them: a stop is never held back
+to ask which one.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+from rosaos.intents.grammar.vocabulary import DeviceVocabulary
+
+STOP_PHRASES = (
+    "emergency stop", "stop moving", "stop it", "hold it", "hold on", "hold up", "stand still",
+    "stay still", "keep still", "stay put", "don't move", "do not move", "dont move", "that's enough",
+    "thats enough", "that is enough", "quit it", "cut it out", "knock it off", "shut it down",
+    "stop", "halt", "freeze", "enough", "cease", "abort", "whoa", "woah", "stopp",
+)  # fmt: skip
+"""Words and phrases that mean stop, longest first where one contains another."""
+
+DOING = frozenset(
+    [
+        "moving",
+        "walking",
+        "driving",
+        "rolling",
+        "going",
+        "running",
+        "turning",
+        "spinning",
+        "rotating",
+        "searching",
+        "looking",
+        "talking",
+        "speaking",
+        "playing",
+        "dancing",
+        "now",
+        "right",
+        "immediately",
+        "instantly",
+        "at",
+        "once",
+        "already",
+        "again",
+        "everything",
+        "all",
+        "it",
+        "that",
+        "this",
+        "what",
+        "whatever",
+        "you're",
+        "you",
+        "are",
+        "doing",
+        "from",
+    ]
+)
+"""Words that may follow a stop word without changing what it stops."""
+
+EVERYTHING = frozenset({"everything", "all", "everyone", "everybody", "it all", "all of it", "all of you"})
+
+FILLERS = frozenset(
+    [
+        "okay",
+        "ok",
+        "oh",
+        "man",
+        "hey",
+        "please",
+        "pls",
+        "now",
+        "just",
+        "right",
+        "alright",
+        "all",
+        "so",
+        "well",
+        "uh",
+        "um",
+        "er",
+        "ah",
+        "hmm",
+        "wait",
+        "no",
+        "nope",
+        "yo",
+        "dude",
+        "buddy",
+        "jeez",
+        "god",
+        "damn",
+        "dammit",
+        "seriously",
+        "quick",
+        "quickly",
+        "real",
+        "really",
+        "i",
+        "said",
+        "told",
+        "you",
+        "could",
+        "can",
+        "would",
+        "will",
+        "you",
+        "ya",
+        "guys",
+        "thanks",
+        "thank",
+        "the",
+        "a",
+        "my",
+        "our",
+        "your",
+        "both",
+        "every",
+        "each",
+    ]
+)
+"""Words that carry no command: ignored around a stop."""
+
+_NEGATED_MOVES = ("don't move", "do not move", "dont move")
+NEGATIONS = ("don't", "dont", "do not", "never", "not", "no need to", "doesn't")
+_CLAUSES = re.compile(r"\s*(?:[,;.!?]+|\band then\b|\bthen\b|\band\b)\s*")
+_WORD = re.compile(r"[a-z0-9']+|[,;.!?]")
+"""Words, and the punctuation that ends a clause."""
+
+
+@dataclass(frozen=True)
+class StopRequest:
+    """A sentence that means stop: the devices it names (empty: a bare "stop", everything)."""
+
+    devices: tuple[str, ...]
+    rest: str = ""
+    """Other commands in the sentence ("stop the dog and turn on the light"): run after the stop."""
+
+
+class DeviceRefs:
+    """The world's devices by the words people call them: own names first, then kinds and plurals."""
+
+    def __init__(self, devices: Sequence[DeviceVocabulary], language: str = "en") -> None:
+        self.language = language
+        own: dict[str, set[str]] = {}
+        kinds: dict[str, set[str]] = {}
+        for device in devices:
+            for name in device.own_names(language):
+                own.setdefault(name, set()).add(device.name)
+            for name in device.spoken_names(language):
+                kinds.setdefault(name, set()).add(device.name)
+        for name, found in list(kinds.items()):
+            kinds.setdefault(_plural(name), set()).update(found)
+        self.names: dict[str, frozenset[str]] = {name: frozenset(found) for name, found in kinds.items()}
+        self.names.update({name: frozenset(found) for name, found in own.items()})
+        self._longest = sorted(self.names, key=lambda name: -len(name.split()))
+        self.order = [device.name for device in devices]
+
+    def resolve(self, text: str) -> tuple[str, ...] | None:
+        """The devices ``text`` names (all of a shared kind), or None when it is not only names."""
+        found, rest = self.take(_words(text))
+        return tuple(found) if found and not [word for word in rest if word not in FILLERS] else None
+
+    def take(self, words: list[str]) -> tuple[list[str], list[str]]:
+        """The devices named in ``words`` (in world order), and the words left over."""
+        found: set[str] = set()
+        rest: list[str] = []
+        index = 0
+        while index < len(words):
+            for name in self._longest:
+                size = len(name.split())
+                if words[index : index + size] == name.split():
+                    found |= self.names[name]
+                    index += size
+                    break
+            else:
+                word = words[index]
+                rest.append(word[:-2] if word.endswith("'s") else word)
+                index += 1
+        return [name for name in self.order if name in found], rest
+
+
+def read_stop(text: str, refs: DeviceRefs) -> StopRequest | None:
+    """What ``text`` asks to stop, or None when it does not mean stop (see the module docstring)."""
+    said = " ".join(_words(text))
+    if not said or _negated(said):
+        return None
+    clauses: list[tuple[str, str, list[str]]] = []  # (kind, clause, devices): stop, name or other
+    for clause in filter(None, (piece.strip() for piece in _CLAUSES.split(said))):
+        found, rest = refs.take(_strip_stops(clause.split()))
+        if found and any(f" {phrase} " in f" {clause} " for phrase in _NEGATED_MOVES):
+            return None  # "don't move the dog" refuses a command; "dog, don't move" is a stop
+        if [word for word in rest if word not in FILLERS and word not in DOING]:
+            clauses.append(("other", clause, found))
+        else:
+            clauses.append(("stop" if _count_stops(clause) else "name", clause, found))
+    if not any(kind == "stop" for kind, _, _ in clauses):
+        return None
+    first = next((index for index, (kind, _, _) in enumerate(clauses) if kind == "other"), len(clauses))
+    if any(kind == "stop" and not found for kind, _, found in clauses[first:]):
+        return None  # "walk forward, then stop": the end of that command, not a stop of its own
+    devices = [
+        name
+        for index, (kind, _, found) in enumerate(clauses)
+        if kind == "stop" or (kind == "name" and index < first)
+        for name in found
+    ]
+    rest = [
+        clause
+        for index, (kind, clause, _) in enumerate(clauses)
+        if kind == "other" or (kind == "name" and index > first)
+    ]
+    return StopRequest(tuple(dict.fromkeys(devices)), " and ".join(rest))
+
+
+def _words(text: str) -> list[str]:
+    cleaned = text.lower().replace("’", "'")
+    return _WORD.findall(cleaned)
+
+
+def _strip_stops(words: list[str]) -> list[str]:
+    """``words`` without its stop phrases and everything-words."""
+    text = f" {' '.join(words)} "
+    for phrase in (*STOP_PHRASES, *sorted(EVERYTHING, key=len, reverse=True)):
+        while f" {phrase} " in text:
+            text = text.replace(f" {phrase} ", " ")
+    return text.split()
+
+
+def _count_stops(clause: str) -> int:
+    text = f" {clause} "
+    return sum(text.count(f" {phrase} ") for phrase in STOP_PHRASES if " " not in phrase) + sum(
+        1 for phrase in STOP_PHRASES if " " in phrase and f" {phrase} " in text
+    )
+
+
+def _negated(said: str) -> bool:
+    """A negation right before a stop word ("don't stop the music"): not a stop."""
+    text = f" {said} "
+    for negation in NEGATIONS:
+        for phrase in ("stop", "halt", "freeze", "pause"):
+            if f" {negation} {phrase} " in text:
+                return True
+    return False
+
+
+def _plural(name: str) -> str:
+    last = name.split()[-1]
+    if last.endswith(("s", "x", "ch", "sh")):
+        plural = last + "es"
+    elif last.endswith("y") and last[-2:-1] not in "aeiou":
+        plural = last[:-1] + "ies"
+    else:
+        plural = last + "s"
+    return " ".join([*name.split()[:-1], plural])

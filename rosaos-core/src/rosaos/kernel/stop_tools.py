@@ -1,0 +1,112 @@
+"""The kernel tools that need no lease: ``stop`` (preempts) and ``device_state`` (reads).
+
+A person's "stop" and a question about a device ("is the turtlebot docked?") must work while
+another process holds the device, so neither goes through ``launch_process``. Both run in the
+kernel, on the kernel's own tool server, and both engines use them: the offline engine plans
+calls to them, and an LLM kernel is told when to call them (:mod:`rosaos.kernel.agent`).
+"""
+
+from __future__ import annotations
+
+import asyncio
+from collections.abc import Callable, Mapping
+from typing import Annotated, Any
+
+from fastmcp import FastMCP
+from fastmcp.exceptions import ToolError
+from mcp.types import ToolAnnotations
+from pydantic import Field
+
+from rosaos.devices.client import DeviceClient
+from rosaos.devices.endpoints import DeviceEndpoint
+from rosaos.drivers import READ_ONLY, DeviceError
+from rosaos.kernel.state_words import describe
+from rosaos.kernel.stopping import StopError, Stopper, describe_task
+from rosaos.processes.manager import ProcessManager
+
+STOP_TOOL_NAMES = ("stop", "device_state")
+STATE_TIMEOUT = 3.0
+
+STOPS = ToolAnnotations(readOnlyHint=False, destructiveHint=True, idempotentHint=True)
+
+
+def add_stop_tools(
+    server: FastMCP,
+    stopper: Stopper,
+    manager: ProcessManager,
+    endpoints: Callable[[], Mapping[str, DeviceEndpoint]],
+) -> None:
+    """Register ``stop`` and ``device_state`` on the kernel's tool server."""
+
+    @server.tool(annotations=STOPS)
+    async def stop(
+        devices: Annotated[
+            list[str] | None,
+            Field(
+                max_length=32,
+                description="Instance names to stop ('stop the dog': ['dog']). Empty or omitted for a bare "
+                "'stop' or 'stop everything': every robot in motion, then what speaks, then music, "
+                "then every running process.",
+            ),
+        ] = None,
+    ) -> dict[str, Any]:
+        """Stop at once, needing no lease: terminate the processes holding each device and call its safe_stop.
+
+        Use it whenever a person says stop, halt, freeze, enough, hold it, or the like, even while
+        another process holds the device: do not launch a process for a stop. Returns what was
+        stopped and which tasks ended, and 'summary', a sentence to tell the user.
+        """
+        try:
+            report = await stopper.stop(devices or [])
+        except StopError as error:
+            raise ToolError(str(error)) from None
+        return report.model_dump(mode="json")
+
+    @server.tool(annotations=READ_ONLY)
+    async def device_state(
+        device: Annotated[
+            str | None,
+            Field(
+                max_length=200,
+                description="Instance name ('turtlebot'); omit to read every device.",
+            ),
+        ] = None,
+    ) -> dict[str, Any]:
+        """Read a device's current state, needing no lease and starting no process (also while another process holds it).
+
+        Use it to answer questions ("is the porch light on?", "where is the robot?", "how much
+        battery?", "what's playing?"). Returns the raw state, 'said' (sentences in words, positions
+        in metres and degrees: prefer them to the raw numbers) and 'held_by' (running processes
+        using it). Answer yes or no first when the question is yes or no.
+        """
+        known = endpoints()
+        if device is not None and device not in known:
+            raise ToolError(f"no device named {device!r}; the devices are {', '.join(known)}")
+        names = [device] if device is not None else list(known)
+        running = manager.list()
+        read = await asyncio.gather(*(_read(known[name], running) for name in names))
+        if device is not None:
+            return read[0]
+        return {"devices": read}
+
+
+async def _read(endpoint: DeviceEndpoint, running: list[Any]) -> dict[str, Any]:
+    held_by = [
+        {"id": info.id, "task": describe_task(info.task)}
+        for info in running
+        if endpoint.name in info.devices and not endpoint.always_attached
+    ]
+    answer: dict[str, Any] = {"device": endpoint.name, "status": endpoint.status, "held_by": held_by}
+    if endpoint.url is None:
+        return answer | {"state": None, "said": [f"The {_spoken(endpoint.name)} is {endpoint.status}."]}
+    client = DeviceClient(endpoint.url, endpoint.token, STATE_TIMEOUT, endpoint.name)
+    try:
+        state = await asyncio.wait_for(client.get_state(), STATE_TIMEOUT)
+    except (DeviceError, TimeoutError) as error:
+        problem = str(error) or f"it did not answer within {STATE_TIMEOUT:g} s"
+        return answer | {"state": None, "said": [f"I could not read the {_spoken(endpoint.name)}: {problem}"]}
+    return answer | {"state": state, "said": describe(_spoken(endpoint.name), state)}
+
+
+def _spoken(name: str) -> str:
+    return name.replace("_", " ")

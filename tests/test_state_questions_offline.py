@@ -1,0 +1,58 @@
+"""A driver's own question template is answered from ``device_state``, not by a process.
+
+The built-in drivers' templates ("how bright is the kitchen light?", "what's the volume?") plan a
+process that only reads ``get_state``; the offline engine reads the state through the kernel's
+lease-free ``device_state`` instead, so the answer comes while another process holds the device.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import pytest
+from pydantic_ai.messages import (
+    ModelMessage,
+    ModelRequest,
+    ModelResponse,
+    TextPart,
+    ToolCallPart,
+    ToolReturnPart,
+    UserPromptPart,
+)
+
+from rosaos.config import RosaosConfig
+from rosaos.devices.world import build_world
+from rosaos.intents.grammar.vocabulary import device_vocabularies
+from rosaos.models.kernel_model import LocalIntentModel
+from rosaos.plugins import load_drivers
+
+TOOLS = ["launch_process", "stop", "device_state"]
+
+
+@pytest.fixture(scope="module")
+def model() -> LocalIntentModel:
+    world = build_world(RosaosConfig(), load_drivers())
+    return LocalIntentModel(device_vocabularies(world.instances.values()))
+
+
+@pytest.mark.parametrize(
+    ("said", "device", "state", "answer"),
+    [
+        ("how bright is the kitchen light?", "kitchen_light", {"on": True, "brightness": 70},
+         "The kitchen light is on, at 70% brightness."),
+        ("what's the volume?", "spotify", {"is_playing": False, "volume": 40}, "The volume is at 40."),
+    ],
+)  # fmt: skip
+def test_a_template_question_reads_device_state(
+    model: LocalIntentModel, said: str, device: str, state: dict[str, Any], answer: str
+) -> None:
+    messages: list[ModelMessage] = [ModelRequest(parts=[UserPromptPart(f"[User said] {said}")])]
+    [call] = model.respond(messages, TOOLS)
+    assert isinstance(call, ToolCallPart) and call.tool_name == "device_state"
+    assert call.args_as_dict() == {"device": device}
+    result = {"device": device, "state": state, "held_by": [{"id": 3, "task": "a long task"}], "said": []}
+    messages += [
+        ModelResponse(parts=[call]),
+        ModelRequest(parts=[ToolReturnPart("device_state", result, tool_call_id=call.tool_call_id)]),
+    ]
+    assert model.respond(messages, TOOLS) == [TextPart(answer)]
