@@ -42,6 +42,7 @@ from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people
 from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
 from rosaos.kernel.device_status import DeviceStatusUpdates
 from rosaos.kernel.events import DeviceNoticeEvent, Event, EventStore, StoreClosedError, WorkerCallbackEvent
+from rosaos.kernel.launch_cause import CurrentEvent, LaunchCause
 from rosaos.kernel.loop import KernelLoop
 from rosaos.kernel.notices import NoticeWatcher
 from rosaos.kernel.orphans import LiveProcesses, recover_orphans
@@ -165,17 +166,18 @@ class Kernel:
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         self.manager.record_callback(callback)
-        await self._live.ended(callback.process_id)
         await self._activity.record(event_id, callback.process_id, callback.receipts)
-        if callback.process_id in self._ended_published:
-            return
-        self._ended_published.add(callback.process_id)
-        text = f"process {callback.process_id} ended: {callback.status}"
-        if callback.error:
-            text += f" ({callback.error})"
-        await self._updates.publish(
-            "process_ended", text, callback.model_dump(mode="json"), event_id=event_id
-        )
+        if callback.process_id not in self._ended_published:
+            self._ended_published.add(callback.process_id)
+            text = f"process {callback.process_id} ended: {callback.status}"
+            if callback.error:
+                text += f" ({callback.error})"
+            await self._updates.publish(
+                "process_ended", text, callback.model_dump(mode="json"), event_id=event_id
+            )
+        # Forgotten only once its end is on the updates stream: a kill before this line leaves the
+        # record, and the restart publishes the committed callback (kernel/orphans.py).
+        await self._live.ended(callback.process_id)
 
     async def emergency_stop(self, reason: str) -> EmergencyStopReport:
         """Terminate every process, call every device's safe_stop, and latch until reset.
@@ -325,9 +327,22 @@ class Kernel:
         if isinstance(self.supervisor, DeviceSupervisor):
             self.supervisor.release_background()
             await self.supervisor.settle({name for p in await self._live.left() for name in p.devices})
-        await recover_orphans(self._live, self._store, self.supervisor.directory(), self._callback_committed)
+        await recover_orphans(
+            self._live,
+            self._store,
+            self.supervisor.directory(),
+            self._callback_committed,
+            remember=self.manager.remember,
+        )
         self.states = DeviceStateCache(self.endpoints)
-        tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._launched)
+        current = CurrentEvent()
+        tools = build_kernel_tools(
+            self.manager,
+            self.endpoints,
+            current=current,
+            before_start=self._launching,
+            launched_before=self._live.launched_for,
+        )
         add_timer_tools(tools, self.timers)
         agent = build_kernel_agent(self._models.kernel, tools)
         self.loop = KernelLoop(
@@ -337,6 +352,7 @@ class Kernel:
             instructions=lambda: kernel_prompt(self.endpoints().values(), self.config.kernel.kernel_prompt),
             model=self._model_for_event,
             history_budget=self.config.kernel.history_messages,
+            current=current,
         )
         self.loop.before = lambda event: answer_from_chat(self.confirmations, event)
         app = create_app(
@@ -421,10 +437,11 @@ class Kernel:
         if not appended.duplicate:
             await self._updates.publish_event(appended.id, event)
 
-    async def _launched(self, info: ProcessInfo) -> None:
-        """Keep ids unique across restarts, and remember the process until its end is recorded."""
+    async def _launching(self, info: ProcessInfo, cause: LaunchCause | None) -> None:
+        """Before a worker has the job: keep ids unique across restarts, and remember the process
+        and its cause until its end is recorded. A crash after this line leaves an orphan record."""
         await self._store.note_process_id(info.id)
-        await self._live.launched(info)
+        await self._live.launched(info, cause)
 
 
 def _base_url(sock: socket.socket) -> str:
