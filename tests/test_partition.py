@@ -124,3 +124,55 @@ def test_a_silent_link_stops_the_robot_and_a_healed_one_frees_its_lease(
     assert freed_after < FREE_BOUND, f"the lease was free only {freed_after:.1f} s after the link came back"
     assert ended and ended[-1]["data"]["status"] != "ok", ended
     assert "unreachable" in ended[-1]["data"]["error"] or "deadman" in ended[-1]["data"]["error"], ended
+
+
+def test_a_safe_stop_that_could_not_be_delivered_is_retried_when_the_link_heals(
+    dog: tuple[str, str], tmp_path: Path
+) -> None:
+    dog_url, dog_token = dog
+    port = int(dog_url.rsplit(":", 1)[1].split("/")[0])
+    with blackhole(port) as link:
+        config = tmp_path / "rosaos.toml"
+        config.write_text(
+            f'data_dir = "{tmp_path / "data"}"\n[kernel]\npool_size = 1\n'
+            f'[devices.dog]\ndriver = "ros"\nurl = "http://127.0.0.1:{link.port}/mcp"\n'
+            f'token = "{dog_token}"\ndescription = "Hiwonder PuppyPi robot dog"\n'
+        )
+        kernel, url = start_kernel(config)
+        token = (tmp_path / "data" / "token").read_text().strip()
+        headers = {"Authorization": f"Bearer {token}"}
+        try:
+            with httpx.Client(base_url=url, headers=headers, timeout=10) as api:
+                api.post("/chat", json={"text": "make the dog walk forward 10 meters"}).raise_for_status()
+                wait_for(lambda: dog_state(dog_url, dog_token)["x"] > 0.2, 60, "the dog walking")
+                link.silence()
+        finally:
+            kernel.send_signal(signal.SIGKILL)
+            kernel.wait()
+        kernel, url = start_kernel(config)  # the dog cannot be told: its safe_stop is owed
+        try:
+            with httpx.Client(base_url=url, headers=headers, timeout=10) as api:
+                crashed = [
+                    u
+                    for u in api.get("/updates", params={"after": 0, "limit": 1000}).json()["updates"]
+                    if u["kind"] == "process_ended"
+                ]
+                refused = api.post("/chat", json={"text": "make the dog walk forward half a meter"})
+                refused.raise_for_status()
+                time.sleep(3.0)
+                link.heal()
+
+                def retried() -> bool:
+                    updates = api.get("/updates", params={"after": 0, "limit": 1000}).json()["updates"]
+                    return any("was retried and done" in u["text"] for u in updates)
+
+                wait_for(retried, 20, "the owed safe_stop retried and reported")
+                updates = api.get("/updates", params={"after": 0, "limit": 1000}).json()["updates"]
+        finally:
+            kernel.send_signal(signal.SIGINT)
+            kernel.wait(60)
+    assert crashed and "dog NOT safe-stopped" in crashed[-1]["data"]["error"], crashed
+    texts = [u["text"] for u in updates]
+    assert any("owes a safe_stop" in text or "is not available" in text for text in texts), texts
+    launched = [u["data"]["process_id"] for u in updates if u["kind"] == "process_launched"]
+    assert launched == [1], f"a process got the dog before its owed stop landed: {launched}"

@@ -46,6 +46,7 @@ from rosaos.kernel.launch_cause import CurrentEvent, LaunchCause
 from rosaos.kernel.loop import KernelLoop
 from rosaos.kernel.notices import NoticeWatcher
 from rosaos.kernel.orphans import LiveProcesses, recover_orphans
+from rosaos.kernel.pending_stops import PendingStops, StopUndelivered
 from rosaos.kernel.timer_tools import add_timer_tools
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.tools import build_kernel_tools
@@ -53,7 +54,7 @@ from rosaos.kernel.updates import UpdateStream
 from rosaos.models.defaults import KernelModels, kernel_models
 from rosaos.models.select import ModelSpec
 from rosaos.processes.jobs import WorkerCallback, callback_idempotency_key
-from rosaos.processes.manager import EmergencyStop, ProcessInfo, ProcessManager
+from rosaos.processes.manager import EmergencyStop, LaunchRefused, ProcessInfo, ProcessManager
 from rosaos.processes.pool import WorkerPool
 from rosaos.processes.prompts import base_process_prompt
 
@@ -189,6 +190,7 @@ class Kernel:
         latch = self.manager.emergency_stop
         assert latch is not None
         outcomes, saved = await asyncio.gather(self.supervisor.safe_stop_all(), self._save_latch(latch))
+        await self._pending_stops.note(outcomes)  # an unreachable device is stopped when it is back
         report = EmergencyStopReport(
             latched=True,
             reason=latch.reason,
@@ -327,13 +329,20 @@ class Kernel:
         if isinstance(self.supervisor, DeviceSupervisor):
             self.supervisor.release_background()
             await self.supervisor.settle({name for p in await self._live.left() for name in p.devices})
-        await recover_orphans(
+        self._pending_stops = PendingStops(
+            self._store,
+            self.supervisor.directory,
+            lambda text, data: self._updates.publish("notice", text, data),
+        )
+        await self._pending_stops.deliver()  # owed by the last run: a device that is back is stopped now
+        stops = await recover_orphans(
             self._live,
             self._store,
             self.supervisor.directory(),
             self._callback_committed,
             remember=self.manager.remember,
         )
+        await self._pending_stops.note(stops)
         self.states = DeviceStateCache(self.endpoints)
         current = CurrentEvent()
         tools = build_kernel_tools(
@@ -371,6 +380,7 @@ class Kernel:
         self._tasks.append(asyncio.create_task(self.states.run(), name="device states"))
         self.notices = NoticeWatcher(self.endpoints, self._enqueue_notice)
         self._tasks.append(asyncio.create_task(self.notices.run(), name="device notices"))
+        self._tasks.append(asyncio.create_task(self._pending_stops.run(), name="pending safe stops"))
         self._tasks.append(asyncio.create_task(self._run_loop(), name="kernel loop"))
         # Timers that fell due while the kernel was down fire now, once, and say they are late.
         self._tasks.append(asyncio.create_task(self.timers.run(), name="timers"))
@@ -440,6 +450,10 @@ class Kernel:
     async def _launching(self, info: ProcessInfo, cause: LaunchCause | None) -> None:
         """Before a worker has the job: keep ids unique across restarts, and remember the process
         and its cause until its end is recorded. A crash after this line leaves an orphan record."""
+        try:
+            await self._pending_stops.before_grant(info.devices)
+        except StopUndelivered as owed:
+            raise LaunchRefused(str(owed)) from None
         await self._store.note_process_id(info.id)
         await self._live.launched(info, cause)
 

@@ -196,6 +196,9 @@ class ProcessManager:
         if before_start is not None:
             try:
                 await before_start(info.model_copy())
+            except LaunchRefused:
+                self._end(process_id, "error")
+                raise
             except Exception as failure:
                 self._end(process_id, "error")
                 raise LaunchRefused(
