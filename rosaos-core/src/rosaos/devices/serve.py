@@ -24,6 +24,7 @@ from starlette.types import ASGIApp
 from rosaos.auth import BearerAuthMiddleware, HostOriginGuard, bound_hosts
 from rosaos.device_notices import NoticeBoard, notice_endpoint
 from rosaos.devices.deadman import HeardMiddleware, deadman_of, running_deadman
+from rosaos.devices.latch import add_latch
 from rosaos.devices.world import DeviceInstance
 from rosaos.drivers import SETS, DeviceBackend, DeviceError, no_safe_stop
 
@@ -62,6 +63,7 @@ async def open_device(instance: DeviceInstance, data_dir: Path) -> AsyncIterator
         server.strict_input_validation = True
         _add_safe_stop(server, instance, backend)
         add_notice_route(server, ctx.notices)
+        add_latch(server, instance.name)  # the emergency stop holds here too (devices/latch.py)
         async with contextlib.AsyncExitStack() as stack:
             if spec.safe_stop is not no_safe_stop:  # a device with nothing to stop needs no deadman
 

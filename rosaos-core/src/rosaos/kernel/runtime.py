@@ -42,6 +42,7 @@ from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people
 from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
 from rosaos.kernel.device_status import DeviceStatusUpdates
 from rosaos.kernel.events import DeviceNoticeEvent, Event, EventStore, StoreClosedError, WorkerCallbackEvent
+from rosaos.kernel.host_latch import HostLatches
 from rosaos.kernel.launch_cause import CurrentEvent, LaunchCause
 from rosaos.kernel.loop import KernelLoop
 from rosaos.kernel.notices import NoticeWatcher
@@ -189,7 +190,9 @@ class Kernel:
         stopped = await self.manager.latch_emergency_stop(reason)
         latch = self.manager.emergency_stop
         assert latch is not None
-        outcomes, saved = await asyncio.gather(self.supervisor.safe_stop_all(), self._save_latch(latch))
+        outcomes, saved, untold = await asyncio.gather(
+            self.supervisor.safe_stop_all(), self._save_latch(latch), self._host_latches.push(True, reason)
+        )
         await self._pending_stops.note(outcomes)  # an unreachable device is stopped when it is back
         report = EmergencyStopReport(
             latched=True,
@@ -198,6 +201,7 @@ class Kernel:
             terminated=[info.id for info in stopped],
             devices=[DeviceSafeStop(name=o.instance, ok=o.ok, detail=o.detail) for o in outcomes],
             saved=saved,
+            untold_hosts=untold,
         )
         await self._updates.publish("error", f"EMERGENCY STOP: {reason}", report.model_dump(mode="json"))
         return report
@@ -213,14 +217,16 @@ class Kernel:
         await self._store.set_value(EMERGENCY_STOP_KEY, None)
         if self.manager.emergency_stop is latch:  # not if a new stop came while the disk was busy
             self.manager.reset_emergency_stop()
+            await self._host_latches.push(False)
             await self._updates.publish("notice", "emergency stop reset: processes may run again", {})
         return self.emergency_stop_state()
 
     def emergency_stop_state(self) -> EmergencyStopState:
         latch = self.manager.emergency_stop
+        untold = list(self._host_latches.untold)
         if latch is None:
-            return EmergencyStopState(latched=False)
-        return EmergencyStopState(latched=True, reason=latch.reason, time=latch.time)
+            return EmergencyStopState(latched=False, untold_hosts=untold)
+        return EmergencyStopState(latched=True, reason=latch.reason, time=latch.time, untold_hosts=untold)
 
     async def _save_latch(self, latch: EmergencyStop) -> bool:
         """Save the latch for the next start; False (and a log entry) if the store failed."""
@@ -335,6 +341,9 @@ class Kernel:
             lambda text, data: self._updates.publish("notice", text, data),
         )
         await self._pending_stops.deliver()  # owed by the last run: a device that is back is stopped now
+        self._host_latches = HostLatches(self.supervisor.directory)
+        if self.manager.emergency_stop is not None:  # latched before the restart: so are the hosts
+            await self._host_latches.push(True, self.manager.emergency_stop.reason)
         stops = await recover_orphans(
             self._live,
             self._store,
@@ -381,6 +390,7 @@ class Kernel:
         self.notices = NoticeWatcher(self.endpoints, self._enqueue_notice)
         self._tasks.append(asyncio.create_task(self.notices.run(), name="device notices"))
         self._tasks.append(asyncio.create_task(self._pending_stops.run(), name="pending safe stops"))
+        self._tasks.append(asyncio.create_task(self._host_latches.run(), name="host latches"))
         self._tasks.append(asyncio.create_task(self._run_loop(), name="kernel loop"))
         # Timers that fell due while the kernel was down fire now, once, and say they are late.
         self._tasks.append(asyncio.create_task(self.timers.run(), name="timers"))
