@@ -105,7 +105,12 @@ async def test_a_latched_stop_is_still_latched_after_a_restart_until_a_person_re
         assert reset == {"latched": False, "reason": None, "time": None, "untold_hosts": []}
 
     async with kernel_api(tmp_path) as api:
-        assert (await api.get("/estop")).json() == {"latched": False, "reason": None, "time": None, "untold_hosts": []}
+        assert (await api.get("/estop")).json() == {
+            "latched": False,
+            "reason": None,
+            "time": None,
+            "untold_hosts": [],
+        }
 
 
 async def test_a_stored_latch_this_version_cannot_read_stays_latched(tmp_path: Path) -> None:
