@@ -14,6 +14,7 @@ import subprocess
 from collections.abc import Iterator
 from typing import Any
 
+import httpx
 import pytest
 import schemathesis
 from cli_process import ROSAOS, line_matching
@@ -75,3 +76,25 @@ def test_every_operation_answers_as_published(kernel: tuple[str, str]) -> None:
     assert not failures, f"{sorted(failures)}\n\n" + "\n\n".join(
         f"{label}:\n{text}" for label, text in failures.items()
     )
+
+
+@pytest.mark.parametrize(
+    ("path", "methods"),
+    [("/estop", {"GET", "POST"}), ("/confirmations", {"GET"}), ("/confirmations/1", {"POST"})],
+)
+def test_a_405_lists_every_method_of_its_path(kernel: tuple[str, str], path: str, methods: set[str]) -> None:
+    url, token = kernel
+    answer = httpx.options(f"{url}{path}", headers={"Authorization": f"Bearer {token}"})
+    assert answer.status_code == 405
+    assert methods <= {method.strip() for method in answer.headers["allow"].split(",")}, answer.headers[
+        "allow"
+    ]
+
+
+def test_a_login_body_that_is_not_utf8_gets_an_answer_the_schema_lists(kernel: tuple[str, str]) -> None:
+    url, _ = kernel
+    listed = httpx.get(f"{url}/openapi.json").json()["paths"]["/login"]["post"]["responses"]
+    answer = httpx.post(
+        f"{url}/login", content=b'{"code": "\xff\xfe"}', headers={"Content-Type": "application/json"}
+    )
+    assert str(answer.status_code) in listed, (answer.status_code, sorted(listed))

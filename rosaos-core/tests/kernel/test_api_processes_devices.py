@@ -90,12 +90,12 @@ async def test_ended_processes_are_listed_only_when_asked(
 async def test_the_emergency_stop_latches_until_reset(
     client: httpx.AsyncClient, runtime: TestRuntime
 ) -> None:
-    unlatched = {"latched": False, "reason": None, "time": None}
+    unlatched = {"latched": False, "reason": None, "time": None, "untold_hosts": []}
     assert (await client.get("/estop", headers=AUTH)).json() == unlatched
     stopped = (await client.post("/estop", json={"reason": "robot near the stairs"}, headers=AUTH)).json()
     assert (stopped["latched"], stopped["reason"]) == (True, "robot near the stairs")
     assert (stopped["terminated"], stopped["devices"], stopped["saved"]) == ([], [], True)
-    latch = {key: stopped[key] for key in ("latched", "reason", "time")}
+    latch = {key: stopped[key] for key in ("latched", "reason", "time", "untold_hosts")}
     assert (await client.get("/estop", headers=AUTH)).json() == latch
     assert (await client.post("/estop/reset", headers=AUTH)).json() == unlatched
 

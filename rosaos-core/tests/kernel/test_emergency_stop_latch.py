@@ -91,6 +91,7 @@ async def test_a_latched_stop_is_still_latched_after_a_restart_until_a_person_re
             "latched": True,
             "reason": "robot near the stairs",
             "time": report["time"],
+            "untold_hosts": [],
         }
         # An event that arrives while latched is handled: the kernel is told why nothing may run.
         updates = await say(api, "wave at the visitors")
@@ -101,10 +102,15 @@ async def test_a_latched_stop_is_still_latched_after_a_restart_until_a_person_re
         assert (await api.get("/processes", params={"all": "true"})).json() == []
 
         reset = (await api.post("/estop/reset")).json()
-        assert reset == {"latched": False, "reason": None, "time": None}
+        assert reset == {"latched": False, "reason": None, "time": None, "untold_hosts": []}
 
     async with kernel_api(tmp_path) as api:
-        assert (await api.get("/estop")).json() == {"latched": False, "reason": None, "time": None}
+        assert (await api.get("/estop")).json() == {
+            "latched": False,
+            "reason": None,
+            "time": None,
+            "untold_hosts": [],
+        }
 
 
 async def test_a_stored_latch_this_version_cannot_read_stays_latched(tmp_path: Path) -> None:
@@ -124,5 +130,5 @@ async def test_a_reset_with_nothing_latched_says_nothing_on_the_updates_stream(t
         before = (await api.get("/updates", params={"after": 0, "limit": 1000})).json()["updates"]
         reset = (await api.post("/estop/reset")).json()
         after = (await api.get("/updates", params={"after": 0, "limit": 1000})).json()["updates"]
-    assert reset == {"latched": False, "reason": None, "time": None}
+    assert reset == {"latched": False, "reason": None, "time": None, "untold_hosts": []}
     assert after == before

@@ -23,8 +23,10 @@ from starlette.types import ASGIApp
 
 from rosaos.auth import BearerAuthMiddleware, HostOriginGuard, bound_hosts
 from rosaos.device_notices import NoticeBoard, notice_endpoint
+from rosaos.devices.deadman import HeardMiddleware, deadman_of, running_deadman
+from rosaos.devices.latch import add_latch
 from rosaos.devices.world import DeviceInstance
-from rosaos.drivers import SETS, DeviceBackend, DeviceError
+from rosaos.drivers import SETS, DeviceBackend, DeviceError, no_safe_stop
 
 MCP_PATH = "/mcp"
 HEALTH_PATH = "/health"
@@ -61,7 +63,15 @@ async def open_device(instance: DeviceInstance, data_dir: Path) -> AsyncIterator
         server.strict_input_validation = True
         _add_safe_stop(server, instance, backend)
         add_notice_route(server, ctx.notices)
-        yield OpenDevice(instance, backend, server)
+        add_latch(server, instance.name)  # the emergency stop holds here too (devices/latch.py)
+        async with contextlib.AsyncExitStack() as stack:
+            if spec.safe_stop is not no_safe_stop:  # a device with nothing to stop needs no deadman
+
+                async def stop() -> None:
+                    await spec.safe_stop(backend)
+
+                await stack.enter_async_context(running_deadman(server, instance.name, stop))
+            yield OpenDevice(instance, backend, server)
     finally:
         await backend.close()
 
@@ -97,7 +107,10 @@ def device_http_app(server: FastMCP, token: str, allowed_hosts: Iterable[str] = 
 
     Only loopback and ``allowed_hosts`` may appear in ``Host``, and a browser only from the same
     origin (:class:`~rosaos.auth.HostOriginGuard`)."""
-    mcp_app = server.http_app(path=MCP_PATH)
+    mcp_app: ASGIApp = server.http_app(path=MCP_PATH)
+    deadman = deadman_of(server)
+    if deadman is not None:  # behind the token: only an authenticated request counts as heard
+        mcp_app = HeardMiddleware(mcp_app, deadman)
     guarded = BearerAuthMiddleware(_with_health(mcp_app), token=token, open_paths=[HEALTH_PATH])
     return HostOriginGuard(guarded, allowed_hosts=allowed_hosts)
 

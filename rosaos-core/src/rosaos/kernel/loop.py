@@ -21,6 +21,7 @@ from pydantic_ai.usage import UsageLimits
 
 from rosaos.kernel.agent import trim_history
 from rosaos.kernel.events import Event, EventStore
+from rosaos.kernel.launch_cause import CurrentEvent
 from rosaos.kernel.notice_text import render_notice
 from rosaos.kernel.offline_turn import offline_turn
 from rosaos.kernel.timer_text import render_timer_fired
@@ -76,6 +77,7 @@ class KernelLoop:
         model: Callable[[Event], Model | None] = lambda event: None,
         history_budget: int = 40,
         request_limit: int = 20,
+        current: CurrentEvent | None = None,
     ) -> None:
         self.store = store
         self.updates = updates
@@ -86,6 +88,8 @@ class KernelLoop:
         self.request_limit = request_limit
         self.history: list[ModelMessage] = []
         self.handled = 0
+        self.current = current or CurrentEvent()
+        """The event being handled: the cause of the launches its handling makes."""
         self.before: Callable[[Event], Awaitable[list[Output] | None]] | None = None
         """Sees each event before the model; outputs instead of a model run (confirmation answers)."""
         self._toolset = CombinedToolset(agent.toolsets)
@@ -104,7 +108,11 @@ class KernelLoop:
         """Handle every pending event, oldest first; return how many were handled."""
         count = 0
         while (event := await self.store.next_pending()) is not None:
-            outputs = await self.handle(event)
+            self.current.begin(event.id)
+            try:
+                outputs = await self.handle(event)
+            finally:
+                self.current.end()
             # The outputs and the acknowledgement commit together: after a crash an event shows
             # all of its outputs or none (and is then handled again).
             await self.updates.publish_and_mark_handled(event.id, outputs)

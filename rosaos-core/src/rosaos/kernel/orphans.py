@@ -1,6 +1,9 @@
 """Processes a dead kernel left behind: remembered while they run, made safe and reported on restart.
 
-A process is written to the event store when it is launched and removed when its end is recorded.
+A process is written to the event store when it is launched — after its leases are granted and
+*before* any worker is told to start, with the event and step that launched it — and removed when
+its end is recorded. The cause is kept longer (:data:`CAUSES_KEPT` launches): when the event is
+handled again after a crash, the same launch is refused (:mod:`rosaos.kernel.launch_cause`).
 A kernel killed with ``kill -9`` removes nothing, so at the next start the store still lists the
 processes that were running. Their workers died with the old kernel (they watch its pipe and stop
 their devices), but the kernel does not take that on trust: before its loop grants anything,
@@ -15,17 +18,22 @@ import asyncio
 import logging
 from collections.abc import Awaitable, Callable, Mapping
 from datetime import datetime
+from typing import Any
 
 from pydantic import BaseModel, ValidationError
 
 from rosaos.devices.supervisor import DirectoryEntry, SafeStopOutcome, safe_stop_entry
 from rosaos.kernel.events import EventStore, WorkerCallbackEvent
+from rosaos.kernel.launch_cause import LaunchCause
 from rosaos.processes.jobs import WorkerCallback, callback_idempotency_key
 from rosaos.processes.manager import ProcessInfo
 
 log = logging.getLogger("rosaos.kernel.orphans")
 
 LIVE_PROCESSES_KEY = "live_processes"
+LAUNCH_CAUSES_KEY = "launch_causes"
+"""``"event:step"`` → process id, for the last :data:`CAUSES_KEPT` launches."""
+CAUSES_KEPT = 2000
 RESTART_ERROR = "kernel restarted"
 """The error of a process a dead kernel left: with status ``crashed`` it reads ``crashed (kernel restarted: …)``."""
 
@@ -37,6 +45,9 @@ class LiveProcess(BaseModel):
     task: str
     devices: list[str]
     started_at: datetime
+    event_id: int | None = None
+    """The event whose handling launched it (None: launched outside the loop)."""
+    step: int | None = None
 
 
 class LiveProcesses:
@@ -46,14 +57,33 @@ class LiveProcesses:
         self._store = store
         self._lock = asyncio.Lock()  # launches and ends interleave at awaits
 
-    async def launched(self, info: ProcessInfo) -> None:
-        """Remember a process that was just launched."""
+    async def launched(self, info: ProcessInfo, cause: LaunchCause | None = None) -> None:
+        """Remember a process that is being launched, and what launched it: call before it starts."""
         async with self._lock:
             live = await self._read()
             live[info.id] = LiveProcess(
-                id=info.id, task=info.task, devices=info.devices, started_at=info.started_at
+                id=info.id,
+                task=info.task,
+                devices=info.devices,
+                started_at=info.started_at,
+                event_id=cause.event_id if cause else None,
+                step=cause.step if cause else None,
             )
+            if cause is not None:
+                causes = await self._causes()
+                causes[_cause_key(cause)] = info.id
+                kept = dict(list(causes.items())[-CAUSES_KEPT:])
+                await self._store.set_value(LAUNCH_CAUSES_KEY, kept)
             await self._write(live)
+
+    async def launched_for(self, cause: LaunchCause) -> int | None:
+        """The process a launch with this cause started before, if the store remembers one."""
+        process_id = (await self._causes()).get(_cause_key(cause))
+        return process_id if isinstance(process_id, int) else None
+
+    async def _causes(self) -> dict[str, Any]:
+        stored = await self._store.get_value(LAUNCH_CAUSES_KEY)
+        return dict(stored) if isinstance(stored, dict) else {}
 
     async def ended(self, process_id: int) -> None:
         """Forget a process whose end was recorded."""
@@ -89,6 +119,7 @@ async def recover_orphans(
     store: EventStore,
     directory: Mapping[str, DirectoryEntry],
     recorded: Callable[[int, WorkerCallbackEvent], Awaitable[None]],
+    remember: Callable[[ProcessInfo], None] | None = None,
 ) -> list[SafeStopOutcome]:
     """``safe_stop`` every device a left-behind process held, then report each process as crashed.
 
@@ -99,6 +130,17 @@ async def recover_orphans(
     orphans = await live.left()
     if not orphans:
         return []
+    for process in orphans:  # listed by `rosaos ps --all` until this kernel stops
+        if remember is not None:
+            remember(
+                ProcessInfo(
+                    id=process.id,
+                    task=process.task,
+                    devices=process.devices,
+                    state="running",
+                    started_at=process.started_at,
+                )
+            )
     held = sorted({name for process in orphans for name in process.devices if name in directory})
     outcomes = list(await asyncio.gather(*(safe_stop_entry(directory[name]) for name in held)))
     stops = {outcome.instance: outcome for outcome in outcomes}
@@ -122,8 +164,17 @@ async def recover_orphans(
             idempotency_key=callback_idempotency_key(process.id),
         )
         appended = await store.append(event)
-        if not appended.duplicate:  # else its own callback got through and waits in the queue
-            await recorded(appended.id, event)
+        if appended.duplicate:
+            # Its own callback was committed before the kernel died, but perhaps not published:
+            # publish that one (the process really ended as it says), not the crash.
+            committed = await store.get(appended.id)
+            if committed is not None and isinstance(committed.payload, WorkerCallback):
+                event = event.model_copy(update={"payload": committed.payload})
+        await recorded(appended.id, event)
         await live.ended(process.id)
         log.warning("process %d (%s): %s", process.id, process.task, callback.error)
     return outcomes
+
+
+def _cause_key(cause: LaunchCause) -> str:
+    return f"{cause.event_id}:{cause.step}"

@@ -42,9 +42,12 @@ from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people
 from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
 from rosaos.kernel.device_status import DeviceStatusUpdates
 from rosaos.kernel.events import DeviceNoticeEvent, Event, EventStore, StoreClosedError, WorkerCallbackEvent
+from rosaos.kernel.host_latch import HostLatches
+from rosaos.kernel.launch_cause import CurrentEvent, LaunchCause
 from rosaos.kernel.loop import KernelLoop
 from rosaos.kernel.notices import NoticeWatcher
 from rosaos.kernel.orphans import LiveProcesses, recover_orphans
+from rosaos.kernel.pending_stops import PendingStops, StopUndelivered
 from rosaos.kernel.stop_tools import add_stop_tools
 from rosaos.kernel.stopping import Stopper
 from rosaos.kernel.timer_tools import add_timer_tools
@@ -57,7 +60,7 @@ from rosaos.memory.store import MemoryStore
 from rosaos.models.defaults import KernelModels, kernel_models
 from rosaos.models.select import ModelSpec
 from rosaos.processes.jobs import WorkerCallback, callback_idempotency_key
-from rosaos.processes.manager import EmergencyStop, ProcessInfo, ProcessManager
+from rosaos.processes.manager import EmergencyStop, LaunchRefused, ProcessInfo, ProcessManager
 from rosaos.processes.pool import WorkerPool
 from rosaos.processes.prompts import base_process_prompt
 
@@ -146,8 +149,7 @@ class Kernel:
 
     async def launch(self, task: str, devices: list[str]) -> ProcessInfo:
         """A process the page launched (a card control), recorded and announced as the kernel's own are."""
-        info = await self.manager.launch(task, devices)
-        await self._launched(info)
+        info = await self.manager.launch(task, devices, before_start=self._launching_uncaused)
         data = {"process_id": info.id, "devices": info.devices, "state": info.state}
         await self._updates.publish(
             "process_launched", f"process {info.id} launched with {', '.join(info.devices)}", data
@@ -185,18 +187,19 @@ class Kernel:
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         self.manager.record_callback(callback)
-        await self._live.ended(callback.process_id)
         await self._activity.record(event_id, callback.process_id, callback.receipts)
         self.sightings.record_receipts(callback.receipts)  # the people its robots saw
-        if callback.process_id in self._ended_published:
-            return
-        self._ended_published.add(callback.process_id)
-        text = f"process {callback.process_id} ended: {callback.status}"
-        if callback.error:
-            text += f" ({callback.error})"
-        await self._updates.publish(
-            "process_ended", text, callback.model_dump(mode="json"), event_id=event_id
-        )
+        if callback.process_id not in self._ended_published:
+            self._ended_published.add(callback.process_id)
+            text = f"process {callback.process_id} ended: {callback.status}"
+            if callback.error:
+                text += f" ({callback.error})"
+            await self._updates.publish(
+                "process_ended", text, callback.model_dump(mode="json"), event_id=event_id
+            )
+        # Forgotten only once its end is on the updates stream: a kill before this line leaves the
+        # record, and the restart publishes the committed callback (kernel/orphans.py).
+        await self._live.ended(callback.process_id)
 
     async def emergency_stop(self, reason: str) -> EmergencyStopReport:
         """Terminate every process, call every device's safe_stop, and latch until reset.
@@ -207,7 +210,10 @@ class Kernel:
         stopped = await self.manager.latch_emergency_stop(reason)
         latch = self.manager.emergency_stop
         assert latch is not None
-        outcomes, saved = await asyncio.gather(self.supervisor.safe_stop_all(), self._save_latch(latch))
+        outcomes, saved, untold = await asyncio.gather(
+            self.supervisor.safe_stop_all(), self._save_latch(latch), self._host_latches.push(True, reason)
+        )
+        await self._pending_stops.note(outcomes)  # an unreachable device is stopped when it is back
         report = EmergencyStopReport(
             latched=True,
             reason=latch.reason,
@@ -215,6 +221,7 @@ class Kernel:
             terminated=[info.id for info in stopped],
             devices=[DeviceSafeStop(name=o.instance, ok=o.ok, detail=o.detail) for o in outcomes],
             saved=saved,
+            untold_hosts=untold,
         )
         await self._updates.publish("error", f"EMERGENCY STOP: {reason}", report.model_dump(mode="json"))
         return report
@@ -230,14 +237,16 @@ class Kernel:
         await self._store.set_value(EMERGENCY_STOP_KEY, None)
         if self.manager.emergency_stop is latch:  # not if a new stop came while the disk was busy
             self.manager.reset_emergency_stop()
+            await self._host_latches.push(False)
             await self._updates.publish("notice", "emergency stop reset: processes may run again", {})
         return self.emergency_stop_state()
 
     def emergency_stop_state(self) -> EmergencyStopState:
         latch = self.manager.emergency_stop
+        untold = list(self._host_latches.untold)
         if latch is None:
-            return EmergencyStopState(latched=False)
-        return EmergencyStopState(latched=True, reason=latch.reason, time=latch.time)
+            return EmergencyStopState(latched=False, untold_hosts=untold)
+        return EmergencyStopState(latched=True, reason=latch.reason, time=latch.time, untold_hosts=untold)
 
     async def _save_latch(self, latch: EmergencyStop) -> bool:
         """Save the latch for the next start; False (and a log entry) if the store failed."""
@@ -346,9 +355,32 @@ class Kernel:
         if isinstance(self.supervisor, DeviceSupervisor):
             self.supervisor.release_background()
             await self.supervisor.settle({name for p in await self._live.left() for name in p.devices})
-        await recover_orphans(self._live, self._store, self.supervisor.directory(), self._callback_committed)
+        self._pending_stops = PendingStops(
+            self._store,
+            self.supervisor.directory,
+            lambda text, data: self._updates.publish("notice", text, data),
+        )
+        await self._pending_stops.deliver()  # owed by the last run: a device that is back is stopped now
+        self._host_latches = HostLatches(self.supervisor.directory)
+        if self.manager.emergency_stop is not None:  # latched before the restart: so are the hosts
+            await self._host_latches.push(True, self.manager.emergency_stop.reason)
+        stops = await recover_orphans(
+            self._live,
+            self._store,
+            self.supervisor.directory(),
+            self._callback_committed,
+            remember=self.manager.remember,
+        )
+        await self._pending_stops.note(stops)
         self.states = DeviceStateCache(self.endpoints)
-        tools = build_kernel_tools(self.manager, self.endpoints, on_launch=self._launched)
+        current = CurrentEvent()
+        tools = build_kernel_tools(
+            self.manager,
+            self.endpoints,
+            current=current,
+            before_start=self._launching,
+            launched_before=self._live.launched_for,
+        )
         add_timer_tools(tools, self.timers)
         self.memory = MemoryStore.open(self.data_dir)
         self.sightings = SightingLog(self.memory, self.config.memory.sightings_days)
@@ -370,6 +402,7 @@ class Kernel:
             ),
             model=self._model_for_event,
             history_budget=self.config.kernel.history_messages,
+            current=current,
         )
         self.loop.before = lambda event: answer_from_chat(self.confirmations, event)
         app = create_app(
@@ -388,6 +421,8 @@ class Kernel:
         self._tasks.append(asyncio.create_task(self.states.run(), name="device states"))
         self.notices = NoticeWatcher(self.endpoints, self._enqueue_notice)
         self._tasks.append(asyncio.create_task(self.notices.run(), name="device notices"))
+        self._tasks.append(asyncio.create_task(self._pending_stops.run(), name="pending safe stops"))
+        self._tasks.append(asyncio.create_task(self._host_latches.run(), name="host latches"))
         self._tasks.append(asyncio.create_task(self._run_loop(), name="kernel loop"))
         # Timers that fell due while the kernel was down fire now, once, and say they are late.
         self._tasks.append(asyncio.create_task(self.timers.run(), name="timers"))
@@ -456,14 +491,22 @@ class Kernel:
 
     async def _launch(self, task: str, devices: list[str]) -> ProcessInfo:
         """Launch a process as ``launch_process`` does (a memory tool's: drive to a place)."""
-        info = await self.manager.launch(task, devices)
-        await self._launched(info)
-        return info
+        return await self.manager.launch(task, devices, before_start=self._launching_uncaused)
 
-    async def _launched(self, info: ProcessInfo) -> None:
-        """Keep ids unique across restarts, and remember the process until its end is recorded."""
+    async def _launching_uncaused(self, info: ProcessInfo) -> None:
+        """Before a worker has the job of a launch no event step caused (a card control, a memory
+        tool): recorded for orphan recovery all the same."""
+        await self._launching(info, None)
+
+    async def _launching(self, info: ProcessInfo, cause: LaunchCause | None) -> None:
+        """Before a worker has the job: keep ids unique across restarts, and remember the process
+        and its cause until its end is recorded. A crash after this line leaves an orphan record."""
+        try:
+            await self._pending_stops.before_grant(info.devices)
+        except StopUndelivered as owed:
+            raise LaunchRefused(str(owed)) from None
         await self._store.note_process_id(info.id)
-        await self._live.launched(info)
+        await self._live.launched(info, cause)
 
 
 def _base_url(sock: socket.socket) -> str:

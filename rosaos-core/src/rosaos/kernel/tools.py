@@ -16,6 +16,7 @@ from pydantic import Field
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.drivers import CHANGES, DELETES, READ_ONLY
 from rosaos.kernel.follow_ups import attach_follow_up
+from rosaos.kernel.launch_cause import CurrentEvent, LaunchCause
 from rosaos.processes.manager import LaunchRefused, ProcessInfo, ProcessManager
 
 KERNEL_TOOL_NAMES = ("launch_process", "terminate_process", "list_processes", "list_devices")
@@ -25,11 +26,18 @@ def build_kernel_tools(
     manager: ProcessManager,
     devices: Callable[[], Mapping[str, DeviceEndpoint]],
     on_launch: Callable[[ProcessInfo], Awaitable[None]] | None = None,
+    *,
+    current: CurrentEvent | None = None,
+    before_start: Callable[[ProcessInfo, LaunchCause | None], Awaitable[None]] | None = None,
+    launched_before: Callable[[LaunchCause], Awaitable[int | None]] | None = None,
 ) -> FastMCP:
     """Build the process-manager server that the kernel agent mounts in-process.
 
-    ``on_launch(info)`` runs after each launch; the kernel records the process so ids stay
-    unique across restarts and a crash leaves a record of what was running.
+    ``before_start(info, cause)`` runs after the leases are granted and before a worker is told
+    to start: the kernel records the launch durably there, so a crash at any later point leaves
+    a record (:mod:`rosaos.kernel.orphans`). ``launched_before(cause)`` names the process an
+    earlier run of the same event already launched at this step, which is then not launched
+    again. ``on_launch(info)`` runs after each launch.
     """
     server = FastMCP("rosaos-kernel", instructions="Process management for the rosaOS kernel.")
 
@@ -68,8 +76,23 @@ def build_kernel_tools(
         """
         if then is not None and then.strip():
             task = attach_follow_up(task, then)
+        cause = current.next_cause() if current is not None else None
+        if cause is not None and launched_before is not None:
+            earlier = await launched_before(cause)
+            if earlier is not None:
+                raise ToolError(
+                    f"this command was already launched as process {earlier} before the kernel "
+                    "restarted; that run is reported on its own and is not started a second time"
+                )
+        start_hook = None
+        if before_start is not None:
+            hook = before_start
+
+            async def start_hook(info: ProcessInfo) -> None:
+                await hook(info, cause)
+
         try:
-            info = await manager.launch(task, list(devices))
+            info = await manager.launch(task, list(devices), before_start=start_hook)
         except LaunchRefused as refusal:
             raise ToolError(str(refusal)) from None
         if on_launch is not None:

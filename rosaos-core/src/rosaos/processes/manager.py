@@ -152,9 +152,16 @@ class ProcessManager:
         """Unlatch: processes may be launched again."""
         self.emergency_stop = None
 
-    async def launch(self, task: str, devices: builtins.list[str]) -> ProcessInfo:
+    async def launch(
+        self,
+        task: str,
+        devices: builtins.list[str],
+        before_start: Callable[[ProcessInfo], Awaitable[None]] | None = None,
+    ) -> ProcessInfo:
         """Start a process for ``task`` holding ``devices`` (plus the always-attached ones).
 
+        ``before_start(info)`` runs once the leases are granted and before any worker has the job
+        (the kernel records the launch durably there); if it fails, nothing is started.
         Returns as soon as a worker has the job. Raises :class:`LaunchRefused` when the task is
         empty, a device is unknown, unavailable, or held exclusively by another process.
         """
@@ -186,6 +193,17 @@ class ProcessManager:
         )
         info = ProcessInfo(id=process_id, task=task, devices=granted, state="running", started_at=_now())
         self._processes[process_id] = info
+        if before_start is not None:
+            try:
+                await before_start(info.model_copy())
+            except LaunchRefused:
+                self._end(process_id, "error")
+                raise
+            except Exception as failure:
+                self._end(process_id, "error")
+                raise LaunchRefused(
+                    f"could not record the launch, so it was not started: {failure}"
+                ) from None
         try:
             handle = await self._pool.run(job)
         except (PoolError, ValueError) as failure:
@@ -243,6 +261,12 @@ class ProcessManager:
         this manager does not know (from before a restart) is ignored.
         """
         self._end(callback.process_id, callback.status)
+
+    def remember(self, info: ProcessInfo) -> None:
+        """List a process a dead kernel left (``ps --all`` shows it); it holds no lease here.
+
+        Its end comes next, through :meth:`record_callback`, from the kernel's orphan recovery."""
+        self._processes.setdefault(info.id, info.model_copy())
 
     async def _worker_ended(self, callback: WorkerCallback, delivered: bool) -> None:
         self.record_callback(callback)

@@ -50,6 +50,7 @@ from rosaos.processes.jobs import (
     WorkerJob,
     callback_idempotency_key,
 )
+from rosaos.processes.keepalive import DeadlineToolset, DeviceLink, keepalives, owner_headers
 from rosaos.processes.plan_runner import run_plan
 from rosaos.processes.prompts import process_system_prompt, tool_prefix
 from rosaos.processes.recording import RecordingToolset
@@ -219,6 +220,19 @@ PROGRESS = ProgressRelay()
 
 
 async def _run_agent(job: WorkerJob, calls: ToolCallLog, receipts: list[Receipt] | None = None) -> str:
+    # Keepalives run for the whole job: a host stops an armed device whose owner goes quiet.
+    async with keepalives(job.devices) as links:
+        try:
+            return await _run_agent_linked(job, calls, receipts, links)
+        finally:
+            lost = [link.device for link in links.values() if link.losses]
+            if lost:  # a session that lived through a silent network is not to be trusted again
+                await SESSIONS.forget(lost)
+
+
+async def _run_agent_linked(
+    job: WorkerJob, calls: ToolCallLog, receipts: list[Receipt] | None, links: dict[str, DeviceLink]
+) -> str:
     model = process_model(job)
     prefixed = len(job.devices) > 1
     try:
@@ -226,7 +240,8 @@ async def _run_agent(job: WorkerJob, calls: ToolCallLog, receipts: list[Receipt]
         asker = KernelAsker(job.callback_url.removesuffix("/event"), job.callback_token, job.process_id)
         for device in job.devices:
             session = await SESSIONS.toolset(device, image_budget_for(job.model, model))
-            guarded = ConfirmingToolset(session, device=device.name, rule=device.confirm, asker=asker)
+            bounded = DeadlineToolset(wrapped=session, link=links.get(device.name))
+            guarded = ConfirmingToolset(bounded, device=device.name, rule=device.confirm, asker=asker)
             recorded = receipts if receipts is not None else []
             toolset = observed(
                 RecordingToolset(guarded, device=device.name, receipts=recorded), device.name, calls
@@ -257,7 +272,8 @@ def plan_of(task: str) -> Plan | None:
 
 async def _connect(device: GrantedDevice, images: int | None = None) -> MCPToolset[Any]:
     """Open the device's MCP session up front, so a dead device is reported by name, not as a stack."""
-    transport = StreamableHttpTransport(device.url, headers=image_headers(images), auth=device.token)
+    headers = {**image_headers(images), **owner_headers()}
+    transport = StreamableHttpTransport(device.url, headers=headers, auth=device.token)
     client: Client[Any] = Client(
         transport,
         name=f"rosaos-{device.name}",

@@ -36,12 +36,19 @@ from rosaos.drivers import DriverSpec
 from rosaos.intents.grammar.intents_file import IntentsFile, IntentsFileError, load_intents_file
 from rosaos.kernel.notices import notices_url
 from rosaos.plugins import DriverInfo, DriverRegistry
-from rosaos.testing.device_runner import RunningDevice, build_instance, load_all_drivers, run_device
+from rosaos.testing.device_runner import (
+    RunningDevice,
+    build_instance,
+    load_all_drivers,
+    raw_tool_call,
+    run_device,
+)
 from rosaos.testing.tool_checks import (
     OutOfRangeCall,
     control_problems,
     missing_annotations,
     missing_descriptions,
+    odd_number_calls,
     out_of_range_candidates,
     result_object,
     result_text,
@@ -49,6 +56,8 @@ from rosaos.testing.tool_checks import (
 )
 
 NOT_IMPLEMENTED = "driver not implemented yet"
+ODD_CALL_TIMEOUT = 10.0
+"""Seconds a call with a tiny (in-bounds) number may take before the kit calls it unbounded."""
 
 
 class DriverConformance:
@@ -293,6 +302,32 @@ class DriverConformance:
             return  # no controls declared: the card only shows state
         problems = control_problems(card.controls, shared_tools)
         assert not problems, f"card controls of driver {rosaos_driver.spec.name!r}:\n" + "\n".join(problems)
+
+    @pytest.mark.asyncio
+    async def test_odd_numbers_are_refused_or_answered(
+        self, fresh_device: RunningDevice, shared_tools: list[mcp_types.Tool]
+    ) -> None:
+        """NaN and ±Inf are refused on every number of every tool; 0 and 1e-9 are refused where the
+        bounds exclude them, and otherwise the call still comes back (no move that lasts for ever)."""
+        problems = []
+        for call in odd_number_calls(shared_tools):
+            shown = f"{call.tool}({call.name}={call.value!r})"
+            try:
+                result = await raw_tool_call(fresh_device, call.tool, call.args, ODD_CALL_TIMEOUT)
+            except TimeoutError:
+                problems.append(
+                    f"{shown} did not return within {ODD_CALL_TIMEOUT:g} s; give it a practical bound "
+                    "(e.g. Field(ge=0.02) for a speed)"
+                )
+                await raw_tool_call(fresh_device, "safe_stop", {}, ODD_CALL_TIMEOUT)
+                continue
+            text = " ".join(str(block.get("text", "")) for block in result.get("content") or [])
+            if call.must_refuse and not result.get("isError"):
+                problems.append(f"{shown} was accepted; numbers must be finite and within their bounds")
+            if "Traceback" in text:
+                problems.append(f"{shown} crashed instead of refusing: {text[:200]}")
+        await raw_tool_call(fresh_device, "safe_stop", {}, ODD_CALL_TIMEOUT)
+        assert not problems, "\n".join(problems)
 
     def test_intents_name_existing_tools(
         self, rosaos_driver: DriverInfo, shared_tools: list[mcp_types.Tool]

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import secrets
 import threading
 from collections.abc import Iterator, Mapping
@@ -17,6 +18,7 @@ from pathlib import Path
 from types import ModuleType
 from typing import Any
 
+import httpx
 from fastmcp import Client
 from pydantic import BaseModel, ValidationError
 
@@ -129,3 +131,48 @@ def run_device(instance: DeviceInstance, data_dir: Path, token: str | None = Non
         thread.join(START_TIMEOUT)
         if "error" in outcome:
             raise outcome["error"]
+
+
+async def raw_tool_call(
+    device: RunningDevice, tool: str, args: dict[str, Any], timeout: float
+) -> dict[str, Any]:
+    """Call ``tool`` with ``args`` written by :func:`json.dumps`, so NaN and Infinity reach the server.
+
+    An MCP client writes a NaN as ``null`` (pydantic's JSON), which hides what a careless caller
+    really sends. Returns the JSON-RPC ``result`` (``isError`` and ``content``); raises
+    ``TimeoutError`` when no answer comes within ``timeout`` seconds."""
+    version = "2026-07-28"
+    body = {
+        "jsonrpc": "2.0",
+        "id": 1,
+        "method": "tools/call",
+        "params": {
+            "name": tool,
+            "arguments": args,
+            "_meta": {
+                "io.modelcontextprotocol/protocolVersion": version,
+                "io.modelcontextprotocol/clientCapabilities": {},
+            },
+        },
+    }
+    headers = {
+        "Authorization": f"Bearer {device.token}",
+        "Accept": "application/json, text/event-stream",
+        "Content-Type": "application/json",
+        "mcp-protocol-version": version,
+        "mcp-method": "tools/call",
+        "mcp-name": tool,
+    }
+    async with httpx.AsyncClient(timeout=timeout) as http:
+        try:
+            response = await http.post(device.url, content=json.dumps(body), headers=headers)
+        except httpx.TimeoutException:
+            raise TimeoutError(f"{tool} did not answer within {timeout:g} s") from None
+    text = response.text
+    if "text/event-stream" in response.headers.get("content-type", ""):
+        data = [line[5:].strip() for line in text.splitlines() if line.startswith("data:")]
+        text = data[-1] if data else "{}"
+    answer = json.loads(text)
+    if "result" in answer:
+        return dict(answer["result"])
+    return {"isError": True, "content": [{"type": "text", "text": json.dumps(answer.get("error"))}]}

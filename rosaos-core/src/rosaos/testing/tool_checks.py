@@ -7,6 +7,7 @@ test lists every offending tool at once instead of stopping at the first.
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -90,6 +91,71 @@ def out_of_range_candidates(tools: Iterable[mcp_types.Tool]) -> list[OutOfRangeC
             else:
                 calls.append((len(required), OutOfRangeCall(tool.name, args, (name,))))
     return [call for _, call in sorted(calls, key=lambda item: item[0])]
+
+
+ODD_NUMBERS = (math.nan, math.inf, -math.inf, 0.0, 1e-9)
+"""What a careless or hostile caller sends for a number: not finite, zero, vanishingly small."""
+
+
+@dataclass(frozen=True)
+class OddNumberCall:
+    """A tool call with one number set to an odd value; ``must_refuse`` when the schema excludes it."""
+
+    tool: str
+    args: dict[str, Any]
+    name: str
+    value: float
+    must_refuse: bool
+
+
+def odd_number_calls(tools: Iterable[mcp_types.Tool]) -> list[OddNumberCall]:
+    """For every number of every tool (optional ones too), a call with each of :data:`ODD_NUMBERS`.
+
+    Not finite is always to be refused. Zero and 1e-9 are to be refused when the schema's bounds
+    exclude them; when they allow them, the call must still come back (a speed of 1e-9 that makes
+    a move last for ever is a bound missing)."""
+    calls = []
+    for tool in tools:
+        properties: dict[str, Any] = tool.input_schema.get("properties") or {}
+        required = list(tool.input_schema.get("required") or [])
+        for name, prop in properties.items():
+            number = _number_schema(prop)
+            if number is None:
+                continue
+            others: dict[str, Any] = {}
+            for other in required:
+                if other != name and (value := example_value(properties.get(other, {}))) is not None:
+                    others[other] = value
+            if len(others) < len([other for other in required if other != name]):
+                continue  # the kit cannot make up a valid value for another required argument
+            for odd in ODD_NUMBERS:
+                refuse = not math.isfinite(odd) or not _within(number, odd)
+                calls.append(OddNumberCall(tool.name, {**others, name: odd}, name, odd, refuse))
+    return calls
+
+
+def _number_schema(prop: Any) -> dict[str, Any] | None:
+    """The numeric schema of a property (``number``/``integer``, or one branch of an ``anyOf``)."""
+    if not isinstance(prop, dict):
+        return None
+    if prop.get("type") in ("number", "integer"):
+        return prop
+    for branch in prop.get("anyOf") or []:
+        if isinstance(branch, dict) and branch.get("type") in ("number", "integer"):
+            return branch
+    return None
+
+
+def _within(schema: dict[str, Any], value: float) -> bool:
+    if schema.get("type") == "integer" and value != int(value):
+        return False
+    checks = (
+        ("minimum", lambda bound: value >= bound),
+        ("exclusiveMinimum", lambda bound: value > bound),
+        ("maximum", lambda bound: value <= bound),
+        ("exclusiveMaximum", lambda bound: value < bound),
+    )
+    return all(check(schema[key]) for key, check in checks if key in schema)
 
 
 def _just_above_maximum(prop: Any) -> int | float | None:

@@ -19,6 +19,11 @@ Coordinate = Annotated[
     Field(ge=-1000, le=1000, allow_inf_nan=False, description="Metres in the frame get_pose reports."),
 ]
 
+MIN_LINEAR_SPEED = 0.02
+"""m/s: slower than this a move of metres takes minutes, or, at 1e-9, for ever (its timeout with it)."""
+MIN_ANGULAR_SPEED = 0.05
+"""rad/s: the same floor for turns."""
+
 
 def register(mcp: FastMCP, backend: RosBackend) -> None:
     """Add drive, move_distance, rotate and stop, described with this robot's limits."""
@@ -84,9 +89,13 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
         speed: Annotated[
             float | None,
             Field(
-                gt=0,
+                ge=MIN_LINEAR_SPEED,
                 le=10,
-                description=f"m/s; default {min(speeds.linear, limits.linear):g}, at most {limits.linear:g}.",
+                allow_inf_nan=False,
+                description=(
+                    f"m/s, at least {MIN_LINEAR_SPEED:g}; default {min(speeds.linear, limits.linear):g}, "
+                    f"at most {limits.linear:g}."
+                ),
             ),
         ] = None,
     ) -> dict[str, Any]:
@@ -107,9 +116,13 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
         speed: Annotated[
             float | None,
             Field(
-                gt=0,
+                ge=MIN_ANGULAR_SPEED,
                 le=20,
-                description=f"rad/s; default {min(speeds.angular, limits.angular):g}, at most {limits.angular:g}.",
+                allow_inf_nan=False,
+                description=(
+                    f"rad/s, at least {MIN_ANGULAR_SPEED:g}; default {min(speeds.angular, limits.angular):g}, "
+                    f"at most {limits.angular:g}."
+                ),
             ),
         ] = None,
     ) -> dict[str, Any]:

@@ -10,15 +10,19 @@ the API docs (``/docs``, ``/openapi.json``). Browser requests from another origi
 
 from __future__ import annotations
 
+import re
 import time
 from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
 from fastapi import FastAPI, Request
+from fastapi.exception_handlers import http_exception_handler
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from fastapi.staticfiles import StaticFiles
+from starlette.exceptions import HTTPException as StarletteHTTPException
+from starlette.responses import Response
 
 import rosaos
 from rosaos.auth import BearerAuthMiddleware, HostOriginGuard
@@ -83,9 +87,29 @@ def create_app(
     app.mount("/static", StaticFiles(directory=WEB_DIR), name="static")
     app.add_exception_handler(RequestValidationError, _invalid_request)
     app.add_exception_handler(Exception, _internal_error)
+    app.add_exception_handler(StarletteHTTPException, _http_error)
     assets = [f"/static/{path.name}" for path in WEB_DIR.iterdir() if path.is_file()]
     open_paths = ["/", "/health", "/login", "/docs", "/openapi.json", *assets]
     # Added last = runs first: foreign hosts and origins are refused before the token is looked at.
     app.add_middleware(BearerAuthMiddleware, token=runtime.token, open_paths=open_paths)
     app.add_middleware(HostOriginGuard, allowed_hosts=allowed_hosts, allowed_origins=allowed_origins)
     return app
+
+
+async def _http_error(request: Request, error: Exception) -> Response:
+    """FastAPI's answer, except that a 405 lists every method of the path in ``Allow``.
+
+    The router stops at the first route whose path matches, so ``OPTIONS /estop`` would say
+    ``Allow: GET`` although ``POST /estop`` exists too. The published paths know them all."""
+    assert isinstance(error, StarletteHTTPException)
+    response = await http_exception_handler(request, error)
+    if error.status_code == 405:
+        methods = {
+            method.upper()
+            for template, operations in request.app.openapi()["paths"].items()
+            if re.fullmatch(re.sub(r"\\\{[^}]+\\\}", "[^/]+", re.escape(template)), request.url.path)
+            for method in operations
+        }
+        if methods:
+            response.headers["Allow"] = ", ".join(sorted(methods))
+    return response

@@ -95,7 +95,10 @@ async def health(request: Request, runtime: Runtime) -> Health:
 
 @public.post(
     "/login",
-    responses={401: PROTECTED_ERRORS[401] | {"description": "An unknown, expired or used login code"}},
+    responses={
+        400: PROTECTED_ERRORS[400] | {"description": "A body that is not UTF-8 JSON"},
+        401: PROTECTED_ERRORS[401] | {"description": "An unknown, expired or used login code"},
+    },
 )
 async def login(body: LoginRequest, runtime: Runtime, response: Response) -> LoginToken:
     """Trade a one-time login code (from ``#login=`` in the printed link) for the bearer token."""

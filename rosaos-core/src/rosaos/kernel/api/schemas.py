@@ -177,6 +177,9 @@ class EmergencyStopState(BaseModel):
     reason: str | None = None
     time: datetime | None = None
     """When it was (last) pressed; None when not latched."""
+    untold_hosts: list[str] = Field(default_factory=list)
+    """Devices whose host could not be told the latch (or its reset) yet: it is pushed again every
+    few seconds, but until then such a host would still run a tool call that reaches it."""
 
 
 class DeviceSafeStop(BaseModel):
