@@ -73,10 +73,12 @@ class Receipt(BaseModel):
     def line(self) -> str:
         """One line for the kernel model: ``turtlebot.drive(linear=0.2) -> ok [clamped: ...]``."""
         args = ", ".join(f"{key}={json.dumps(value)}" for key, value in self.arguments.items())
-        outcome = "ok" if self.ok else f"error: {(self.error or '')[:200]}"
+        # The device's words are data: quoted, so a line break in them cannot start a line.
+        outcome = "ok" if self.ok else f"error: {json.dumps((self.error or '')[:200], ensure_ascii=False)}"
         text = f"{self.device}.{self.tool}({args}) -> {outcome}"
         if self.safety is not None and self.safety.decision != "refused":
-            text += f" [{self.safety.decision}: {self.safety.detail[:200]}]"
+            detail = json.dumps(self.safety.detail[:200], ensure_ascii=False)
+            text += f" [{self.safety.decision}: {detail}]"
         return text
 
 

@@ -7,7 +7,14 @@ from collections.abc import Iterable, Sequence
 from fastmcp import FastMCP
 from pydantic_ai import Agent
 from pydantic_ai.mcp import MCPToolset
-from pydantic_ai.messages import ModelMessage, ModelRequest, UserPromptPart
+from pydantic_ai.messages import (
+    ModelMessage,
+    ModelRequest,
+    RetryPromptPart,
+    ToolCallPart,
+    ToolReturnPart,
+    UserPromptPart,
+)
 from pydantic_ai.models import Model
 
 from rosaos.devices.endpoints import DeviceEndpoint
@@ -85,15 +92,34 @@ def build_kernel_agent(model: Model, tools: FastMCP) -> Agent[None, str]:
     return Agent(model, toolsets=[toolset], name="rosaos-kernel")
 
 
-def trim_history(messages: Sequence[ModelMessage], budget: int) -> list[ModelMessage]:
-    """Keep at most about ``budget`` recent messages, cutting only at a user turn.
+def trim_history(messages: Sequence[ModelMessage], budget: int, max_chars: int | None = None) -> list[ModelMessage]:
+    """Keep at most about ``budget`` recent messages and ``max_chars`` of their text, cutting only at a user turn.
 
-    Cutting elsewhere could orphan a tool return from its call, which models reject.
+    Cutting elsewhere could orphan a tool return from its call, which models reject. The size
+    bound matters as much as the count: one callback with its receipts weighs like ten short
+    turns, and every kernel request carries the whole history.
     """
-    if len(messages) <= budget:
-        return list(messages)
-    for start in range(len(messages) - budget, len(messages)):
-        message = messages[start]
-        if isinstance(message, ModelRequest) and any(isinstance(p, UserPromptPart) for p in message.parts):
-            return list(messages[start:])
+    messages = list(messages)
+    starts = [
+        index
+        for index, message in enumerate(messages)
+        if isinstance(message, ModelRequest) and any(isinstance(p, UserPromptPart) for p in message.parts)
+    ]
+    sizes = [message_size(message) for message in messages]
+    for start in starts:
+        if len(messages) - start <= budget and (max_chars is None or sum(sizes[start:]) <= max_chars):
+            return messages[start:]
     return []
+
+
+def message_size(message: ModelMessage) -> int:
+    """About how many characters ``message`` adds to a request (its texts, tool arguments and results)."""
+    size = 0
+    for part in message.parts:
+        if isinstance(part, ToolCallPart):
+            size += len(part.tool_name) + len(part.args_as_json_str())
+        elif isinstance(part, ToolReturnPart | RetryPromptPart):
+            size += len(str(part.content))
+        else:
+            size += len(str(getattr(part, "content", "")))
+    return size

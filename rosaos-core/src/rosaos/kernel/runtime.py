@@ -337,6 +337,8 @@ class Kernel:
             instructions=lambda: kernel_prompt(self.endpoints().values(), self.config.kernel.kernel_prompt),
             model=self._model_for_event,
             history_budget=self.config.kernel.history_messages,
+            history_chars=self.config.kernel.history_chars,
+            relay_reports=self.config.kernel.relay_reports,
         )
         self.loop.before = lambda event: answer_from_chat(self.confirmations, event)
         app = create_app(

@@ -8,6 +8,7 @@ what they returned). This module holds that reading, shared by the kernel and pr
 from __future__ import annotations
 
 import ast
+import json
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -81,10 +82,12 @@ def parse_callback(body: str) -> WorkerCallbackEvent:
             task = None
     output = error = None
     rest = rest.split(f"\n{RECEIPTS_HEADING}", 1)[0]  # the receipts follow the output or error
+    rest, _, report = rest.partition("\nreport: ")  # a failure's report follows its error
     if rest.startswith("error:"):
-        error = rest[len("error:") :].strip()
+        error = _unquoted(rest[len("error:") :])
+        output = _unquoted(report) if report else None
     elif rest.startswith("output:"):
-        output = rest[len("output:") :].strip()
+        output = _unquoted(rest[len("output:") :])
     return WorkerCallbackEvent(
         worker=int(worker.group("worker")) if worker else None,
         status=status.group("status") if status else "unknown",
@@ -92,6 +95,19 @@ def parse_callback(body: str) -> WorkerCallbackEvent:
         output=output,
         error=error,
     )
+
+
+def _unquoted(text: str) -> str:
+    """A rendered value: JSON strings (how event_text quotes data) decoded, other text as it is."""
+    text = text.strip()
+    if text.startswith('"'):
+        try:
+            value = json.loads(text)
+        except ValueError:
+            return text
+        if isinstance(value, str):
+            return value.strip()
+    return text
 
 
 def last_request(messages: Sequence[ModelMessage]) -> ModelRequest | None:
