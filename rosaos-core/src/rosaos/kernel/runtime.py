@@ -254,6 +254,8 @@ class Kernel:
                 token=entry.token or self._token,
                 status=entry.status,
                 confirm=self._confirm_rule(name),
+                attached_tools=tuple(spec.attached_tools),
+                attached_prompt=spec.attached_prompt,
             )
         return endpoints
 

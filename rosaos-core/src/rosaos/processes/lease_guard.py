@@ -18,7 +18,14 @@ import dataclasses
 import time
 from collections.abc import Sequence
 
-from pydantic_ai.messages import ModelMessage, ModelRequest, ModelResponse, RetryPromptPart, ToolCallPart
+from pydantic_ai.messages import (
+    ModelMessage,
+    ModelRequest,
+    ModelResponse,
+    RetryPromptPart,
+    ToolCallPart,
+    ToolReturnPart,
+)
 from pydantic_ai.models import Model, ModelRequestParameters
 from pydantic_ai.models.wrapper import WrapperModel
 from pydantic_ai.settings import ModelSettings
@@ -97,19 +104,24 @@ class LeaseGuardModel(WrapperModel):
             return messages
         explained: list[ModelMessage] = []
         for message in messages:
-            if isinstance(message, ModelRequest) and any(
-                isinstance(part, RetryPromptPart) and part.tool_call_id in self._refusals
-                for part in message.parts
-            ):
+            if isinstance(message, ModelRequest) and any(_answers(part, self._refusals) for part in message.parts):
                 parts = [
                     dataclasses.replace(part, content=self._refusals[part.tool_call_id])
-                    if isinstance(part, RetryPromptPart) and part.tool_call_id in self._refusals
+                    if _answers(part, self._refusals)
                     else part
                     for part in message.parts
                 ]
                 message = dataclasses.replace(message, parts=parts)
             explained.append(message)
         return explained
+
+
+def _answers(part: object, refusals: dict[str, str]) -> bool:
+    """Whether ``part`` is pydantic-ai's answer to a call :class:`LeaseGuardModel` refused (a retry
+    prompt, or a tool return marked retried, depending on the pydantic-ai version)."""
+    if isinstance(part, RetryPromptPart):
+        return part.tool_call_id in refusals
+    return isinstance(part, ToolReturnPart) and part.outcome != "success" and part.tool_call_id in refusals
 
 
 def _arguments(call: ToolCallPart) -> dict[str, object]:

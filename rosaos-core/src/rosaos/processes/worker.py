@@ -50,6 +50,7 @@ from rosaos.processes.jobs import (
     WorkerJob,
     callback_idempotency_key,
 )
+from rosaos.processes.lease_guard import LeaseGuardModel
 from rosaos.processes.plan_runner import run_plan
 from rosaos.processes.prompts import process_system_prompt, tool_prefix
 from rosaos.processes.recording import RecordingToolset
@@ -121,6 +122,14 @@ async def run_job(job: WorkerJob) -> WorkerCallback:
     if status == "ok" and failed is not None:
         # The model may have written a polite sentence about it; the device call still failed.
         status, error = "error", f"{failed.device}: {failed.tool} failed: {failed.error}"
+    if status == "ok" and messages and job.devices and not any(call.ok for call in calls.calls):
+        # A model ran the process and said it was done, but no device call of it succeeded:
+        # success is the devices' word, not the model's (issue 22).
+        status = "unverified"
+        error = (
+            "the process agent said it was done, but it made no successful device call, so nothing "
+            "shows that it happened; its report is not a result"
+        )
     requests, tool_calls = count_usage(messages)
     if not messages:  # a plan run without an agent (processes/plan_runner.py): no model requests
         tool_calls = len(calls.calls)
@@ -221,19 +230,24 @@ PROGRESS = ProgressRelay()
 async def _run_agent(job: WorkerJob, calls: ToolCallLog, receipts: list[Receipt] | None = None) -> str:
     model = process_model(job)
     prefixed = len(job.devices) > 1
+    recorded = receipts if receipts is not None else []
     try:
         toolsets: list[AbstractToolset[Any]] = []
         asker = KernelAsker(job.callback_url.removesuffix("/event"), job.callback_token, job.process_id)
         for device in job.devices:
             session = await SESSIONS.toolset(device, image_budget_for(job.model, model))
-            guarded = ConfirmingToolset(session, device=device.name, rule=device.confirm, asker=asker)
-            recorded = receipts if receipts is not None else []
+            # The offline plan runner calls the tools its plan names; only a model is offered less.
+            offered = session if isinstance(model, LocalPlanModel) else offered_tools(session, device.tools)
+            guarded = ConfirmingToolset(offered, device=device.name, rule=device.confirm, asker=asker)
             toolset = observed(
                 RecordingToolset(guarded, device=device.name, receipts=recorded), device.name, calls
             )
             toolsets.append(toolset.prefixed(tool_prefix(device.name)) if prefixed else toolset)
         if isinstance(model, LocalPlanModel) and (plan := plan_of(job.task)) is not None:
             return await run_plan(plan, toolsets, model, model.language)
+        if not isinstance(model, LocalPlanModel):
+            granted = [device.name for device in job.devices]
+            model = LeaseGuardModel(model, job.process_id, granted, job.world_devices, recorded)
         agent = Agent(
             model,
             instructions=process_system_prompt(job.base_prompt, job.task, job.devices),
@@ -245,6 +259,14 @@ async def _run_agent(job: WorkerJob, calls: ToolCallLog, receipts: list[Receipt]
         await SESSIONS.forget(job.devices)
         raise
     return str(result.output)
+
+
+def offered_tools(session: AbstractToolset[Any], tools: Sequence[str] | None) -> AbstractToolset[Any]:
+    """``session`` limited to ``tools`` (None: all of them), e.g. the Reachy's speaking tools."""
+    if tools is None:
+        return session
+    allowed = frozenset(tools)
+    return session.filtered(lambda ctx, tool: tool.name in allowed)
 
 
 def plan_of(task: str) -> Plan | None:
