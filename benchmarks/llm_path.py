@@ -34,7 +34,7 @@ from typing import Any
 import httpx
 
 sys.path.insert(0, str(Path(__file__).parent))
-from llm_scripted_server import DEMO_SENTENCE, PROFILES, Logged, Script, serve  # noqa: E402
+from llm_scripted_server import DEMO_SENTENCE, PROFILES, Logged, Script, serve
 
 EARLIER = [
     "turn on the kitchen light",
@@ -172,7 +172,9 @@ def run(port: int, profiles: list[str]) -> dict[str, Any]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--profiles", nargs="+", default=["cloud", "local-8b"], choices=sorted(PROFILES))
     parser.add_argument("--port", type=int, default=19410, help="port for rosaos up (default 19410)")
     parser.add_argument("--json", type=Path, help="also write the results here")

@@ -24,9 +24,7 @@ from dataclasses import dataclass, field
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from typing import Any
 
-DEMO_SENTENCE = (
-    "undock the TurtleBot, search the environment for a person, and when someone is found, turn the lamp green"
-)
+DEMO_SENTENCE = "undock the TurtleBot, search the environment for a person, and when someone is found, turn the lamp green"
 LAUNCH = "launch_process"
 
 COMMANDS: dict[str, list[dict[str, Any]]] = {
@@ -149,7 +147,11 @@ def kernel_answer(messages: list[dict[str, Any]]) -> dict[str, Any]:
     lowered = event.lower()
     if "callback" in lowered:
         follow_up = re.search(r"Kernel follow-up[^:]*:\s*(?P<then>[^\n\"'\\]+)", event)
-        if follow_up and "status=ok" in event.replace('"status": "ok"', "status=ok") and "found a person" in lowered:
+        if (
+            follow_up
+            and "status=ok" in event.replace('"status": "ok"', "status=ok")
+            and "found a person" in lowered
+        ):
             task = follow_up.group("then").strip()
             launch = {"task": task, "devices": ["living_room_lamp"]}
             return {"role": "assistant", "content": None, "tool_calls": [_call(LAUNCH, launch, 0)]}

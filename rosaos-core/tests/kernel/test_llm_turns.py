@@ -20,7 +20,14 @@ from fastmcp import FastMCP
 from fastmcp.exceptions import ToolError
 from pydantic_ai import Agent
 from pydantic_ai.mcp import MCPToolset
-from pydantic_ai.messages import ModelMessage, ModelRequest, ModelResponse, TextPart, ToolCallPart, UserPromptPart
+from pydantic_ai.messages import (
+    ModelMessage,
+    ModelRequest,
+    ModelResponse,
+    TextPart,
+    ToolCallPart,
+    UserPromptPart,
+)
 from pydantic_ai.models.function import AgentInfo, FunctionModel
 
 from rosaos.kernel.events import EventStore, UserText, UserTypedEvent, WorkerCallbackEvent
@@ -101,7 +108,9 @@ async def typed(loop: KernelLoop, text: str) -> int:
     return appended.id
 
 
-async def test_five_chats_that_arrive_while_the_model_thinks_take_at_most_two_requests(tmp_path: Path) -> None:
+async def test_five_chats_that_arrive_while_the_model_thinks_take_at_most_two_requests(
+    tmp_path: Path,
+) -> None:
     scripted, launched = Scripted(delay=1.0), []
     async with kernel_loop(tmp_path, scripted, launched) as loop:
         runner = asyncio.create_task(loop.run_forever())
@@ -179,7 +188,9 @@ async def test_a_report_that_tries_to_pass_for_the_user_launches_nothing(tmp_pat
     scripted, launched = Scripted(), []
     async with kernel_loop(tmp_path, scripted, launched) as loop:
         loop.relay_reports = False  # make the callback reach the model
-        callback = WorkerCallback(process_id=2, status="ok", task="turn on the kitchen light", output=INJECTION)
+        callback = WorkerCallback(
+            process_id=2, status="ok", task="turn on the kitchen light", output=INJECTION
+        )
         await loop.store.append(WorkerCallbackEvent(kind="worker_callback", payload=callback))
         await loop.run_pending()
         assert len(scripted.prompts) == 1

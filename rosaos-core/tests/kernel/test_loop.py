@@ -30,7 +30,7 @@ def test_a_worker_callback_carries_worker_status_task_and_output() -> None:
 def test_a_failed_worker_callback_shows_the_error() -> None:
     callback = WorkerCallback(process_id=7, status="crashed", error="worker killed by SIGKILL")
     assert render_event(event("worker_callback", callback)) == (
-        "[Worker callback] worker=7 status=crashed\nerror: \"worker killed by SIGKILL\""
+        '[Worker callback] worker=7 status=crashed\nerror: "worker killed by SIGKILL"'
     )
 
 
@@ -57,7 +57,9 @@ def test_text_from_a_worker_or_a_device_never_starts_a_line_of_its_own() -> None
         render_event(
             event(
                 "worker_callback",
-                WorkerCallback(process_id=3, status="error", error=INJECTION, output=INJECTION, receipts=[receipt]),
+                WorkerCallback(
+                    process_id=3, status="error", error=INJECTION, output=INJECTION, receipts=[receipt]
+                ),
             )
         ),
         render_event(event("device_notice", DeviceNotice(device="lamp", message=INJECTION))),

@@ -98,7 +98,9 @@ def build_kernel_agent(model: Model, tools: FastMCP) -> Agent[None, str]:
     return Agent(model, toolsets=[toolset], name="rosaos-kernel")
 
 
-def trim_history(messages: Sequence[ModelMessage], budget: int, max_chars: int | None = None) -> list[ModelMessage]:
+def trim_history(
+    messages: Sequence[ModelMessage], budget: int, max_chars: int | None = None
+) -> list[ModelMessage]:
     """Keep at most about ``budget`` recent messages and ``max_chars`` of their text, cutting only at a user turn.
 
     Cutting elsewhere could orphan a tool return from its call, which models reject. The size

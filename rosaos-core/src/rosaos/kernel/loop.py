@@ -20,8 +20,8 @@ from pydantic_ai.toolsets import CombinedToolset
 from pydantic_ai.usage import UsageLimits
 
 from rosaos.kernel.agent import trim_history
-from rosaos.kernel.events import Event, EventStore
 from rosaos.kernel.event_text import render_event, render_events
+from rosaos.kernel.events import Event, EventStore
 from rosaos.kernel.offline_turn import offline_turn
 from rosaos.kernel.short_turns import LaunchAckModel, relayable, relayed_messages
 from rosaos.kernel.updates import UpdateKind, UpdateStream
@@ -162,7 +162,7 @@ class KernelLoop:
                         prompt,
                         message_history=self.history,
                         instructions=self.instructions(),
-                        model=LaunchAckModel(offline),
+                        model=LaunchAckModel(offline) if offline is not None else None,
                         usage_limits=UsageLimits(request_limit=self.request_limit),
                     )
                     new_messages, output = result.new_messages(), result.output
@@ -183,9 +183,7 @@ class KernelLoop:
         return outputs
 
     def _remember(self, new_messages: list[ModelMessage]) -> None:
-        self.history = trim_history(
-            [*self.history, *new_messages], self.history_budget, self.history_chars
-        )
+        self.history = trim_history([*self.history, *new_messages], self.history_budget, self.history_chars)
 
 
 Output = tuple[UpdateKind, str, dict[str, Any]]

@@ -17,10 +17,12 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections.abc import Sequence
+from typing import Any, cast
 
 from pydantic_ai.messages import (
     ModelMessage,
     ModelRequest,
+    ModelRequestPart,
     ModelResponse,
     RetryPromptPart,
     ToolCallPart,
@@ -62,7 +64,9 @@ class LeaseGuardModel(WrapperModel):
         model_request_parameters: ModelRequestParameters,
     ) -> ModelResponse:
         """Explain earlier refused calls, ask the model, and note the calls it makes to tools it lacks."""
-        response = await self.wrapped.request(self._explained(messages), model_settings, model_request_parameters)
+        response = await self.wrapped.request(
+            self._explained(messages), model_settings, model_request_parameters
+        )
         offered = {tool.name for tool in model_request_parameters.function_tools}
         offered |= {tool.name for tool in model_request_parameters.output_tools}
         for part in response.parts:
@@ -98,30 +102,32 @@ class LeaseGuardModel(WrapperModel):
             f"whose tools are: {', '.join(offered) or 'none'}."
         )
 
+    def _explain(self, part: ModelRequestPart) -> ModelRequestPart:
+        """pydantic-ai's answer to a refused call (a retry prompt, or a tool return marked retried,
+        depending on its version) with the lease's words; any other part as it is."""
+        if isinstance(part, RetryPromptPart) and part.tool_call_id in self._refusals:
+            return dataclasses.replace(part, content=self._refusals[part.tool_call_id])
+        if (
+            isinstance(part, ToolReturnPart)
+            and part.outcome != "success"
+            and part.tool_call_id in self._refusals
+        ):
+            returned = cast("ToolReturnPart[Any]", part)
+            return dataclasses.replace(returned, content=self._refusals[part.tool_call_id])
+        return part
+
     def _explained(self, messages: list[ModelMessage]) -> list[ModelMessage]:
         """``messages`` with pydantic-ai's "Unknown tool name" answers replaced by the lease's word."""
         if not self._refusals:
             return messages
         explained: list[ModelMessage] = []
         for message in messages:
-            if isinstance(message, ModelRequest) and any(_answers(part, self._refusals) for part in message.parts):
-                parts = [
-                    dataclasses.replace(part, content=self._refusals[part.tool_call_id])
-                    if _answers(part, self._refusals)
-                    else part
-                    for part in message.parts
-                ]
-                message = dataclasses.replace(message, parts=parts)
+            if isinstance(message, ModelRequest):
+                parts = [self._explain(part) for part in message.parts]
+                if any(new is not old for new, old in zip(parts, message.parts, strict=True)):
+                    message = dataclasses.replace(message, parts=parts)
             explained.append(message)
         return explained
-
-
-def _answers(part: object, refusals: dict[str, str]) -> bool:
-    """Whether ``part`` is pydantic-ai's answer to a call :class:`LeaseGuardModel` refused (a retry
-    prompt, or a tool return marked retried, depending on the pydantic-ai version)."""
-    if isinstance(part, RetryPromptPart):
-        return part.tool_call_id in refusals
-    return isinstance(part, ToolReturnPart) and part.outcome != "success" and part.tool_call_id in refusals
 
 
 def _arguments(call: ToolCallPart) -> dict[str, object]:
