@@ -37,7 +37,17 @@ SECRET_NAMES = re.compile(r"(pass(word)?|secret|token|api_?key|auth|credential|c
 _CALL_ERROR = re.compile(r"^Error calling tool '[^']*':\s*")
 """How FastMCP heads a tool's error; the driver's own text follows."""
 
-SafetyKind = Literal["clamped", "refused", "deadman_stop", "limited", "stopped"]
+SafetyKind = Literal[
+    "clamped",
+    "refused",
+    "deadman_stop",
+    "limited",
+    "stopped",
+    "confirm_asked",
+    "confirmed",
+    "declined",
+    "expired",
+]
 
 
 class SafetyDecision(BaseModel):
@@ -48,7 +58,9 @@ class SafetyDecision(BaseModel):
     decision: SafetyKind
     """``refused``: not done (allow-list, limit, docked rule); ``clamped``: done with a changed value;
     ``deadman_stop``: the command stream went quiet and the device stopped; ``limited``: cut short
-    by a bound (time, distance); ``stopped``: ended by a stop or the emergency stop."""
+    by a bound (time, distance); ``stopped``: ended by a stop or the emergency stop;
+    ``confirm_asked``, ``confirmed``, ``declined``, ``expired``: a person was asked before the call,
+    and said yes, said no, or did not answer in time (:mod:`rosaos.kernel.confirmations`)."""
     rule: str = Field(default="", max_length=200)
     detail: str = Field(default="", max_length=1000)
 

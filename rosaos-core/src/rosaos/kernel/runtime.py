@@ -38,7 +38,7 @@ from rosaos.kernel.api.app import create_app
 from rosaos.kernel.api.kernel_client import kernel_file, running_kernel_url
 from rosaos.kernel.api.login_codes import LoginCodes, login_url
 from rosaos.kernel.api.schemas import DeviceSafeStop, DeviceView, EmergencyStopReport, EmergencyStopState
-from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people
+from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people, record_confirmation
 from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
 from rosaos.kernel.device_status import DeviceStatusUpdates
 from rosaos.kernel.events import DeviceNoticeEvent, Event, EventStore, StoreClosedError, WorkerCallbackEvent
@@ -286,10 +286,12 @@ class Kernel:
     async def _start_parts(self, sock: socket.socket) -> None:
         self._store = await EventStore.open(self.data_dir / EVENTS_FILE)
         self._updates = await UpdateStream.open(self._store.database)
-        self.confirmations = ConfirmationDesk(
-            self.config.kernel.confirm_timeout, lambda item: ask_people(self._updates, self.endpoints(), item)
-        )
         self._activity = await ActivityLog.open(self._store.database)
+        self.confirmations = ConfirmationDesk(
+            self.config.kernel.confirm_timeout,
+            lambda item: ask_people(self._updates, self.endpoints(), item),
+            record=lambda item: record_confirmation(self._activity, self._updates, item),
+        )
         self._live = LiveProcesses(self._store)
         self.timers = await TimerBook.open(self._store, self._updates.publish_event)
         # A device that boots in the background (the Reachy simulator: seconds of CPU) waits until
