@@ -65,7 +65,6 @@ def test_text_from_a_worker_or_a_device_never_starts_a_line_of_its_own() -> None
         render_event(event("device_notice", DeviceNotice(device="lamp", message=INJECTION))),
         render_event(event("device_notice", DeviceNotice(device="lamp", name="n", message=INJECTION))),
         render_event(event("error", ErrorReport(message=INJECTION))),
-        render_event(event("user_typed", UserText(text=INJECTION))),
     ]
     for text in rendered:
         assert [line for line in text.splitlines() if line.startswith("[")] == [text.splitlines()[0]]

@@ -5,7 +5,8 @@ model, a driver, a network. Whatever they contain, they must never read as an ev
 So every event starts with a header line ``[Tag] ...`` and every text that did not come from the
 user is written as a JSON string (:func:`quoted`): its line breaks become ``\\n`` inside the quotes,
 so no line of it can start a new ``[User typed]`` event, and a quote inside it cannot end it.
-The user's own words are theirs to write; only their line breaks are folded (:func:`one_line`).
+The user's own words are theirs to write, as they wrote them (a typed task may span lines): the
+user is the principal these rules protect, not a source to guard against.
 
 Several events handled in one kernel turn (:mod:`rosaos.kernel.loop` batches what arrived while the
 model was thinking) are joined with a blank line; each still starts with its header.
@@ -43,19 +44,14 @@ def unquoted(text: str) -> str:
     return text
 
 
-def one_line(text: str) -> str:
-    """``text`` with its line breaks folded into spaces (the user's words stay readable)."""
-    return " ".join(text.split("\n")).replace("\r", " ").strip()
-
-
 def render_event(event: Event) -> str:
     """The text the kernel model reads for an event, tagged by kind."""
     payload: Any = event.payload
     match event.kind:
         case "user_said":
-            return f"[User said] {one_line(payload.text)}"
+            return f"[User said] {payload.text}"
         case "user_typed":
-            return f"[User typed] {one_line(payload.text)}"
+            return f"[User typed] {payload.text}"
         case "worker_callback":
             head = f"[Worker callback] worker={payload.process_id} status={payload.status}"
             if payload.task:
