@@ -55,7 +55,7 @@ from rosaos.processes.plan_runner import run_plan
 from rosaos.processes.prompts import process_system_prompt, tool_prefix
 from rosaos.processes.recording import RecordingToolset
 from rosaos.processes.tool_calls import ToolCallLog, observed
-from rosaos.processes.vision import image_budget_for, image_headers
+from rosaos.processes.vision import ImageFallbackModel, image_budget_for, image_headers
 from rosaos.receipts import Receipt
 
 log = logging.getLogger("rosaos.processes.worker")
@@ -247,7 +247,9 @@ async def _run_agent(job: WorkerJob, calls: ToolCallLog, receipts: list[Receipt]
             return await run_plan(plan, toolsets, model, model.language)
         if not isinstance(model, LocalPlanModel):
             granted = [device.name for device in job.devices]
-            model = LeaseGuardModel(model, job.process_id, granted, job.world_devices, recorded)
+            model = LeaseGuardModel(
+                ImageFallbackModel(model), job.process_id, granted, job.world_devices, recorded
+            )
         agent = Agent(
             model,
             instructions=process_system_prompt(job.base_prompt, job.task, job.devices),
