@@ -125,7 +125,8 @@ class ModelConfig(BaseModel):
     language: str = "en"
     vision: bool | None = None
     """Whether the process model takes images (camera tools then send the picture too).
-    Unset: pydantic-ai's profile of the model says (``supports_image_input``)."""
+    Unset: only a cloud provider's model whose pydantic-ai profile says so (``supports_image_input``);
+    an ``openai-compatible`` endpoint must declare it."""
     image_max_px: int = Field(default=768, ge=64, le=4096)
     """Longest side, in pixels, of a picture sent to a model (a JPEG of at most ~400 kB)."""
 
