@@ -126,6 +126,7 @@ def summarize(log: list[Logged]) -> dict[str, Any]:
         "tokens": sum(r.prompt_tokens for r in log),
         "largest_request_bytes": max((r.bytes for r in log), default=0),
         "process_tools_offered": max((r.tools for r in log if r.role == "process"), default=0),
+        "per_request": [(r.role, r.bytes, r.tools, r.tool_bytes) for r in log],
     }
 
 
@@ -140,7 +141,7 @@ def measure(api: httpx.Client, script: Script, sentence: str, profile: str) -> d
     return result
 
 
-def run(port: int, profiles: list[str]) -> dict[str, Any]:
+def run(port: int, profiles: list[str], dump: Path | None = None, light_only: bool = False) -> dict[str, Any]:
     server, script = serve()
     llm_port = server.server_address[1]
     results: dict[str, Any] = {}
@@ -155,10 +156,15 @@ def run(port: int, profiles: list[str]) -> dict[str, Any]:
                     for sentence in EARLIER:
                         api.post("/chat", json={"text": sentence}).raise_for_status()
                         settle(api, script, quiet=0.2)
+                    if dump is not None:
+                        dump.mkdir(parents=True, exist_ok=True)
+                        script.dump = str(dump)
                     results[profile] = {
                         "light switch": measure(api, script, "turn on the kitchen light", profile),
-                        "paper demo": measure(api, script, DEMO_SENTENCE, profile),
                     }
+                    script.dump = None
+                    if not light_only:
+                        results[profile]["paper demo"] = measure(api, script, DEMO_SENTENCE, profile)
                     # Back to the start: the robot docks again for the next profile's demo.
                     script.reset(PROFILES["none"])
         finally:
@@ -178,10 +184,12 @@ def main() -> None:
     parser.add_argument("--profiles", nargs="+", default=["cloud", "local-8b"], choices=sorted(PROFILES))
     parser.add_argument("--port", type=int, default=19410, help="port for rosaos up (default 19410)")
     parser.add_argument("--json", type=Path, help="also write the results here")
+    parser.add_argument("--dump", type=Path, help="write the light switch's request bodies here")
+    parser.add_argument("--light-only", action="store_true", help="skip the paper's demo")
     args = parser.parse_args()
     results = {}
     for profile in args.profiles:  # a fresh rosaos up per profile: same history, same robot pose
-        results.update(run(args.port, [profile]))
+        results.update(run(args.port, [profile], args.dump, args.light_only))
     load = os.getloadavg()[0]
     print(f"load average (1 min) at the end: {load:.1f} on {os.cpu_count()} cores")
     header = "| profile | command | requests (kernel + process) | bytes | est. tokens | tools offered to the process | s to device |"

@@ -7,11 +7,13 @@ it offered. Before answering it sleeps as a real model would (:class:`Latency`),
 ``POST /chat`` to the device changing includes what the model's prefill and decoding would cost.
 
 The script reads what it is sent, not rosaOS's internals: a kernel request is one that offers
-``launch_process``. On a user's sentence the kernel launches the processes of :data:`COMMANDS`;
-after its launches it writes a short acknowledgement (if rosaOS asks it for one); on a process's
-callback it answers in one sentence, or launches the follow-up the paper's demo asks for. A process
-agent calls the tools its task needs (:data:`PLANS`), one per request, then reports in one sentence
-(if rosaOS asks it to).
+``launch_process``. On a user's sentence the kernel launches the processes of :data:`COMMANDS`, with
+"On it." beside the calls (as the kernel prompt asks); after its launches it acknowledges them (if
+rosaOS asks it to); on a process's callback it answers in one sentence, or launches the follow-up
+the paper's demo asks for. A process agent calls the tools its task needs (:data:`PLANS`), one per
+request, with its one-sentence report beside the call that finishes the task when that call's
+success says it all (as the process prompt asks), and a report after the results otherwise.
+rosaOS at 4416b49 ignored text beside tool calls and asked again; the script is the same for both.
 """
 
 from __future__ import annotations
@@ -104,6 +106,8 @@ class Script:
 
     latency: Latency = PROFILES["none"]
     log: list[Logged] = field(default_factory=list)
+    dump: str | None = None
+    """A directory to write every request body to (``NNN-role.json``), to see where bytes go."""
     lock: threading.Lock = field(default_factory=threading.Lock)
 
     def reset(self, latency: Latency) -> None:
@@ -159,7 +163,8 @@ def kernel_answer(messages: list[dict[str, Any]]) -> dict[str, Any]:
     for sentence, launches in sorted(COMMANDS.items(), key=lambda item: -len(item[0])):
         if sentence.lower() in lowered:
             calls = [_call(LAUNCH, launch, index) for index, launch in enumerate(launches)]
-            return {"role": "assistant", "content": None, "tool_calls": calls}
+            # As the kernel prompt asks: the words for the user beside the launch.
+            return {"role": "assistant", "content": "On it.", "tool_calls": calls}
     return {"role": "assistant", "content": "I did not understand that."}
 
 
@@ -172,7 +177,11 @@ def process_answer(messages: list[dict[str, Any]], tools: list[str]) -> dict[str
         name, args = plan[len(results)]
         tool = next((t for t in tools if t == name or t.endswith(f"_{name}")), None)
         if tool is not None:
-            return {"role": "assistant", "content": None, "tool_calls": [_call(tool, args, len(results))]}
+            # As the process prompt asks: the report beside the call that finishes the task, when
+            # the call's success says it all (a search's report depends on what it found).
+            last = len(results) == len(plan) - 1 and name != "search"
+            report = f"Done: {task.strip().rstrip('.')}." if last else None
+            return {"role": "assistant", "content": report, "tool_calls": [_call(tool, args, len(results))]}
     last = _text(results[-1].get("content")) if results else ""
     if '"found": true' in last or '"found":true' in last:
         return {"role": "assistant", "content": "Found a person."}
@@ -213,6 +222,10 @@ class _Handler(BaseHTTPRequestHandler):
         data = json.dumps(reply).encode()
         tool_bytes = len(json.dumps(body.get("tools", [])))
         with self.script.lock:
+            if self.script.dump:
+                path = f"{self.script.dump}/{len(self.script.log):03d}-{role}.json"
+                with open(path, "wb") as file:
+                    file.write(raw)
             self.script.log.append(
                 Logged(role, len(raw), prompt_tokens, output_tokens, len(tools), tool_bytes, time.time())
             )

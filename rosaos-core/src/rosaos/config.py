@@ -94,7 +94,7 @@ class KernelConfig(BaseModel):
     """Model requests one process agent may make (pydantic-ai usage limit)."""
     history_messages: int = Field(default=40, ge=2, le=1000)
     """Kernel conversation budget: older messages are trimmed beyond this many."""
-    history_chars: int = Field(default=12_000, ge=1000, le=1_000_000)
+    history_chars: int = Field(default=4000, ge=1000, le=1_000_000)
     """Kernel conversation budget in characters (about 4 per token): every request carries it."""
     relay_reports: bool = True
     """With an LLM kernel: a process that ended ok, with no follow-up waiting, is relayed to the

@@ -14,7 +14,7 @@ from rosaos.kernel.confirmations import Confirmation, ConfirmationDesk
 from rosaos.kernel.events import Event
 from rosaos.kernel.loop import Output
 from rosaos.kernel.updates import UpdateStream
-from rosaos.receipts import Receipt, SafetyDecision
+from rosaos.receipts import Receipt, SafetyDecision, SafetyKind
 
 log = logging.getLogger(__name__)
 SPEAK_TIMEOUT = 5.0
@@ -37,14 +37,19 @@ async def ask_people(
         log.warning("could not ask confirmation %s out loud on %s: %s", item.id, speaker.name, failure)
 
 
-DECISIONS = {"pending": "confirm_asked", "yes": "confirmed", "no": "declined", "expired": "expired"}
+DECISIONS: dict[str, SafetyKind] = {
+    "pending": "confirm_asked",
+    "yes": "confirmed",
+    "no": "declined",
+    "expired": "expired",
+}
 
 
 async def record_confirmation(activity: ActivityLog, updates: UpdateStream, item: Confirmation) -> None:
     """A question asked or settled, as a safety decision in the activity log (``rosaos log``);
     an expiry is also a notice, so the people who were asked learn that silence counted as no."""
     decision = SafetyDecision(
-        decision=DECISIONS[item.state],  # type: ignore[arg-type]
+        decision=DECISIONS[item.state],
         rule="confirm",
         detail=item.question if item.state == "pending" else f"{item.state} (by {item.answered_by})",
     )

@@ -126,7 +126,7 @@ class ConfirmationDesk:
         self._announce = announce
         self._record = record
         """Told of every question when asked and when settled (yes, no, expired): the safety log."""
-        self._tasks: set[asyncio.Task[None]] = set()
+        self._tasks: set[asyncio.Future[None]] = set()
         self._ids = itertools.count(1)
         self._items: dict[int, Confirmation] = {}
         self._changed: dict[int, asyncio.Event] = {}
@@ -204,7 +204,7 @@ class ConfirmationDesk:
             timer.cancel()
         self._changed[confirmation_id].set()
         if self._record is not None:  # called from a timer too: record in a task of its own
-            task = asyncio.get_running_loop().create_task(self._record(self._items[confirmation_id]))
+            task: asyncio.Future[None] = asyncio.ensure_future(self._record(self._items[confirmation_id]))
             self._tasks.add(task)
             task.add_done_callback(self._tasks.discard)
 

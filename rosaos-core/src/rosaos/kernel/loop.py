@@ -53,7 +53,7 @@ class KernelLoop:
         model: Callable[[Event], Model | None] = lambda event: None,
         history_budget: int = 40,
         request_limit: int = 20,
-        history_chars: int = 12_000,
+        history_chars: int = 4000,
         relay_reports: bool = True,
     ) -> None:
         self.store = store

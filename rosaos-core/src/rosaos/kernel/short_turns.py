@@ -14,21 +14,14 @@ model decides everything that needs deciding. Two steps need no decision:
 
 from __future__ import annotations
 
-from pydantic_ai.messages import (
-    ModelMessage,
-    ModelRequest,
-    ModelResponse,
-    RetryPromptPart,
-    TextPart,
-    ToolReturnPart,
-    UserPromptPart,
-)
+from pydantic_ai.messages import ModelMessage, ModelRequest, ModelResponse, TextPart, UserPromptPart
 from pydantic_ai.models import ModelRequestParameters
 from pydantic_ai.models.wrapper import WrapperModel
 from pydantic_ai.settings import ModelSettings
 
 from rosaos.kernel.events import Event
 from rosaos.kernel.follow_ups import follow_up_of
+from rosaos.models.conversation import report_with_accepted_calls
 
 LAUNCH_TOOL = "launch_process"
 ACK_MODEL = "rosaos-launch-ack"
@@ -41,21 +34,10 @@ NO_OUTPUT = "(no output)"
 
 def launch_ack(messages: list[ModelMessage]) -> str | None:
     """The words that end a turn whose last step only launched processes, all accepted; else None."""
-    if len(messages) < 2 or not isinstance(messages[-1], ModelRequest):
+    finished = report_with_accepted_calls(messages)
+    if finished is None or any(call.tool_name != LAUNCH_TOOL for call in finished[0]):
         return None
-    last, previous = messages[-1], messages[-2]
-    if not isinstance(previous, ModelResponse):
-        return None
-    calls = previous.tool_calls
-    if not calls or any(call.tool_name != LAUNCH_TOOL for call in calls):
-        return None
-    if any(isinstance(part, UserPromptPart) for part in last.parts):
-        return None
-    results = [part for part in last.parts if isinstance(part, ToolReturnPart | RetryPromptPart)]
-    accepted = [part for part in results if isinstance(part, ToolReturnPart) and part.outcome == "success"]
-    if len(accepted) != len(calls) or len(results) != len(calls):
-        return None
-    return (previous.text or "").strip() or DEFAULT_ACK
+    return finished[1] or DEFAULT_ACK
 
 
 class LaunchAckModel(WrapperModel):

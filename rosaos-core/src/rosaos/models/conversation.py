@@ -153,6 +153,28 @@ def tool_outcomes(messages: Sequence[ModelMessage]) -> list[ToolOutcome]:
     return [ToolOutcome(calls[key], *results[key]) for key in order if key in results]
 
 
+def report_with_accepted_calls(messages: Sequence[ModelMessage]) -> tuple[list[ToolCallPart], str] | None:
+    """The tool calls of the last response and the text written beside them, when every one of
+    those calls succeeded and nothing else came since; None otherwise.
+
+    A model that writes its report (or its words for the user) in the same response as the calls
+    that finish its work needs no further request once they succeed (kernel/short_turns.py,
+    processes/final_call.py).
+    """
+    if len(messages) < 2 or not isinstance(messages[-1], ModelRequest):
+        return None
+    last, previous = messages[-1], messages[-2]
+    if not isinstance(previous, ModelResponse) or not previous.tool_calls:
+        return None
+    if any(isinstance(part, UserPromptPart) for part in last.parts):
+        return None
+    results = [part for part in last.parts if isinstance(part, ToolReturnPart | RetryPromptPart)]
+    accepted = [part for part in results if isinstance(part, ToolReturnPart) and part.outcome == "success"]
+    if len(accepted) != len(previous.tool_calls) or len(results) != len(accepted):
+        return None
+    return list(previous.tool_calls), (previous.text or "").strip()
+
+
 def responses_by(messages: Sequence[ModelMessage], model_name: str) -> bool:
     """Whether every model response in ``messages`` came from ``model_name`` (and there is one)."""
     responses = [message for message in messages if isinstance(message, ModelResponse)]

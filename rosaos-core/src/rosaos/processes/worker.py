@@ -43,6 +43,7 @@ from rosaos.intents.planning.plan import Plan, PlanError, decode_plan
 from rosaos.models.process_model import LocalPlanModel
 from rosaos.models.select import ModelError, build_model
 from rosaos.processes.confirming import ConfirmationDeclined, ConfirmingToolset, KernelAsker
+from rosaos.processes.final_call import FinalCallModel
 from rosaos.processes.jobs import (
     GrantedDevice,
     ProcessStatus,
@@ -247,8 +248,10 @@ async def _run_agent(job: WorkerJob, calls: ToolCallLog, receipts: list[Receipt]
             return await run_plan(plan, toolsets, model, model.language)
         if not isinstance(model, LocalPlanModel):
             granted = [device.name for device in job.devices]
-            model = LeaseGuardModel(
-                ImageFallbackModel(model), job.process_id, granted, job.world_devices, recorded
+            model = FinalCallModel(
+                LeaseGuardModel(
+                    ImageFallbackModel(model), job.process_id, granted, job.world_devices, recorded
+                )
             )
         agent = Agent(
             model,
