@@ -210,3 +210,17 @@ def calls_unleased() -> FunctionModel:
         return ModelResponse(parts=[TextPart(json.dumps(answers))])
 
     return FunctionModel(respond, model_name="calls-unleased")
+
+
+def reports_beside_call() -> FunctionModel:
+    """Calls ``set_level(42)`` with its report written beside the call, as the process prompt asks;
+    if it is asked again (the call failed), it says what it read."""
+
+    def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        if len(messages) == 1:
+            return ModelResponse(
+                parts=[TextPart("The level is 42."), ToolCallPart("set_level", {"level": 42})]
+            )
+        return ModelResponse(parts=[TextPart("asked again")])
+
+    return FunctionModel(respond, model_name="reports-beside-call")

@@ -107,6 +107,28 @@ async def test_a_call_to_a_device_not_granted_is_logged_and_named_by_the_missing
     assert lamp.state["level"] == 42
 
 
+async def test_a_report_written_beside_the_finishing_call_ends_the_process_in_one_request(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    lamp = devices["lamp"]
+    lamp.state["level"] = 0
+    callback = await run_job(make_job(kernel, "reports_beside_call", [lamp]))
+    assert (callback.status, callback.output, callback.model_requests) == ("ok", "The level is 42.", 1)
+    assert lamp.state["level"] == 42
+
+
+async def test_a_report_written_beside_a_call_that_failed_is_not_taken(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    lamp = devices["lamp"]
+    lamp.state.update(level=0, jammed=True)
+    try:
+        callback = await run_job(make_job(kernel, "reports_beside_call", [lamp]))
+    finally:
+        lamp.state.pop("jammed")
+    assert (callback.output, callback.model_requests, callback.status) == ("asked again", 2, "error")
+
+
 async def test_a_device_granted_with_a_tool_list_offers_only_those_tools(
     kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
 ) -> None:

@@ -43,7 +43,7 @@ from rosaos.intents.planning.plan import Plan, PlanError, decode_plan
 from rosaos.models.process_model import LocalPlanModel
 from rosaos.models.select import ModelError, build_model
 from rosaos.processes.confirming import ConfirmationDeclined, ConfirmingToolset, KernelAsker
-from rosaos.processes.final_call import FinalCallModel
+from rosaos.processes.final_call import FINAL_CALL_MODEL, FinalCallModel
 from rosaos.processes.jobs import (
     GrantedDevice,
     ProcessStatus,
@@ -333,7 +333,10 @@ def describe_error(failure: BaseException) -> str:
 def count_usage(messages: Sequence[ModelMessage]) -> tuple[int, int]:
     """Model requests (responses received) and tool calls made, from a run's messages."""
     responses = [message for message in messages if isinstance(message, ModelResponse)]
-    return len(responses), sum(len(response.tool_calls) for response in responses)
+    asked = [
+        response for response in responses if response.model_name != FINAL_CALL_MODEL
+    ]  # not the local end
+    return len(asked), sum(len(response.tool_calls) for response in responses)
 
 
 def callback_event(callback: WorkerCallback) -> dict[str, Any]:
