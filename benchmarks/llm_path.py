@@ -82,8 +82,8 @@ def start(port: int, llm_port: int, home: Path) -> tuple[subprocess.Popen[str], 
 
 
 def wait_healthy(api: httpx.Client) -> None:
-    """Until every device is healthy (the simulators take a moment)."""
-    deadline = time.monotonic() + 120
+    """Until every device is healthy (the simulators take a moment; longer on a loaded machine)."""
+    deadline = time.monotonic() + 600
     while time.monotonic() < deadline:
         devices = api.get("/devices").json()
         if devices and all(d.get("status") == "healthy" for d in devices):
@@ -131,6 +131,7 @@ def summarize(log: list[Logged]) -> dict[str, Any]:
 
 
 def measure(api: httpx.Client, script: Script, sentence: str, profile: str) -> dict[str, Any]:
+    wait_healthy(api)  # on a loaded machine a device may be briefly marked unhealthy: not what this measures
     script.reset(PROFILES[profile])
     posted = time.time()
     api.post("/chat", json={"text": sentence}).raise_for_status()
@@ -154,6 +155,7 @@ def run(port: int, profiles: list[str], dump: Path | None = None, light_only: bo
                 for profile in profiles:
                     script.reset(PROFILES["none"])
                     for sentence in EARLIER:
+                        wait_healthy(api)
                         api.post("/chat", json={"text": sentence}).raise_for_status()
                         settle(api, script, quiet=0.2)
                     if dump is not None:
