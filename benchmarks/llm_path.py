@@ -150,7 +150,7 @@ def run(port: int, profiles: list[str], dump: Path | None = None, light_only: bo
         up, token = start(port, int(llm_port), Path(tmp))
         try:
             headers = {"Authorization": f"Bearer {token}"}
-            with httpx.Client(base_url=f"http://127.0.0.1:{port}", headers=headers, timeout=30) as api:
+            with httpx.Client(base_url=f"http://127.0.0.1:{port}", headers=headers, timeout=120) as api:
                 wait_healthy(api)
                 for profile in profiles:
                     script.reset(PROFILES["none"])
