@@ -87,7 +87,7 @@ async def test_an_agent_looks_up_twist_and_publishes_a_valid_message(tmp_path: P
 
 
 async def test_a_model_that_takes_images_gets_the_picture_downscaled(tmp_path: Path) -> None:
-    callback, _ = await run_on_robot(tmp_path, "take a picture", "sees_pictures")
+    callback, _ = await run_on_robot(tmp_path, "take a picture", "sees_pictures", vision=True)
     assert callback.status == "ok", callback.error
     seen = json.loads(callback.output or "")
     assert len(seen["images"]) == 1

@@ -114,3 +114,13 @@ async def test_move_distance_times_out_when_the_robot_cannot_move(open_robot: An
         robot.world.e_stop = True  # the base ignores every command
         result = await robot.call("move_distance", meters=0.05, speed=0.3)
     assert result["outcome"] == "timed out"
+
+
+async def test_the_schema_says_the_robots_real_speed_limits(open_robot: Any) -> None:
+    """A model that trusts the schema is not refused: its maximum is the limit, not a sanity bound."""
+    async with open_robot(max_linear=0.2) as robot:
+        tools = {tool.name: tool.inputSchema for tool in await robot.client.list_tools()}
+    linear = tools["drive"]["properties"]["linear"]
+    assert (linear["minimum"], linear["maximum"]) == (-0.2, 0.2)
+    speed = tools["move_distance"]["properties"]["speed"]
+    assert 0.2 in (speed.get("maximum"), *(option.get("maximum") for option in speed.get("anyOf", [])))

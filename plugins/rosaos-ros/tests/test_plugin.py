@@ -100,3 +100,9 @@ async def test_every_tool_sets_all_three_hints(open_robot: Any) -> None:
             hints.destructive_hint,
             hints.idempotent_hint,
         ), tool.name
+
+
+async def test_set_param_is_destructive_so_a_destructive_rule_asks_first(open_robot: Any) -> None:
+    async with open_robot() as robot:
+        hints = {tool.name: tool.annotations for tool in await robot.client.list_tools()}
+    assert hints["set_param"] is not None and hints["set_param"].destructive_hint is True

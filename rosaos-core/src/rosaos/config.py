@@ -110,6 +110,11 @@ class KernelConfig(BaseModel):
     """Model requests one process agent may make (pydantic-ai usage limit)."""
     history_messages: int = Field(default=40, ge=2, le=1000)
     """Kernel conversation budget: older messages are trimmed beyond this many."""
+    history_chars: int = Field(default=4000, ge=1000, le=1_000_000)
+    """Kernel conversation budget in characters (about 4 per token): every request carries it."""
+    relay_reports: bool = True
+    """With an LLM kernel: a process that ended ok, with no follow-up waiting, is relayed to the
+    user in its own words without a kernel model request (the callback still enters the history)."""
     kernel_prompt: str | None = None
     """Replaces the built-in kernel prompt; ``{devices}`` is filled with the device list."""
     process_prompt: str | None = None
@@ -136,7 +141,8 @@ class ModelConfig(BaseModel):
     language: str = "en"
     vision: bool | None = None
     """Whether the process model takes images (camera tools then send the picture too).
-    Unset: pydantic-ai's profile of the model says (``supports_image_input``)."""
+    Unset: only a cloud provider's model whose pydantic-ai profile says so (``supports_image_input``);
+    an ``openai-compatible`` endpoint must declare it."""
     image_max_px: int = Field(default=768, ge=64, le=4096)
     """Longest side, in pixels, of a picture sent to a model (a JPEG of at most ~400 kB)."""
 

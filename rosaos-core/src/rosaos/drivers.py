@@ -163,6 +163,11 @@ class DriverSpec(BaseModel, Generic[BackendT]):
     """Granted to every process without being asked. True only for the user-interface device."""
     prompt: str
     """The device prompt appended to a process agent's system prompt when it holds the device."""
+    attached_tools: tuple[str, ...] = ()
+    """For an always-attached driver: the tools a process gets when the kernel granted the device
+    only because it is always attached (how to speak to the user). Empty: all of them."""
+    attached_prompt: str | None = None
+    """The device prompt that goes with :attr:`attached_tools` (short: those tools only)."""
     settings: type[BaseModel] = DeviceSettings
     server: Callable[[DeviceContext, BackendT], FastMCP]
     """Builds the instance's FastMCP server from its context and its started backend."""

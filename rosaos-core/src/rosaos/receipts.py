@@ -37,7 +37,17 @@ SECRET_NAMES = re.compile(r"(pass(word)?|secret|token|api_?key|auth|credential|c
 _CALL_ERROR = re.compile(r"^Error calling tool '[^']*':\s*")
 """How FastMCP heads a tool's error; the driver's own text follows."""
 
-SafetyKind = Literal["clamped", "refused", "deadman_stop", "limited", "stopped"]
+SafetyKind = Literal[
+    "clamped",
+    "refused",
+    "deadman_stop",
+    "limited",
+    "stopped",
+    "confirm_asked",
+    "confirmed",
+    "declined",
+    "expired",
+]
 
 
 class SafetyDecision(BaseModel):
@@ -48,7 +58,9 @@ class SafetyDecision(BaseModel):
     decision: SafetyKind
     """``refused``: not done (allow-list, limit, docked rule); ``clamped``: done with a changed value;
     ``deadman_stop``: the command stream went quiet and the device stopped; ``limited``: cut short
-    by a bound (time, distance); ``stopped``: ended by a stop or the emergency stop."""
+    by a bound (time, distance); ``stopped``: ended by a stop or the emergency stop;
+    ``confirm_asked``, ``confirmed``, ``declined``, ``expired``: a person was asked before the call,
+    and said yes, said no, or did not answer in time (:mod:`rosaos.kernel.confirmations`)."""
     rule: str = Field(default="", max_length=200)
     detail: str = Field(default="", max_length=1000)
 
@@ -73,10 +85,12 @@ class Receipt(BaseModel):
     def line(self) -> str:
         """One line for the kernel model: ``turtlebot.drive(linear=0.2) -> ok [clamped: ...]``."""
         args = ", ".join(f"{key}={json.dumps(value)}" for key, value in self.arguments.items())
-        outcome = "ok" if self.ok else f"error: {(self.error or '')[:200]}"
+        # The device's words are data: quoted, so a line break in them cannot start a line.
+        outcome = "ok" if self.ok else f"error: {json.dumps((self.error or '')[:200], ensure_ascii=False)}"
         text = f"{self.device}.{self.tool}({args}) -> {outcome}"
         if self.safety is not None and self.safety.decision != "refused":
-            text += f" [{self.safety.decision}: {self.safety.detail[:200]}]"
+            detail = json.dumps(self.safety.detail[:200], ensure_ascii=False)
+            text += f" [{self.safety.decision}: {detail}]"
         return text
 
 

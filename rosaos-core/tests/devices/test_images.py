@@ -41,6 +41,13 @@ def test_the_profile_decides_unless_config_says() -> None:
     assert image_budget_for(spec.model_copy(update={"vision": True}), _model(False)) == 512
 
 
+def test_a_local_endpoint_or_a_python_model_gets_pictures_only_when_declared() -> None:
+    for name in ("openai-compatible", "python:tests:model"):
+        spec = ModelSpec(model=name, base_url="http://127.0.0.1:1/v1", model_name="m")
+        assert image_budget_for(spec, _model(True)) is None
+        assert image_budget_for(spec.model_copy(update={"vision": True}), _model(False)) == 768
+
+
 def test_the_offline_engine_gets_no_pictures() -> None:
     assert image_budget_for(ModelSpec(), _model(True)) is None
     assert image_budget_for(ModelSpec(model="openai:gpt-5.2"), LocalPlanModel("en")) is None

@@ -110,9 +110,9 @@ def test_the_kernel_model_sees_the_receipts_and_the_engine_still_reads_the_outpu
         Event(id=1, time=datetime.now(UTC), kind="worker_callback", source="t", payload=callback)
     )
     assert text.splitlines()[1:] == [
-        "output: I could not drive",
+        'output: "I could not drive"',
         "tool calls:",
-        "- turtlebot.drive(linear=0.8) -> error: refused: 0.8 m/s is above the velocity limit",
+        '- turtlebot.drive(linear=0.8) -> error: "refused: 0.8 m/s is above the velocity limit"',
     ]
     assert parse_callback(parse_event(text).body).output == "I could not drive"
 

@@ -80,6 +80,18 @@ def test_history_is_cut_at_a_user_turn_so_no_tool_return_is_orphaned() -> None:
     assert isinstance(first.parts[0], UserPromptPart)
 
 
+def test_history_is_bounded_by_size_as_well_as_by_count() -> None:
+    long = [
+        ModelRequest(parts=[UserPromptPart("[Worker callback] worker=1 status=ok\noutput: " + "x" * 5000)]),
+        ModelResponse(parts=[TextPart("done")]),
+    ]
+    history = long + turn(2) + turn(3)
+    trimmed = trim_history(history, 40, max_chars=2000)
+    assert trimmed == history[2:]
+    assert trim_history(history, 40, max_chars=100_000) == history
+    assert trim_history(long, 40, max_chars=1000) == []  # one turn too big to carry: none carried
+
+
 def test_the_default_prompt_tells_the_model_about_every_timer_tool_and_timer_event() -> None:
     from rosaos.kernel.timer_tools import TIMER_TOOL_NAMES
 

@@ -180,3 +180,47 @@ def process_report() -> dict[str, object]:
         "path": sys.path,
         "cwd": os.getcwd(),
     }
+
+
+def claims_done() -> FunctionModel:
+    """Says the task is done without calling any tool: the model's word only."""
+
+    def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        return ModelResponse(parts=[TextPart("Done, it is on.")])
+
+    return FunctionModel(respond, model_name="claims-done")
+
+
+def calls_unleased() -> FunctionModel:
+    """Calls ``fan_set_level`` (a device it was not granted), then its own ``set_level``, then reports
+    the answers it read."""
+
+    def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        answers = [
+            str(part.model_response() if hasattr(part, "model_response") else part.content)
+            for message in messages
+            if isinstance(message, ModelRequest)
+            for part in message.parts
+            if not isinstance(part, UserPromptPart)
+        ]
+        if len(answers) == 0:
+            return ModelResponse(parts=[ToolCallPart("fan_set_level", {"level": 42})])
+        if len(answers) == 1:
+            return ModelResponse(parts=[ToolCallPart("set_level", {"level": 42})])
+        return ModelResponse(parts=[TextPart(json.dumps(answers))])
+
+    return FunctionModel(respond, model_name="calls-unleased")
+
+
+def reports_beside_call() -> FunctionModel:
+    """Calls ``set_level(42)`` with its report written beside the call, as the process prompt asks;
+    if it is asked again (the call failed), it says what it read."""
+
+    def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        if len(messages) == 1:
+            return ModelResponse(
+                parts=[TextPart("The level is 42."), ToolCallPart("set_level", {"level": 42})]
+            )
+        return ModelResponse(parts=[TextPart("asked again")])
+
+    return FunctionModel(respond, model_name="reports-beside-call")

@@ -75,6 +75,69 @@ async def test_a_failed_device_call_is_an_error_even_when_the_model_reports_it_p
     assert lamp.state["level"] == 0
 
 
+async def test_a_model_that_says_done_without_a_device_call_does_not_end_ok(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    lamp = devices["lamp"]
+    lamp.state["level"] = 0
+    callback = await run_job(make_job(kernel, "claims_done", [lamp]))
+    assert callback.status == "unverified"
+    assert callback.output == "Done, it is on."  # kept, but not taken for a result
+    assert "no successful device call" in (callback.error or "")
+    assert lamp.state["level"] == 0
+
+
+async def test_a_call_to_a_device_not_granted_is_logged_and_named_by_the_missing_lease(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    lamp = devices["lamp"]
+    lamp.state["level"] = 0
+    job = make_job(kernel, "calls_unleased", [lamp]).model_copy(update={"world_devices": ["fan", "lamp"]})
+    callback = await run_job(job)
+    refused, done = callback.receipts
+    assert (refused.device, refused.tool, refused.ok) == ("fan", "fan_set_level", False)
+    assert refused.error is not None
+    assert refused.error.startswith(f"process {job.process_id} holds no lease on fan; it holds lamp")
+    # The model read the same words, not pydantic-ai's list of every tool name.
+    answers = json.loads(callback.output or "")
+    assert f"process {job.process_id} holds no lease on fan" in answers[0], answers
+    assert "Available tools" not in answers[0]
+    # It corrected itself with a tool it holds: judged on its real calls.
+    assert (done.tool, done.ok, callback.status) == ("set_level", True, "ok")
+    assert lamp.state["level"] == 42
+
+
+async def test_a_report_written_beside_the_finishing_call_ends_the_process_in_one_request(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    lamp = devices["lamp"]
+    lamp.state["level"] = 0
+    callback = await run_job(make_job(kernel, "reports_beside_call", [lamp]))
+    assert (callback.status, callback.output, callback.model_requests) == ("ok", "The level is 42.", 1)
+    assert lamp.state["level"] == 42
+
+
+async def test_a_report_written_beside_a_call_that_failed_is_not_taken(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    lamp = devices["lamp"]
+    lamp.state.update(level=0, jammed=True)
+    try:
+        callback = await run_job(make_job(kernel, "reports_beside_call", [lamp]))
+    finally:
+        lamp.state.pop("jammed")
+    assert (callback.output, callback.model_requests, callback.status) == ("asked again", 2, "error")
+
+
+async def test_a_device_granted_with_a_tool_list_offers_only_those_tools(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    job = make_job(kernel, "reports_prompt", [devices["lamp"]])
+    job.devices[0].tools = ["get_state"]
+    callback = await run_job(job)
+    assert json.loads(callback.output or "")["tools"] == ["get_state"]
+
+
 async def test_unreachable_device_is_an_error_naming_it(kernel: KernelStandIn, unreachable_url: str) -> None:
     dead = LoopbackDevice("dead_lamp", unreachable_url.replace("/event", "/mcp"), {})
     callback = await run_job(make_job(kernel, "sets_level", [dead]))

@@ -54,6 +54,10 @@ SPEC: DriverSpec[ReachyBackend] = DriverSpec(
     concurrency="shared",
     always_attached=True,  # the user interface: every process can speak to the user
     prompt=read_packaged_text(__file__, "prompt.md"),
+    # Granted to a process without being asked (every light switch): speaking only, not the
+    # head, camera and emotions, whose schemas were 71 % of a light switch's tools.
+    attached_tools=("speak", "stop_speaking"),
+    attached_prompt=read_packaged_text(__file__, "attached_prompt.md"),
     settings=ReachySettings,
     server=build_server,
     backends={"sim": sim_backend, "real": real_backend},

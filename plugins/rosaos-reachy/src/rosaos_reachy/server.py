@@ -51,7 +51,7 @@ def build_server(ctx: DeviceContext, backend: ReachyBackend) -> FastMCP:
         duration; it keeps talking while you go on. A sentence said while another is still being
         spoken follows it, unless ``interrupt`` cuts that one off (and any waiting their turn).
 
-        This is how to answer the user: keep it short and conversational.
+        Use it when the task asks the robot to say something; keep it short and conversational.
         """
         return await backend.speaker.say(text, interrupt=interrupt)
 

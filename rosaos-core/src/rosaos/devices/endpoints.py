@@ -25,6 +25,10 @@ class DeviceEndpoint:
     status: DeviceStatus
     confirm: list[str] | Literal["destructive"] | None = None
     """What needs a person's yes (:func:`rosaos.kernel.confirmations.confirm_rule`)."""
+    attached_tools: tuple[str, ...] = ()
+    """For an always-attached device: the tools a process gets when the kernel did not ask for it."""
+    attached_prompt: str | None = None
+    """The device prompt that goes with :attr:`attached_tools`."""
 
     @property
     def grantable(self) -> bool:

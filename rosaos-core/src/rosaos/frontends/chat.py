@@ -74,6 +74,8 @@ class Conversation:
     processes: dict[int, dict[str, Any]] = field(default_factory=dict)
     callback_events: dict[int, int] = field(default_factory=dict)
     """callback event id → process id"""
+    joined: set[int] = field(default_factory=set)
+    """Events the kernel handled in the same turn as this message (their outputs are its outputs)."""
     unclaimed: dict[int, tuple[int, dict[str, Any]]] = field(default_factory=dict)
     """Callbacks seen before the launch that explains them: process id → (event id, payload).
     A fast worker can report before the kernel has finished the run that launched it."""
@@ -92,7 +94,11 @@ class Conversation:
             return False
         if kind == "notice" and data.get("process_id") in self.processes:
             return True  # a question one of our processes asks (a confirmation) is ours to show
-        ours = event_id == self.event_id or event_id in self.callback_events
+        if kind == "notice" and "handled_with" in data and event_id == self.event_id:
+            # The kernel read this message together with later ones: their turn is ours too.
+            self.joined.add(int(data["handled_with"]))
+            return False
+        ours = event_id == self.event_id or event_id in self.callback_events or event_id in self.joined
         if not ours:
             return False
         if kind == "notice" and data.get("refused"):
@@ -143,14 +149,14 @@ async def send_and_wait(
         # Check first, read second: an event's outputs commit with its "handled" mark, so updates
         # read after seeing it handled include every process it launched.
         was_settled = await _settled(client, conversation)
-        known = len(conversation.processes)
+        known = len(conversation.processes), len(conversation.joined)
         updates, cursor = await client.updates_after(cursor)
         for update in updates:
             if conversation.absorb(update) and console is not None:
                 line = format_update(update)
                 if line:
                     console.print(line, style=_STYLE.get(update["kind"]), markup=False, highlight=False)
-        if was_settled and len(conversation.processes) == known:
+        if was_settled and (len(conversation.processes), len(conversation.joined)) == known:
             return (EXIT_OK if conversation.succeeded else EXIT_FAILED), conversation
         await asyncio.sleep(POLL_SECONDS)
     conversation.errors.append(f"gave up waiting after {timeout:g} s")
@@ -163,7 +169,7 @@ async def _settled(client: KernelClient, conversation: Conversation) -> bool:
         return False
     if any(not info.get("status") for info in conversation.processes.values()):
         return False
-    for event_id in conversation.callback_events:
+    for event_id in [*conversation.callback_events, *conversation.joined]:
         if not await _handled(client, event_id):
             return False
     return True

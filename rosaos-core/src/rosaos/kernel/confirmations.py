@@ -119,9 +119,14 @@ Announce = Callable[[Confirmation], Awaitable[None]]
 class ConfirmationDesk:
     """The kernel's pending questions, in memory: a process that waits dies with the kernel anyway."""
 
-    def __init__(self, timeout: float, announce: Announce | None = None) -> None:
+    def __init__(
+        self, timeout: float, announce: Announce | None = None, record: Announce | None = None
+    ) -> None:
         self.timeout = timeout
         self._announce = announce
+        self._record = record
+        """Told of every question when asked and when settled (yes, no, expired): the safety log."""
+        self._tasks: set[asyncio.Future[None]] = set()
         self._ids = itertools.count(1)
         self._items: dict[int, Confirmation] = {}
         self._changed: dict[int, asyncio.Event] = {}
@@ -146,6 +151,8 @@ class ConfirmationDesk:
         loop = asyncio.get_running_loop()
         self._timers[item.id] = loop.call_later(self.timeout, self._settle, item.id, "expired", "silence")
         self._forget_old()
+        if self._record is not None:
+            await self._record(item)
         if self._announce is not None:
             await self._announce(item)
         return item
@@ -196,6 +203,10 @@ class ConfirmationDesk:
         if timer is not None:
             timer.cancel()
         self._changed[confirmation_id].set()
+        if self._record is not None:  # called from a timer too: record in a task of its own
+            task: asyncio.Future[None] = asyncio.ensure_future(self._record(self._items[confirmation_id]))
+            self._tasks.add(task)
+            task.add_done_callback(self._tasks.discard)
 
     def _forget_old(self) -> None:
         settled = [key for key, item in self._items.items() if item.state != "pending"]

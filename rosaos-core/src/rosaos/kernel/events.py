@@ -390,6 +390,25 @@ class EventStore:
         rows = await self.database.run(take)
         return _event(rows[0]) if rows else None
 
+    async def take_pending(self, after: int, limit: int) -> list[Event]:
+        """Up to ``limit`` more unhandled events after ``after``, oldest first; each counts as a delivery.
+
+        The kernel takes them with the event it is about to handle, to read them in one turn.
+        """
+
+        def take(connection: sqlite3.Connection) -> list[tuple[Any, ...]]:
+            return connection.execute(
+                "UPDATE events SET attempts = attempts + 1 WHERE id IN "
+                "(SELECT id FROM events WHERE handled_at IS NULL AND id > ? ORDER BY id LIMIT ?) "
+                f"RETURNING {_COLUMNS}",
+                (after, limit),
+            ).fetchall()
+
+        if limit <= 0:
+            return []
+        rows = await self.database.run(take)
+        return sorted((_event(row) for row in rows), key=lambda event: event.id)
+
     async def mark_handled(self, event_id: int) -> bool:
         """Acknowledge an event once the kernel is done with it. False if it was already handled.
 

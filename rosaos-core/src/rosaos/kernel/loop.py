@@ -20,14 +20,13 @@ from pydantic_ai.toolsets import CombinedToolset
 from pydantic_ai.usage import UsageLimits
 
 from rosaos.kernel.agent import trim_history
+from rosaos.kernel.event_text import render_event, render_events
 from rosaos.kernel.events import Event, EventStore
 from rosaos.kernel.launch_cause import CurrentEvent
-from rosaos.kernel.notice_text import render_notice
 from rosaos.kernel.offline_turn import offline_turn
-from rosaos.kernel.timer_text import render_timer_fired
+from rosaos.kernel.short_turns import LaunchAckModel, relayable, relayed_messages
 from rosaos.kernel.updates import UpdateKind, UpdateStream
 from rosaos.models.kernel_model import LocalIntentModel
-from rosaos.receipts import receipts_text
 
 log = logging.getLogger(__name__)
 
@@ -37,32 +36,10 @@ MODEL_RETRIES = 3
 MAX_DELIVERIES = 3
 """An event redelivered this often has crashed the kernel each time: report it and move on."""
 
+BATCH_LIMIT = 20
+"""Most events one LLM turn handles together (those that arrived while the model was thinking)."""
 
-def render_event(event: Event) -> str:
-    """The text the kernel model reads for an event, tagged by kind."""
-    payload: Any = event.payload
-    match event.kind:
-        case "user_said":
-            return f"[User said] {payload.text}"
-        case "user_typed":
-            return f"[User typed] {payload.text}"
-        case "worker_callback":
-            head = f"[Worker callback] worker={payload.process_id} status={payload.status}"
-            if payload.task:
-                head += f" task={payload.task!r}"
-            body = (
-                f"error: {payload.error}" if payload.error else f"output: {payload.output or '(no output)'}"
-            )
-            if payload.receipts:  # what was really done, whatever the output claims
-                body += "\n" + receipts_text(payload.receipts)
-            return f"{head}\n{body}"
-        case "device_notice":
-            return render_notice(payload)
-        case "error":
-            return f"[Error] {payload.message}"
-        case "timer_fired":
-            return render_timer_fired(payload)
-    return f"[{event.kind}] {payload}"
+__all__ = ["KernelLoop", "Output", "render_event", "tool_activity"]
 
 
 class KernelLoop:
@@ -78,6 +55,8 @@ class KernelLoop:
         history_budget: int = 40,
         request_limit: int = 20,
         current: CurrentEvent | None = None,
+        history_chars: int = 4000,
+        relay_reports: bool = True,
     ) -> None:
         self.store = store
         self.updates = updates
@@ -85,6 +64,10 @@ class KernelLoop:
         self.instructions = instructions
         self.model_for = model
         self.history_budget = history_budget
+        self.history_chars = history_chars
+        """The kernel's history is bounded by size too: a few long callbacks weigh like many turns."""
+        self.relay_reports = relay_reports
+        """Relay an ok process's report to the user without a model request (see short_turns)."""
         self.request_limit = request_limit
         self.history: list[ModelMessage] = []
         self.handled = 0
@@ -105,34 +88,73 @@ class KernelLoop:
                 await self.store.wait_for_pending()
 
     async def run_pending(self) -> int:
-        """Handle every pending event, oldest first; return how many were handled."""
+        """Handle every pending event, oldest first; return how many were handled.
+
+        Events for the LLM that arrived while it was thinking are handled together, in one turn
+        with one request (up to :data:`BATCH_LIMIT`): a slow model does not make a queue of turns.
+        The offline engine reads one event per turn and takes them one at a time.
+        """
         count = 0
         while (event := await self.store.next_pending()) is not None:
-            self.current.begin(event.id)
-            try:
-                outputs = await self.handle(event)
-            finally:
-                self.current.end()
-            # The outputs and the acknowledgement commit together: after a crash an event shows
-            # all of its outputs or none (and is then handled again).
-            await self.updates.publish_and_mark_handled(event.id, outputs)
-            self.handled += 1
-            count += 1
+            queue = [event]
+            if self._for_model(event):
+                queue += await self.store.take_pending(after=event.id, limit=BATCH_LIMIT - 1)
+            while queue:
+                batch = [queue.pop(0)]
+                while queue and self._for_model(batch[0]) and self._for_model(queue[0]):
+                    batch.append(queue.pop(0))
+                # A batch's launches are caused by its first event: the offline engine's batches
+                # hold one event, and an LLM batch is handled again whole after a crash.
+                self.current.begin(batch[0].id)
+                try:
+                    outputs = await self.handle_batch(batch)
+                finally:
+                    self.current.end()
+                # The outputs and the acknowledgements commit together: after a crash an event
+                # shows all of its outputs or none (and is then handled again).
+                await self.updates.publish_batch_and_mark_handled([e.id for e in batch], outputs)
+                self.handled += len(batch)
+                count += len(batch)
         return count
 
     def reset_conversation(self) -> None:
         """Forget the kernel's conversation (a fresh start for benchmarks and tests)."""
         self.history = []
 
+    def _for_model(self, event: Event) -> bool:
+        """Whether ``event`` goes to an LLM (which can read several events in one turn)."""
+        return not isinstance(self.model_for(event) or self.agent.model, LocalIntentModel)
+
     async def handle(self, event: Event) -> list[Output]:
         """Run the kernel agent on one event; return the updates that say what it did."""
-        if event.attempts > MAX_DELIVERIES:
-            return [_error(f"event {event.id} was skipped: handling it failed {event.attempts - 1} times")]
-        if self.before is not None and (outputs := await self.before(event)) is not None:
-            return outputs
-        prompt = render_event(event)
-        model = self.model_for(event)
+        return await self.handle_batch([event])
+
+    async def handle_batch(self, events: list[Event]) -> list[Output]:
+        """Run the kernel agent on ``events`` in one turn; return the updates that say what it did."""
+        outputs: list[Output] = []
+        for_model: list[Event] = []
+        for event in events:
+            if event.attempts > MAX_DELIVERIES:
+                outputs.append(
+                    _error(f"event {event.id} was skipped: handling it failed {event.attempts - 1} times")
+                )
+            elif self.before is not None and (answered := await self.before(event)) is not None:
+                outputs += answered
+            else:
+                for_model.append(event)
+        if for_model:
+            outputs += await self._turn(for_model)
+        return outputs
+
+    async def _turn(self, events: list[Event]) -> list[Output]:
+        prompt = render_events(events)
+        model = self.model_for(events[0])
         offline = model or self.agent.model
+        if len(events) == 1 and not isinstance(offline, LocalIntentModel):
+            report = relayable(events[0]) if self.relay_reports else None
+            if report is not None:  # nothing to decide: the process's report is the reply
+                self._remember(relayed_messages(prompt, report))
+                return [("kernel_reply", report, {"relayed": True})]
         for attempt in range(1, MODEL_RETRIES + 1):
             try:
                 if isinstance(offline, LocalIntentModel):  # no agent run needed: see offline_turn
@@ -150,14 +172,15 @@ class KernelLoop:
                         prompt,
                         message_history=self.history,
                         instructions=self.instructions(),
-                        model=model,
+                        model=LaunchAckModel(offline) if offline is not None else None,
                         usage_limits=UsageLimits(request_limit=self.request_limit),
                     )
                     new_messages, output = result.new_messages(), result.output
             except UsageLimitExceeded as error:
                 return [_error(f"the kernel gave up on this event: {error}")]
             except Exception as error:  # the model or its provider failed; try again, then report
-                log.warning("kernel model failed on event %s (attempt %s): %s", event.id, attempt, error)
+                ids = ", ".join(str(event.id) for event in events)
+                log.warning("kernel model failed on event %s (attempt %s): %s", ids, attempt, error)
                 if attempt == MODEL_RETRIES:
                     return [_error(f"the kernel model failed: {type(error).__name__}: {error}")]
                 await asyncio.sleep(0.5 * 2**attempt)
@@ -166,8 +189,11 @@ class KernelLoop:
         outputs = tool_activity(new_messages)
         if output.strip():
             outputs.append(("kernel_reply", output, {}))
-        self.history = trim_history([*self.history, *new_messages], self.history_budget)
+        self._remember(new_messages)
         return outputs
+
+    def _remember(self, new_messages: list[ModelMessage]) -> None:
+        self.history = trim_history([*self.history, *new_messages], self.history_budget, self.history_chars)
 
 
 Output = tuple[UpdateKind, str, dict[str, Any]]

@@ -3,10 +3,12 @@
 ::
 
     [Device notice] device=turtlebot name=battery_low importance=notify data={"battery": 0.12}
-    turtlebot: battery at 12 %
+    "turtlebot: battery at 12 %"
 
-The first line carries the fields, the second the driver's sentence for people. A notice posted
-by hand (no ``name``) keeps the older one-line shape: ``device=X importance=info <message>``.
+The first line carries the fields, the second the driver's sentence for people, as a JSON string:
+a device's text is data, and no line of it may pass for an event header
+(:mod:`rosaos.kernel.event_text`). A notice posted by hand (no ``name``) keeps the older one-line
+shape: ``device=X importance=info "<message>"``.
 """
 
 from __future__ import annotations
@@ -33,8 +35,19 @@ def render_notice(notice: DeviceNotice) -> str:
     if notice.name:
         if notice.data:
             head += f" data={json.dumps(notice.data, ensure_ascii=False, sort_keys=True)}"
-        return f"{head}\n{notice.message}"
-    return f"{head} {notice.message}"
+        return f"{head}\n{json.dumps(notice.message, ensure_ascii=False)}"
+    return f"{head} {json.dumps(notice.message, ensure_ascii=False)}"
+
+
+def _unquoted(text: str) -> str:
+    if text.startswith('"'):
+        try:
+            value = json.loads(text)
+        except ValueError:
+            return text
+        if isinstance(value, str):
+            return value
+    return text
 
 
 @dataclass(frozen=True)
@@ -62,7 +75,7 @@ def read_notice(body: str) -> ReadNotice:
         data = loaded if isinstance(loaded, dict) else {}
     return ReadNotice(
         device=match.group("device"),
-        message=body.strip()[match.end() :].strip() or body.strip(),
+        message=_unquoted(body.strip()[match.end() :].strip() or body.strip()),
         name=match.group("name"),
         importance=match.group("importance") or "info",
         data=data,

@@ -38,7 +38,7 @@ from rosaos.kernel.api.app import create_app
 from rosaos.kernel.api.kernel_client import kernel_file, running_kernel_url
 from rosaos.kernel.api.login_codes import LoginCodes, login_url
 from rosaos.kernel.api.schemas import DeviceSafeStop, DeviceView, EmergencyStopReport, EmergencyStopState
-from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people
+from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people, record_confirmation
 from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
 from rosaos.kernel.device_status import DeviceStatusUpdates
 from rosaos.kernel.events import DeviceNoticeEvent, Event, EventStore, StoreClosedError, WorkerCallbackEvent
@@ -284,6 +284,8 @@ class Kernel:
                 token=entry.token or self._token,
                 status=entry.status,
                 confirm=self._confirm_rule(name),
+                attached_tools=tuple(spec.attached_tools),
+                attached_prompt=spec.attached_prompt,
             )
         return endpoints
 
@@ -314,10 +316,12 @@ class Kernel:
     async def _start_parts(self, sock: socket.socket) -> None:
         self._store = await EventStore.open(self.data_dir / EVENTS_FILE)
         self._updates = await UpdateStream.open(self._store.database)
-        self.confirmations = ConfirmationDesk(
-            self.config.kernel.confirm_timeout, lambda item: ask_people(self._updates, self.endpoints(), item)
-        )
         self._activity = await ActivityLog.open(self._store.database)
+        self.confirmations = ConfirmationDesk(
+            self.config.kernel.confirm_timeout,
+            lambda item: ask_people(self._updates, self.endpoints(), item),
+            record=lambda item: record_confirmation(self._activity, self._updates, item),
+        )
         self._live = LiveProcesses(self._store)
         self.timers = await TimerBook.open(self._store, self._updates.publish_event)
         # A device that boots in the background (the Reachy simulator: seconds of CPU) waits until
@@ -403,6 +407,8 @@ class Kernel:
             model=self._model_for_event,
             history_budget=self.config.kernel.history_messages,
             current=current,
+            history_chars=self.config.kernel.history_chars,
+            relay_reports=self.config.kernel.relay_reports,
         )
         self.loop.before = lambda event: answer_from_chat(self.confirmations, event)
         app = create_app(

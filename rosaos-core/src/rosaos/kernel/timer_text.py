@@ -91,4 +91,5 @@ def render_timer_fired(payload: TimerFired) -> str:
     head = f"[Timer fired] timer={payload.timer_id} due={payload.due.astimezone().strftime('%H:%M:%S')}"
     if payload.late_seconds >= LATE_AFTER_SECONDS:
         head += f" (late by {duration_text(payload.late_seconds)}: the kernel was not running then)"
-    return f"{head}\naction: {payload.action}"
+    action = " ".join(payload.action.splitlines())  # one line: it cannot start an event of its own
+    return f"{head}\naction: {action}"

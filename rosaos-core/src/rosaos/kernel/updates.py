@@ -143,31 +143,65 @@ class UpdateStream:
         """
         return await self._publish(items, event_id, mark_handled=True)
 
+    async def publish_batch_and_mark_handled(
+        self, event_ids: Sequence[int], items: Sequence[tuple[UpdateKind, str, dict[str, Any]]]
+    ) -> list[int]:
+        """Publish what the kernel did for events it handled in one turn, and mark them all handled.
+
+        The outputs belong to the last event; each earlier one gets a ``notice`` whose data says
+        ``handled_with`` that event, so a chat following an earlier message follows the turn too.
+        One transaction, as for a single event.
+        """
+        if len(event_ids) == 1:
+            return await self.publish_and_mark_handled(event_ids[0], items)
+        *earlier, last = event_ids
+        groups: list[tuple[int | None, Sequence[tuple[UpdateKind, str, dict[str, Any] | None]]]] = [
+            (event_id, [("notice", f"handled together with event {last}", {"handled_with": last})])
+            for event_id in earlier
+        ]
+        groups.append((last, items))
+        return await self._publish_groups(groups, mark_handled=True)
+
     async def _publish(
         self,
         items: Sequence[tuple[UpdateKind, str, dict[str, Any] | None]],
         event_id: int | None,
         mark_handled: bool,
     ) -> list[int]:
+        return await self._publish_groups([(event_id, items)], mark_handled)
+
+    async def _publish_groups(
+        self,
+        groups: Sequence[tuple[int | None, Sequence[tuple[UpdateKind, str, dict[str, Any] | None]]]],
+        mark_handled: bool,
+    ) -> list[int]:
+        """Insert each group's updates under its event (and mark it handled), all in one transaction."""
         at = time.time()
-        encoded = [(kind, text, json.dumps(data or {}, default=str)) for kind, text, data in items]
+        encoded = [
+            (event_id, [(kind, text, json.dumps(data or {}, default=str)) for kind, text, data in items])
+            for event_id, items in groups
+        ]
 
         def commit(connection: sqlite3.Connection) -> list[int]:
-            ids = [
-                int(
-                    connection.execute(
-                        "INSERT INTO updates (time, kind, text, data, event_id) VALUES (?, ?, ?, ?, ?) RETURNING id",
-                        (at, kind, text, data, event_id),
-                    ).fetchall()[0][0]
-                )
-                for kind, text, data in encoded
-            ]
-            if mark_handled and event_id is not None:
-                mark_handled_in(connection, event_id)
+            ids = []
+            for event_id, rows in encoded:
+                for kind, text, data in rows:
+                    ids.append(
+                        int(
+                            connection.execute(
+                                "INSERT INTO updates (time, kind, text, data, event_id) "
+                                "VALUES (?, ?, ?, ?, ?) RETURNING id",
+                                (at, kind, text, data, event_id),
+                            ).fetchall()[0][0]
+                        )
+                    )
+                if mark_handled and event_id is not None:
+                    mark_handled_in(connection, event_id)
             return ids
 
         ids = await self._database.run(commit)
-        for update_id, (kind, text, data) in zip(ids, encoded, strict=True):
+        flat = [(event_id, row) for event_id, rows in encoded for row in rows]
+        for update_id, (event_id, (kind, text, data)) in zip(ids, flat, strict=True):
             update = Update(
                 id=update_id,
                 time=datetime.fromtimestamp(at, UTC),

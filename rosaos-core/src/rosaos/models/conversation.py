@@ -8,6 +8,7 @@ what they returned). This module holds that reading, shared by the kernel and pr
 from __future__ import annotations
 
 import ast
+import json
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -81,10 +82,12 @@ def parse_callback(body: str) -> WorkerCallbackEvent:
             task = None
     output = error = None
     rest = rest.split(f"\n{RECEIPTS_HEADING}", 1)[0]  # the receipts follow the output or error
+    rest, _, report = rest.partition("\nreport: ")  # a failure's report follows its error
     if rest.startswith("error:"):
-        error = rest[len("error:") :].strip()
+        error = _unquoted(rest[len("error:") :])
+        output = _unquoted(report) if report else None
     elif rest.startswith("output:"):
-        output = rest[len("output:") :].strip()
+        output = _unquoted(rest[len("output:") :])
     return WorkerCallbackEvent(
         worker=int(worker.group("worker")) if worker else None,
         status=status.group("status") if status else "unknown",
@@ -92,6 +95,19 @@ def parse_callback(body: str) -> WorkerCallbackEvent:
         output=output,
         error=error,
     )
+
+
+def _unquoted(text: str) -> str:
+    """A rendered value: JSON strings (how event_text quotes data) decoded, other text as it is."""
+    text = text.strip()
+    if text.startswith('"'):
+        try:
+            value = json.loads(text)
+        except ValueError:
+            return text
+        if isinstance(value, str):
+            return value.strip()
+    return text
 
 
 def last_request(messages: Sequence[ModelMessage]) -> ModelRequest | None:
@@ -135,6 +151,28 @@ def tool_outcomes(messages: Sequence[ModelMessage]) -> list[ToolOutcome]:
             elif isinstance(part, RetryPromptPart):  # older histories: a tool error asking to retry
                 results[part.tool_call_id] = (False, part.content)
     return [ToolOutcome(calls[key], *results[key]) for key in order if key in results]
+
+
+def report_with_accepted_calls(messages: Sequence[ModelMessage]) -> tuple[list[ToolCallPart], str] | None:
+    """The tool calls of the last response and the text written beside them, when every one of
+    those calls succeeded and nothing else came since; None otherwise.
+
+    A model that writes its report (or its words for the user) in the same response as the calls
+    that finish its work needs no further request once they succeed (kernel/short_turns.py,
+    processes/final_call.py).
+    """
+    if len(messages) < 2 or not isinstance(messages[-1], ModelRequest):
+        return None
+    last, previous = messages[-1], messages[-2]
+    if not isinstance(previous, ModelResponse) or not previous.tool_calls:
+        return None
+    if any(isinstance(part, UserPromptPart) for part in last.parts):
+        return None
+    results = [part for part in last.parts if isinstance(part, ToolReturnPart | RetryPromptPart)]
+    accepted = [part for part in results if isinstance(part, ToolReturnPart) and part.outcome == "success"]
+    if len(accepted) != len(previous.tool_calls) or len(results) != len(accepted):
+        return None
+    return list(previous.tool_calls), (previous.text or "").strip()
 
 
 def responses_by(messages: Sequence[ModelMessage], model_name: str) -> bool:

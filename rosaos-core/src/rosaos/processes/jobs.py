@@ -13,9 +13,11 @@ from pydantic import AliasChoices, BaseModel, ConfigDict, Field
 from rosaos.models.select import ModelSpec
 from rosaos.receipts import Receipt
 
-ProcessStatus = Literal["ok", "error", "crashed", "timeout", "terminated"]
-"""How a process ended: ``ok`` (the agent finished), ``error`` (it raised), ``crashed`` (the
-worker died), ``timeout`` (killed at the job timeout), ``terminated`` (killed on request)."""
+ProcessStatus = Literal["ok", "error", "crashed", "timeout", "terminated", "unverified"]
+"""How a process ended: ``ok`` (the agent finished, and a device call shows it), ``error`` (it
+raised, or a device call failed and was not made good), ``crashed`` (the worker died), ``timeout``
+(killed at the job timeout), ``terminated`` (killed on request), ``unverified`` (the model said it
+was done but no device call of the process succeeded, so nothing shows it happened)."""
 
 
 class GrantedDevice(BaseModel):
@@ -31,6 +33,9 @@ class GrantedDevice(BaseModel):
     prompt: str
     confirm: list[str] | Literal["destructive"] | None = None
     """Tools that need a person's yes first (names, or every destructive one)."""
+    tools: list[str] | None = None
+    """The only tools of this device the process is offered; None: all of them. An always-attached
+    device the kernel did not ask for comes with its speaking tools only."""
 
 
 class WorkerJob(BaseModel):
@@ -48,6 +53,8 @@ class WorkerJob(BaseModel):
     callback_url: str
     """The kernel's ``POST /event`` URL."""
     callback_token: str
+    world_devices: list[str] = Field(default_factory=list)
+    """Every device of the world, so a call to one the process was not granted can be named."""
 
 
 class WorkerCallback(BaseModel):

@@ -31,7 +31,7 @@ from rosaos.processes.pool import PoolError, WorkerPool
 
 log = logging.getLogger("rosaos.processes.manager")
 
-ProcessState = Literal["running", "ok", "error", "crashed", "timeout", "terminated"]
+ProcessState = Literal["running", "ok", "error", "crashed", "timeout", "terminated", "unverified"]
 
 
 class ProcessProgress(BaseModel):
@@ -183,13 +183,14 @@ class ProcessManager:
         job = WorkerJob(
             process_id=process_id,
             task=task,
-            devices=[_granted(endpoints[name]) for name in granted],
+            devices=[_granted(endpoints[name], asked=name in devices) for name in granted],
             model=self._model,
             base_prompt=self._base_prompt,
             timeout=self._job_timeout,
             request_limit=self._request_limit,
             callback_url=self._callback_url,
             callback_token=self._callback_token,
+            world_devices=sorted(endpoints),
         )
         info = ProcessInfo(id=process_id, task=task, devices=granted, state="running", started_at=_now())
         self._processes[process_id] = info
@@ -290,16 +291,21 @@ class ProcessManager:
             ) from None
 
 
-def _granted(endpoint: DeviceEndpoint) -> GrantedDevice:
+def _granted(endpoint: DeviceEndpoint, asked: bool = True) -> GrantedDevice:
+    """The job's view of a granted device. One granted only because it is always attached (the
+    kernel did not ask for it) comes with its speaking tools and short prompt, if its driver has them:
+    a light switch need not carry the Reachy's head, camera and emotions."""
     assert endpoint.url is not None, "the lease table grants served devices only"
+    attached_only = not asked and endpoint.always_attached and bool(endpoint.attached_tools)
     return GrantedDevice(
         name=endpoint.name,
         driver=endpoint.driver,
         url=endpoint.url,
         token=endpoint.token,
         description=endpoint.description,
-        prompt=endpoint.prompt,
+        prompt=(endpoint.attached_prompt or endpoint.prompt) if attached_only else endpoint.prompt,
         confirm=endpoint.confirm,
+        tools=list(endpoint.attached_tools) if attached_only else None,
     )
 
 

@@ -43,6 +43,7 @@ from rosaos.intents.planning.plan import Plan, PlanError, decode_plan
 from rosaos.models.process_model import LocalPlanModel
 from rosaos.models.select import ModelError, build_model
 from rosaos.processes.confirming import ConfirmationDeclined, ConfirmingToolset, KernelAsker
+from rosaos.processes.final_call import FINAL_CALL_MODEL, FinalCallModel
 from rosaos.processes.jobs import (
     GrantedDevice,
     ProcessStatus,
@@ -51,11 +52,12 @@ from rosaos.processes.jobs import (
     callback_idempotency_key,
 )
 from rosaos.processes.keepalive import DeadlineToolset, DeviceLink, keepalives, owner_headers
+from rosaos.processes.lease_guard import LeaseGuardModel
 from rosaos.processes.plan_runner import run_plan
 from rosaos.processes.prompts import process_system_prompt, tool_prefix
 from rosaos.processes.recording import RecordingToolset
 from rosaos.processes.tool_calls import ToolCallLog, observed
-from rosaos.processes.vision import image_budget_for, image_headers
+from rosaos.processes.vision import ImageFallbackModel, image_budget_for, image_headers
 from rosaos.receipts import Receipt
 
 log = logging.getLogger("rosaos.processes.worker")
@@ -122,6 +124,14 @@ async def run_job(job: WorkerJob) -> WorkerCallback:
     if status == "ok" and failed is not None:
         # The model may have written a polite sentence about it; the device call still failed.
         status, error = "error", f"{failed.device}: {failed.tool} failed: {failed.error}"
+    if status == "ok" and messages and job.devices and not any(call.ok for call in calls.calls):
+        # A model ran the process and said it was done, but no device call of it succeeded:
+        # success is the devices' word, not the model's (issue 22).
+        status = "unverified"
+        error = (
+            "the process agent said it was done, but it made no successful device call, so nothing "
+            "shows that it happened; its report is not a result"
+        )
     requests, tool_calls = count_usage(messages)
     if not messages:  # a plan run without an agent (processes/plan_runner.py): no model requests
         tool_calls = len(calls.calls)
@@ -235,20 +245,29 @@ async def _run_agent_linked(
 ) -> str:
     model = process_model(job)
     prefixed = len(job.devices) > 1
+    recorded = receipts if receipts is not None else []
     try:
         toolsets: list[AbstractToolset[Any]] = []
         asker = KernelAsker(job.callback_url.removesuffix("/event"), job.callback_token, job.process_id)
         for device in job.devices:
             session = await SESSIONS.toolset(device, image_budget_for(job.model, model))
             bounded = DeadlineToolset(wrapped=session, link=links.get(device.name))
-            guarded = ConfirmingToolset(bounded, device=device.name, rule=device.confirm, asker=asker)
-            recorded = receipts if receipts is not None else []
+            # The offline plan runner calls the tools its plan names; only a model is offered less.
+            offered = bounded if isinstance(model, LocalPlanModel) else offered_tools(bounded, device.tools)
+            guarded = ConfirmingToolset(offered, device=device.name, rule=device.confirm, asker=asker)
             toolset = observed(
                 RecordingToolset(guarded, device=device.name, receipts=recorded), device.name, calls
             )
             toolsets.append(toolset.prefixed(tool_prefix(device.name)) if prefixed else toolset)
         if isinstance(model, LocalPlanModel) and (plan := plan_of(job.task)) is not None:
             return await run_plan(plan, toolsets, model, model.language)
+        if not isinstance(model, LocalPlanModel):
+            granted = [device.name for device in job.devices]
+            model = FinalCallModel(
+                LeaseGuardModel(
+                    ImageFallbackModel(model), job.process_id, granted, job.world_devices, recorded
+                )
+            )
         agent = Agent(
             model,
             instructions=process_system_prompt(job.base_prompt, job.task, job.devices),
@@ -260,6 +279,14 @@ async def _run_agent_linked(
         await SESSIONS.forget(job.devices)
         raise
     return str(result.output)
+
+
+def offered_tools(session: AbstractToolset[Any], tools: Sequence[str] | None) -> AbstractToolset[Any]:
+    """``session`` limited to ``tools`` (None: all of them), e.g. the Reachy's speaking tools."""
+    if tools is None:
+        return session
+    allowed = frozenset(tools)
+    return session.filtered(lambda ctx, tool: tool.name in allowed)
 
 
 def plan_of(task: str) -> Plan | None:
@@ -322,7 +349,10 @@ def describe_error(failure: BaseException) -> str:
 def count_usage(messages: Sequence[ModelMessage]) -> tuple[int, int]:
     """Model requests (responses received) and tool calls made, from a run's messages."""
     responses = [message for message in messages if isinstance(message, ModelResponse)]
-    return len(responses), sum(len(response.tool_calls) for response in responses)
+    asked = [
+        response for response in responses if response.model_name != FINAL_CALL_MODEL
+    ]  # not the local end
+    return len(asked), sum(len(response.tool_calls) for response in responses)
 
 
 def callback_event(callback: WorkerCallback) -> dict[str, Any]:

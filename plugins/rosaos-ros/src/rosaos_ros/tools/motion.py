@@ -25,15 +25,24 @@ MIN_ANGULAR_SPEED = 0.05
 """rad/s: the same floor for turns."""
 
 
+def _bounds(low: float, high: float) -> dict[str, Any]:
+    """JSON-schema bounds that override the validation bounds in what the model reads."""
+    return {"minimum": low, "maximum": high}
+
+
 def register(mcp: FastMCP, backend: RosBackend) -> None:
     """Add drive, move_distance, rotate and stop, described with this robot's limits."""
     limits, speeds = backend.limits, backend.profile.speeds
+    # The schema's bounds are this robot's real limits, so a model that trusts the schema is not
+    # refused. Validation keeps a wider sanity bound: a value between the two reaches the safety
+    # rule, whose refusal names the limit and the setting that raises it (and is logged as such).
     Linear = Annotated[
         float,
         Field(
             ge=-10,
             le=10,
             description=f"Forward speed in m/s, negative to reverse; at most {limits.linear:g} here.",
+            json_schema_extra=_bounds(-limits.linear, limits.linear),
         ),
     ]
     Angular = Annotated[
@@ -42,6 +51,7 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
             ge=-20,
             le=20,
             description=f"Turn rate in rad/s, positive turns left; at most {limits.angular:g} here.",
+            json_schema_extra=_bounds(-limits.angular, limits.angular),
         ),
     ]
 
@@ -96,6 +106,7 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
                     f"m/s, at least {MIN_LINEAR_SPEED:g}; default {min(speeds.linear, limits.linear):g}, "
                     f"at most {limits.linear:g}."
                 ),
+                json_schema_extra={"maximum": limits.linear},
             ),
         ] = None,
     ) -> dict[str, Any]:
@@ -123,6 +134,7 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
                     f"rad/s, at least {MIN_ANGULAR_SPEED:g}; default {min(speeds.angular, limits.angular):g}, "
                     f"at most {limits.angular:g}."
                 ),
+                json_schema_extra={"maximum": limits.angular},
             ),
         ] = None,
     ) -> dict[str, Any]:

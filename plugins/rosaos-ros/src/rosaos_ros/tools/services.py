@@ -79,7 +79,9 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
         """Read one parameter's value."""
         return {"name": name, "value": await rosapi.get_param(name)}
 
-    @mcp.tool(annotations=SETS)
+    # Destructive: a parameter changes how a node drives the robot (speed limits, controllers), so
+    # a "destructive" confirmation rule asks before it like before a move.
+    @mcp.tool(annotations=SETS.model_copy(update={"destructive_hint": True}))
     async def set_param(name: ParamName, value: ParamValue) -> dict[str, Any]:
         """Set an allowed parameter (the node keeps its type: give a number for a number).
 
