@@ -106,6 +106,8 @@ class Kernel:
         self._started = False
         self.login_codes = LoginCodes()
         self.url = ""
+        self.status_updates: DeviceStatusUpdates | None = None
+        """Publishes devices going down and back (None when the devices are hosted elsewhere)."""
 
     # --- KernelRuntime ---------------------------------------------------------------------------
 
@@ -296,7 +298,8 @@ class Kernel:
             self.world, self.data_dir, self._token, defer_background=True
         )
         if isinstance(self.supervisor, DeviceSupervisor):
-            self.supervisor.on_status_change = DeviceStatusUpdates(self._updates).changed
+            self.status_updates = DeviceStatusUpdates(self._updates, self.supervisor.host_of)
+            self.supervisor.on_status_change = self.status_updates.changed
         kernel = self.config.kernel
         pool = WorkerPool(size=kernel.pool_size, env=self._worker_env, fork_server=kernel.fork_server)
         self.manager = ProcessManager(
