@@ -301,7 +301,12 @@ class Kernel:
             self.status_updates = DeviceStatusUpdates(self._updates, self.supervisor.host_of)
             self.supervisor.on_status_change = self.status_updates.changed
         kernel = self.config.kernel
-        pool = WorkerPool(size=kernel.pool_size, env=self._worker_env, fork_server=kernel.fork_server)
+        pool = WorkerPool(
+            size=kernel.pool_size,
+            env=self._worker_env,
+            fork_server=kernel.fork_server,
+            max_workers=kernel.max_workers,
+        )
         self.manager = ProcessManager(
             devices=self.endpoints,
             model=self._process_model,
