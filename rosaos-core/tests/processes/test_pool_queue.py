@@ -63,7 +63,7 @@ async def test_a_queued_job_can_be_terminated_before_it_starts(
     assert not await pool.terminate(queued.process_id)
 
 
-def test_the_default_cap_is_sized_to_the_machine() -> None:
+async def test_the_default_cap_is_sized_to_the_machine() -> None:
     assert default_max_workers() >= LEAST
     assert WorkerPool(size=2).max_workers == default_max_workers()
     assert WorkerPool(size=8, max_workers=3).max_workers == 8  # never below the warm pool
