@@ -23,6 +23,7 @@ from typing import Any, TextIO
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from rosaos.devices.heartbeat import beat
 from rosaos.devices.host import HostJob, install_stop_signals, serve_until_stopped, stop_on_stdin_eof
 from rosaos.devices.serve import ServedDevice
 from rosaos.drivers import DeviceError
@@ -42,7 +43,7 @@ class BatchHandshake:
     """One line per instance on the host's stdout; each instance speaks once."""
 
     def __init__(self, stream: TextIO) -> None:
-        self._stream = stream
+        self.stream = stream
         self.sent: set[str] = set()
 
     def send(self, instance: str, message: dict[str, Any]) -> None:
@@ -51,8 +52,8 @@ class BatchHandshake:
             log.error("%s: %s", instance, message.get("error", message))
             return
         self.sent.add(instance)
-        self._stream.write(json.dumps({"instance": instance, **message}) + "\n")
-        self._stream.flush()
+        self.stream.write(json.dumps({"instance": instance, **message}) + "\n")
+        self.stream.flush()
 
 
 async def run_batch(batch: HostBatch, handshake: BatchHandshake, watch_stdin: bool) -> int:
@@ -60,6 +61,8 @@ async def run_batch(batch: HostBatch, handshake: BatchHandshake, watch_stdin: bo
     stop = asyncio.Event()
     install_stop_signals(stop)
     watcher = asyncio.create_task(stop_on_stdin_eof(stop)) if watch_stdin else None
+    heartbeat = batch.jobs[0].heartbeat
+    ticker = asyncio.create_task(beat(handshake.stream, heartbeat)) if watch_stdin else None
     broke: list[str] = []
 
     async def serve(job: HostJob) -> None:
@@ -92,6 +95,7 @@ async def run_batch(batch: HostBatch, handshake: BatchHandshake, watch_stdin: bo
     try:
         await asyncio.gather(*(serve(job) for job in batch.jobs))
     finally:
-        if watcher is not None:
-            watcher.cancel()
+        for task in (watcher, ticker):
+            if task is not None:
+                task.cancel()
     return 1 if broke or not handshake.sent else 0

@@ -5,10 +5,11 @@ does not ask for a process of its own (``DriverSpec.own_process``) is served by 
 host (:mod:`rosaos.devices.host_batch`); every other local instance (a real device, the Reachy
 daemon) gets a host subprocess of its own (:mod:`rosaos.devices.host`).
 
-Liveness is checked per host, not per instance (:mod:`rosaos.devices.liveness`): every few
-seconds one ``GET /health`` speaks for all the instances a host serves. A late probe changes
-nothing; only after several missed probes *and* a failed real call (``get_state`` with a generous
-timeout) is the host called down and restarted. A host that exits is restarted at once. Restarts
+Liveness is checked per host, not per instance (:mod:`rosaos.devices.liveness`): the host's
+heartbeat, a line its event loop writes every second, speaks for all the instances it serves.
+A late beat changes nothing; only after several checks without a fresh beat *and* a failed real
+call (``get_state`` with a generous timeout, during which no beat came either) is the host
+called down and restarted. A host that exits is restarted at once. Restarts
 back off exponentially, and a crash restarts the instances of that host and no other. An instance
 that cannot start in the shared host is retried in a host of its own. A host that cannot start is
 reported (log, status, run file) and retried, never fatal. Placeholder drivers are listed as
@@ -38,14 +39,12 @@ from types import TracebackType
 from typing import Any
 from urllib.parse import urlsplit
 
-import httpx
-
 from rosaos.auth import token_path
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.directory import DirectoryEntry, SafeStopOutcome, safe_stop_entry
 from rosaos.devices.host import START_TIMEOUT, HostJob
 from rosaos.devices.host_process import HostProcess
-from rosaos.devices.liveness import LivenessRule, probe
+from rosaos.devices.liveness import LivenessRule
 from rosaos.devices.run_files import (
     DeviceStatus,
     RunFile,
@@ -139,6 +138,8 @@ class DeviceSupervisor:
         self.unhealthy_after = unhealthy_after
         """Missed liveness probes in a row before a real call decides whether a host is down."""
         self.real_call_timeout = real_call_timeout
+        self.heartbeat = min(1.0, health_interval / 2)
+        """Seconds between a host's heartbeat lines: at least two per check."""
         """Seconds that real call may take: generous, so that a busy machine is not a dead host."""
         self.backoff_base = backoff_base
         self.backoff_cap = backoff_cap
@@ -151,8 +152,6 @@ class DeviceSupervisor:
         self._save_lock = asyncio.Lock()
         self._token_file = token_path(data_dir)
         self._owns_runtime_file = False
-        self._http: httpx.AsyncClient | None = None
-        """Kept-open connections for the liveness probes (one per host)."""
 
     async def __aenter__(self) -> DeviceSupervisor:
         try:
@@ -184,7 +183,6 @@ class DeviceSupervisor:
                 f"{other.supervisor_pid}); stop it first, or use another data_dir"
             )
         self._owns_runtime_file = True
-        self._http = httpx.AsyncClient()
         await asyncio.to_thread(self._prepare_files)
         shared: list[_Hosted] = []
         for instance in self.world:
@@ -248,9 +246,6 @@ class DeviceSupervisor:
         if self._owns_runtime_file:  # never remove the file of another rosaOS we refused to race
             async with self._save_lock:
                 await asyncio.to_thread(self.runtime_file.unlink, missing_ok=True)
-        if self._http is not None:
-            await self._http.aclose()
-            self._http = None
 
     def host_of(self, name: str) -> str:
         """Which host serves ``name``: the shared host's name, or the instance's own name."""
@@ -347,6 +342,7 @@ class DeviceSupervisor:
                 self._token_file,
                 self.world.source,
                 host=self.host,
+                heartbeat=self.heartbeat,
                 port=hosted.instance.port or 0,
                 preferred_port=None if hosted.instance.port else hosted.port,
             )
@@ -398,15 +394,16 @@ class DeviceSupervisor:
                     for hosted in group:
                         self._set(hosted, "restarting", url=None, error=error)
                     return
-                verdict = rule.observe(await self._alive(group))
+                verdict = rule.observe(self._beating(host))
                 if verdict == "late":
-                    log.info("%s: liveness probe %d missed; not down yet", _names(group), rule.misses)
+                    log.info("%s: no heartbeat at check %d; not down yet", _names(group), rule.misses)
                     continue
                 if verdict == "ask":
+                    last_beat = host.last_tick
                     error = await self._real_call(group[0], self.real_call_timeout)
-                    if error is not None:
+                    if error is not None and host.last_tick == last_beat and not exited.done():
                         log.warning(
-                            "%s: %d liveness probes missed and get_state failed (%s); restarting the host",
+                            "%s: no heartbeat for %d checks and get_state failed (%s); restarting the host",
                             _names(group),
                             rule.misses,
                             error,
@@ -420,11 +417,9 @@ class DeviceSupervisor:
         finally:
             exited.cancel()
 
-    async def _alive(self, group: list[_Hosted]) -> bool:
-        """The host's one liveness probe: ``/health`` on the port of its first instance."""
-        assert self._http is not None
-        url = group[0].url
-        return url is not None and await probe(self._http, url, self.health_timeout)
+    def _beating(self, host: HostProcess) -> bool:
+        """The host's one liveness signal: a heartbeat within the last ``health_timeout`` (plus a beat)."""
+        return asyncio.get_running_loop().time() - host.last_tick <= self.health_timeout + self.heartbeat
 
     async def _real_call(self, hosted: _Hosted, timeout: float) -> str | None:
         """``get_state`` on one instance: None when it answered, else the error."""
