@@ -11,6 +11,11 @@ it serves, or ``{"instance", "error"}`` when it could not start. An instance tha
 does not stop the others; the supervisor retries it in a process of its own. An instance whose
 server stops after it was ready ends the whole process with code 1, so the supervisor notices at
 once and restarts the batch.
+
+At most :data:`STARTING_AT_ONCE` instances start at the same time. Started all together, a
+hundred instances share the CPU fairly and each takes a hundred times longer, so on a busy
+machine every one of them overruns its driver's own start-up timeout (a Tapo simulator allows
+5 s); a few at a time, each starts quickly and the last is ready no later.
 """
 
 from __future__ import annotations
@@ -29,6 +34,8 @@ from rosaos.devices.serve import ServedDevice
 from rosaos.drivers import DeviceError
 
 log = logging.getLogger("rosaos.devices.host")
+
+STARTING_AT_ONCE = 8
 
 
 class HostBatch(BaseModel):
@@ -64,9 +71,19 @@ async def run_batch(batch: HostBatch, handshake: BatchHandshake, watch_stdin: bo
     heartbeat = batch.jobs[0].heartbeat
     ticker = asyncio.create_task(beat(handshake.stream, heartbeat)) if watch_stdin else None
     broke: list[str] = []
+    starting = asyncio.Semaphore(STARTING_AT_ONCE)
 
     async def serve(job: HostJob) -> None:
+        await starting.acquire()
+        turn = [True]  # this instance holds a start-up turn until it is ready or has failed
+
+        def give_back() -> None:
+            if turn:
+                turn.clear()
+                starting.release()
+
         def ready(served: ServedDevice) -> None:
+            give_back()
             handshake.send(job.instance, {"url": served.url, "pid": os.getpid()})
             log.info("%s (%s, %s) serving at %s", job.instance, job.driver, job.backend, served.url)
 
@@ -91,6 +108,8 @@ async def run_batch(batch: HostBatch, handshake: BatchHandshake, watch_stdin: bo
                 str(error) if isinstance(error, DeviceError | OSError) else f"{type(error).__name__}: {error}"
             )
             handshake.send(job.instance, {"error": reason})
+        finally:
+            give_back()
 
     try:
         await asyncio.gather(*(serve(job) for job in batch.jobs))
