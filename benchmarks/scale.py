@@ -40,13 +40,21 @@ import httpx
 from footprint import BANNER, children, cpu_seconds, free_port, memory_kib, served
 
 START_LIMIT = 300.0
-BUSY_LOOP = "import sys, time\nend = time.monotonic() + float(sys.argv[1])\nwhile time.monotonic() < end:\n    pass\n"
+BUSY_LOOP = (
+    "import sys, time\nend = time.monotonic() + float(sys.argv[1])\nwhile time.monotonic() < end:\n    pass\n"
+)
 
 
 def world(n: int, data_dir: Path) -> str:
     lines = [f'data_dir = "{data_dir}"', "[kernel]", "pool_size = 2", ""]
     for k in range(n):
-        lines += [f"[devices.lamp_{k}]", 'driver = "tapo"', f'description = "Lamp {k}"', "sim = { on = false }", ""]
+        lines += [
+            f"[devices.lamp_{k}]",
+            'driver = "tapo"',
+            f'description = "Lamp {k}"',
+            "sim = { on = false }",
+            "",
+        ]
     return "\n".join(lines)
 
 
@@ -158,7 +166,9 @@ def one_run(n: int, busy: int, busy_seconds: float, idle: float, burst_limit: fl
             port = free_port()
             command = [sys.executable, "-m", "rosaos.cli", "up", "--config", str(config), "--port", str(port)]
             started = time.perf_counter()
-            up = subprocess.Popen(command, cwd=home, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+            up = subprocess.Popen(
+                command, cwd=home, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True
+            )
             try:
                 return measure(up, n, data_dir, started, port, idle, burst_limit)
             finally:
@@ -175,7 +185,13 @@ def one_run(n: int, busy: int, busy_seconds: float, idle: float, burst_limit: fl
 
 
 def measure(
-    up: subprocess.Popen[str], n: int, data_dir: Path, started: float, port: int, idle: float, burst_limit: float
+    up: subprocess.Popen[str],
+    n: int,
+    data_dir: Path,
+    started: float,
+    port: int,
+    idle: float,
+    burst_limit: float,
 ) -> dict[str, Any]:
     assert up.stdout is not None
     lines: list[str] = []
@@ -214,7 +230,9 @@ def measure(
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--n", type=int, nargs="+", default=[10, 100], help="device counts (default 10 100)")
     parser.add_argument("--busy", type=int, default=0, help="CPU-bound busy loops beside it (default 0)")
     parser.add_argument("--busy-seconds", type=float, default=300.0, help="each busy loop stops after this")

@@ -216,7 +216,9 @@ class WorkerPool:
             handle = await self._start_job(job)
         except PoolError as failure:
             self._running.discard(job.process_id)
-            await self._report(ended(job, "error", f"could not start a worker for the process: {failure}"), False)
+            await self._report(
+                ended(job, "error", f"could not start a worker for the process: {failure}"), False
+            )
             return
         if self.on_started is not None and handle.worker_pid is not None:
             self.on_started(job.process_id, handle.worker_pid)
