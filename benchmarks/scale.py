@@ -136,7 +136,7 @@ async def burst(url: str, token: str, n: int, limit: float) -> dict[str, Any]:
         settled = time.perf_counter() - started
         latencies = sorted(latency for status, latency in ended.values() if status == "ok")
         views = (await api.get("/devices")).json()
-    lamps_on = sum(1 for view in views if (view.get("state") or {}).get("on") is True)
+    states = [(view.get("state") or {}).get("on") for view in views]
     return {
         "commands": n,
         "ok": len(latencies),
@@ -150,7 +150,9 @@ async def burst(url: str, token: str, n: int, limit: float) -> dict[str, Any]:
         "notice_texts": notices[:10],
         "refusal_texts": refused[:3],
         "unfinished_replies": [replies.get(event, "") for event in sent if event not in ended][:5],
-        "lamps_on": lamps_on,
+        "lamps_on": states.count(True),
+        "lamps_off": states.count(False),
+        "lamps_unread": states.count(None),  # GET /devices could not read them in time
     }
 
 
@@ -206,7 +208,7 @@ def measure(
     # Drain its output from now on, so a full pipe never stalls it.
     drain = subprocess.Popen(["cat"], stdin=up.stdout, stdout=subprocess.DEVNULL)
     healthy = wait_healthy(data_dir, n, started)
-    time.sleep(3.0)  # let start-up work end before the idle window
+    time.sleep(10.0)  # let start-up work end before the idle window
     cpu_before, at = cpu_seconds(tree(up.pid)), time.perf_counter()
     time.sleep(idle)
     idle_cpu = (cpu_seconds(tree(up.pid)) - cpu_before) / (time.perf_counter() - at)

@@ -147,6 +147,9 @@ class DeviceSupervisor:
         self.stop_grace = stop_grace
         self._devices: dict[str, _Hosted] = {}
         self._tasks: list[asyncio.Task[None]] = []
+        self.version = 0
+        """Bumped whenever an instance's status, URL or error changes: the kernel caches its
+        device list until then, so an event costs no walk over every device."""
         self.on_status_change: StatusListener | None = None
         """Called as ``(instance, old, new, error)`` whenever an instance's status changes."""
         self._save_lock = asyncio.Lock()
@@ -471,6 +474,7 @@ class DeviceSupervisor:
         self, hosted: _Hosted, status: DeviceStatus, *, error: str | None = None, **changes: Any
     ) -> None:
         old = hosted.status
+        self.version += 1
         if status != old:
             hosted.since = now()
         hosted.status = status

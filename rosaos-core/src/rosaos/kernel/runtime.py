@@ -107,6 +107,8 @@ class Kernel:
         self.login_codes = LoginCodes()
         self.url = ""
         self.status_updates: DeviceStatusUpdates | None = None
+        self._endpoints: tuple[int, dict[str, DeviceEndpoint]] | None = None
+        """``endpoints()`` as of the supervisor's ``version``."""
         """Publishes devices going down and back (None when the devices are hosted elsewhere)."""
 
     # --- KernelRuntime ---------------------------------------------------------------------------
@@ -240,7 +242,13 @@ class Kernel:
             await self.supervisor.settle(self.world.instances)
 
     def endpoints(self) -> dict[str, DeviceEndpoint]:
-        """The world's devices as the process manager grants them."""
+        """The world's devices as the process manager grants them.
+
+        Built again only when the supervisor's ``version`` says a device changed: a burst of
+        events then costs no walk over a hundred devices each (callers must not mutate it)."""
+        version = getattr(self.supervisor, "version", None)
+        if version is not None and self._endpoints is not None and self._endpoints[0] == version:
+            return self._endpoints[1]
         endpoints = {}
         for name, entry in self.supervisor.directory().items():
             instance = self.world.instances[name]
@@ -257,6 +265,8 @@ class Kernel:
                 status=entry.status,
                 confirm=self._confirm_rule(name),
             )
+        if version is not None:
+            self._endpoints = (version, endpoints)
         return endpoints
 
     def _confirm_rule(self, name: str) -> ConfirmRule:
