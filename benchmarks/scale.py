@@ -135,7 +135,12 @@ async def burst(url: str, token: str, n: int, limit: float) -> dict[str, Any]:
                 await asyncio.sleep(0.1)
         settled = time.perf_counter() - started
         latencies = sorted(latency for status, latency in ended.values() if status == "ok")
-        views = (await api.get("/devices")).json()
+        print(f"burst ended after {settled:.1f} s: {len(latencies)} ok; reading the lamps…", flush=True)
+        try:
+            views = (await api.get("/devices", timeout=180)).json()
+        except httpx.HTTPError as error:
+            print(f"GET /devices failed: {error!r}", flush=True)
+            views = []
     states = [(view.get("state") or {}).get("on") for view in views]
     return {
         "commands": n,

@@ -403,16 +403,16 @@ class DeviceSupervisor:
                     continue
                 if verdict == "ask":
                     last_beat = host.last_tick
-                    error = await self._real_call(group[0], self.real_call_timeout)
-                    if error is not None and host.last_tick == last_beat and not exited.done():
+                    failure = await self._real_call(group[0], self.real_call_timeout)
+                    if failure is not None and host.last_tick == last_beat and not exited.done():
                         log.warning(
                             "%s: no heartbeat for %d checks and get_state failed (%s); restarting the host",
                             _names(group),
                             rule.misses,
-                            error,
+                            failure,
                         )
                         for hosted in group:
-                            self._set(hosted, "unhealthy", error=error)
+                            self._set(hosted, "unhealthy", error=failure)
                         await self._save()
                         return
                     rule.real_call_answered()
