@@ -131,8 +131,11 @@ class HostProcess:
         stdin.write(job.encode() + b"\n")
         await stdin.drain()
         replies: list[dict[str, Any]] = []
+        loop = asyncio.get_running_loop()
         try:
-            async with asyncio.timeout(start_timeout):
+            # The budget is per instance: it starts again at each reply, so a host that serves
+            # three hundred instances, a few at a time, is not cut off while it makes progress.
+            async with asyncio.timeout(start_timeout) as budget:
                 while len(replies) < lines:
                     line = await stdout.readline()
                     if not line.strip():  # the host exited
@@ -140,6 +143,7 @@ class HostProcess:
                     reply = _reply(line)
                     if not is_tick(reply):  # a beat while other instances still start
                         replies.append(reply)
+                        budget.reschedule(loop.time() + start_timeout)
         except TimeoutError:
             raise DeviceError(
                 f"the host did not become ready within {start_timeout:g} s; see {self.log_file}"

@@ -313,9 +313,12 @@ class DeviceSupervisor:
                 hosted.settled.set()
             await self._save()
             if len(group) > 1 and all(hosted.status == "failed" for hosted in group):
-                # The shared host does not start at all: each instance on its own finds the culprit.
-                for hosted in group:
-                    self._run(self._keep_serving([hosted], self.backoff_base), hosted.instance.name)
+                # The shared host does not start at all: halves find the culprit, a host per
+                # instance only in the end. Never one process per instance at once: three
+                # hundred hosts starting together would bring the machine to its knees.
+                middle = len(group) // 2
+                for half in (group[:middle], group[middle:]):
+                    self._run(self._keep_serving(half, self.backoff_base), _names(half[:1]))
                 return
             lived = asyncio.get_running_loop().time() - started
             # A host that ran for a while earned a fresh start; a crash loop backs off to the cap.
