@@ -102,6 +102,9 @@ class KernelConfig(BaseModel):
     fork_server: bool = True
     """Fork one-off workers from a pre-imported fork server (milliseconds instead of seconds);
     it costs one more process of about a warm worker's memory. Off: one-offs start a new Python."""
+    max_workers: int | None = Field(default=None, ge=1, le=1024)
+    """Processes that may run at once; more wait in a queue, in order, and are not refused.
+    Unset: sized to the machine (6 per core, as many as the available memory holds at 64 MiB)."""
     job_timeout: float = Field(default=300.0, gt=0, le=3600)
     confirm_timeout: float = Field(default=30.0, gt=0, le=600)
     """Seconds a confirmation question waits for a yes; silence is a no."""

@@ -129,6 +129,7 @@ async def test_a_host_that_stops_answering_is_replaced(
 ) -> None:
     monkeypatch.setattr(shared, "health_timeout", 0.3)
     monkeypatch.setattr(shared, "unhealthy_after", 2)
+    monkeypatch.setattr(shared, "real_call_timeout", 0.5)  # missed probes alone never restart it
     monkeypatch.setattr(shared, "stop_grace", 0.5)
     before = shared.directory()["kitchen_light"].restarts
     frozen = runtime(shared.data_dir)["kitchen_light"]["pid"]

@@ -29,6 +29,7 @@ from pydantic import BaseModel, ConfigDict, Field, SecretBytes, SecretStr, Valid
 from pydantic_core import to_jsonable_python
 
 from rosaos.config import format_validation_error
+from rosaos.devices.heartbeat import beat
 from rosaos.devices.host_logging import configure_host_logging
 from rosaos.devices.serve import ServedDevice, open_device, serve_http
 from rosaos.devices.world import DeviceInstance
@@ -65,6 +66,8 @@ class HostJob(BaseModel):
     token_file: Path
     config_file: Path | None = None
     """The rosaos.toml the instance came from, for messages; None for the demo world."""
+    heartbeat: float = Field(default=1.0, gt=0, le=60)
+    """Seconds between heartbeat lines on stdout (:mod:`rosaos.devices.heartbeat`)."""
 
     @classmethod
     def for_instance(
@@ -205,6 +208,7 @@ async def run_job(job: HostJob, handshake: Handshake, watch_stdin: bool) -> int:
     stop = asyncio.Event()
     install_stop_signals(stop)
     watcher = asyncio.create_task(stop_on_stdin_eof(stop)) if watch_stdin else None
+    ticker = asyncio.create_task(beat(handshake.stream, job.heartbeat)) if watch_stdin else None
 
     def ready(served: ServedDevice) -> None:
         handshake.send({"url": served.url, "pid": os.getpid()})
@@ -226,8 +230,9 @@ async def run_job(job: HostJob, handshake: Handshake, watch_stdin: bool) -> int:
         handshake.send({"error": f"{type(error).__name__}: {error}"})
         return 1
     finally:
-        if watcher is not None:
-            watcher.cancel()
+        for task in (watcher, ticker):
+            if task is not None:
+                task.cancel()
     return 0
 
 

@@ -11,6 +11,11 @@ it serves, or ``{"instance", "error"}`` when it could not start. An instance tha
 does not stop the others; the supervisor retries it in a process of its own. An instance whose
 server stops after it was ready ends the whole process with code 1, so the supervisor notices at
 once and restarts the batch.
+
+At most :data:`STARTING_AT_ONCE` instances start at the same time. Started all together, a
+hundred instances share the CPU fairly and each takes a hundred times longer, so on a busy
+machine every one of them overruns its driver's own start-up timeout (a Tapo simulator allows
+5 s); a few at a time, each starts quickly and the last is ready no later.
 """
 
 from __future__ import annotations
@@ -23,11 +28,14 @@ from typing import Any, TextIO
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from rosaos.devices.heartbeat import beat
 from rosaos.devices.host import HostJob, install_stop_signals, serve_until_stopped, stop_on_stdin_eof
 from rosaos.devices.serve import ServedDevice
 from rosaos.drivers import DeviceError
 
 log = logging.getLogger("rosaos.devices.host")
+
+STARTING_AT_ONCE = 8
 
 
 class HostBatch(BaseModel):
@@ -42,7 +50,7 @@ class BatchHandshake:
     """One line per instance on the host's stdout; each instance speaks once."""
 
     def __init__(self, stream: TextIO) -> None:
-        self._stream = stream
+        self.stream = stream
         self.sent: set[str] = set()
 
     def send(self, instance: str, message: dict[str, Any]) -> None:
@@ -51,8 +59,8 @@ class BatchHandshake:
             log.error("%s: %s", instance, message.get("error", message))
             return
         self.sent.add(instance)
-        self._stream.write(json.dumps({"instance": instance, **message}) + "\n")
-        self._stream.flush()
+        self.stream.write(json.dumps({"instance": instance, **message}) + "\n")
+        self.stream.flush()
 
 
 async def run_batch(batch: HostBatch, handshake: BatchHandshake, watch_stdin: bool) -> int:
@@ -60,10 +68,22 @@ async def run_batch(batch: HostBatch, handshake: BatchHandshake, watch_stdin: bo
     stop = asyncio.Event()
     install_stop_signals(stop)
     watcher = asyncio.create_task(stop_on_stdin_eof(stop)) if watch_stdin else None
+    heartbeat = batch.jobs[0].heartbeat
+    ticker = asyncio.create_task(beat(handshake.stream, heartbeat)) if watch_stdin else None
     broke: list[str] = []
+    starting = asyncio.Semaphore(STARTING_AT_ONCE)
 
     async def serve(job: HostJob) -> None:
+        await starting.acquire()
+        turn = [True]  # this instance holds a start-up turn until it is ready or has failed
+
+        def give_back() -> None:
+            if turn:
+                turn.clear()
+                starting.release()
+
         def ready(served: ServedDevice) -> None:
+            give_back()
             handshake.send(job.instance, {"url": served.url, "pid": os.getpid()})
             log.info("%s (%s, %s) serving at %s", job.instance, job.driver, job.backend, served.url)
 
@@ -88,10 +108,13 @@ async def run_batch(batch: HostBatch, handshake: BatchHandshake, watch_stdin: bo
                 str(error) if isinstance(error, DeviceError | OSError) else f"{type(error).__name__}: {error}"
             )
             handshake.send(job.instance, {"error": reason})
+        finally:
+            give_back()
 
     try:
         await asyncio.gather(*(serve(job) for job in batch.jobs))
     finally:
-        if watcher is not None:
-            watcher.cancel()
+        for task in (watcher, ticker):
+            if task is not None:
+                task.cancel()
     return 1 if broke or not handshake.sent else 0

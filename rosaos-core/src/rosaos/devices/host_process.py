@@ -13,6 +13,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from rosaos.devices.heartbeat import is_tick
 from rosaos.devices.host import HostJob
 from rosaos.devices.host_logging import open_rotated_log
 from rosaos.drivers import DeviceError
@@ -32,6 +33,21 @@ class HostProcess:
         """Per instance, for a host serving several (:mod:`rosaos.devices.host_batch`)."""
         self.errors: dict[str, str] = {}
         """Instances of a batch that could not start, and why."""
+        self.last_tick = 0.0
+        """Event-loop time of the host's last heartbeat line (:mod:`rosaos.devices.heartbeat`)."""
+        self._ticks: asyncio.Task[None] | None = None
+
+    def follow_heartbeat(self) -> None:
+        """Read the host's heartbeat lines from now on (after the handshake), into ``last_tick``."""
+        self.last_tick = asyncio.get_running_loop().time()
+        self._ticks = asyncio.create_task(self._read_ticks())
+
+    async def _read_ticks(self) -> None:
+        stdout = self.process.stdout
+        assert stdout is not None
+        loop = asyncio.get_running_loop()
+        while await stdout.readline():  # any line is a sign of life; a host writes only beats now
+            self.last_tick = loop.time()
 
     @classmethod
     async def spawn(
@@ -49,6 +65,7 @@ class HostProcess:
             reason = reply[0].get("error") or await asyncio.to_thread(_tail, log_file)
             raise DeviceError(f"{reason} (log: {log_file})")
         host.url = str(reply[0]["url"])
+        host.follow_heartbeat()
         return host
 
     @classmethod
@@ -82,6 +99,7 @@ class HostProcess:
             await host.stop(stop_grace)
             tail = await asyncio.to_thread(_tail, log_file)
             raise DeviceError(f"no instance of the shared host started: {tail} (log: {log_file})")
+        host.follow_heartbeat()
         return host
 
     @classmethod
@@ -113,13 +131,19 @@ class HostProcess:
         stdin.write(job.encode() + b"\n")
         await stdin.drain()
         replies: list[dict[str, Any]] = []
+        loop = asyncio.get_running_loop()
         try:
-            async with asyncio.timeout(start_timeout):
+            # The budget is per instance: it starts again at each reply, so a host that serves
+            # three hundred instances, a few at a time, is not cut off while it makes progress.
+            async with asyncio.timeout(start_timeout) as budget:
                 while len(replies) < lines:
                     line = await stdout.readline()
                     if not line.strip():  # the host exited
                         break
-                    replies.append(_reply(line))
+                    reply = _reply(line)
+                    if not is_tick(reply):  # a beat while other instances still start
+                        replies.append(reply)
+                        budget.reschedule(loop.time() + start_timeout)
         except TimeoutError:
             raise DeviceError(
                 f"the host did not become ready within {start_timeout:g} s; see {self.log_file}"
@@ -144,6 +168,8 @@ class HostProcess:
 
     async def stop(self, grace: float) -> None:
         """SIGTERM the host's process group, SIGKILL it after ``grace`` seconds; reap the host."""
+        if self._ticks is not None:
+            self._ticks.cancel()
         if self.process.returncode is None:
             _signal_group(self.pid, signal.SIGTERM)
             try:

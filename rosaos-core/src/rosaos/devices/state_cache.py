@@ -5,6 +5,10 @@ session, so any number of open pages cost the devices nothing extra. It polls on
 looks: each ``GET /devices`` (:meth:`DeviceStateCache.wanted`) keeps it going for ``watch``
 seconds, and an idle ``rosaos up`` with no page open reads nothing. A request after a quiet
 spell waits for one fresh read rather than show a stale state.
+
+At most ``concurrency`` devices are read at once: opening a hundred MCP sessions together on a
+busy machine makes every one of them miss its timeout, and then nothing is ever shown. The
+timeout counts from a read's own start, not from its wait for a turn.
 """
 
 from __future__ import annotations
@@ -31,6 +35,7 @@ class DeviceStateCache:
         interval: float = 1.0,
         timeout: float = 3.0,
         watch: float = 10.0,
+        concurrency: int = 8,
     ) -> None:
         self._endpoints = endpoints
         self.interval = interval
@@ -43,6 +48,7 @@ class DeviceStateCache:
         self._refreshed_at = float("-inf")
         self._wake = asyncio.Event()
         self._lock = asyncio.Lock()
+        self._turns = asyncio.Semaphore(concurrency)
         self.refreshes = 0
         """How many times every device was read (for tests and benchmarks)."""
 
@@ -89,6 +95,10 @@ class DeviceStateCache:
             self._clients.clear()
 
     async def _read(self, endpoint: DeviceEndpoint) -> None:
+        async with self._turns:
+            await self._read_now(endpoint)
+
+    async def _read_now(self, endpoint: DeviceEndpoint) -> None:
         assert endpoint.url is not None
         try:
             client = await self._client(endpoint)

@@ -1,21 +1,28 @@
-"""Serve the local instances of a world in host processes, keep them healthy, and say where they are.
+"""Serve the local instances of a world in host processes, keep them alive, and say where they are.
 
 :class:`DeviceSupervisor` is what ``rosaos up`` runs. Every simulated instance of a driver that
 does not ask for a process of its own (``DriverSpec.own_process``) is served by one shared device
 host (:mod:`rosaos.devices.host_batch`); every other local instance (a real device, the Reachy
-daemon) gets a host subprocess of its own (:mod:`rosaos.devices.host`). Every few seconds the
-supervisor calls each instance's ``get_state`` over HTTP, and restarts a host that died or stopped
-answering, backing off exponentially: a crash restarts the instances of that host, and no other.
-An instance that cannot start in the shared host is retried in a host of its own. A host that
-cannot start is reported (log, status, run file) and retried, never fatal. Placeholder
-drivers are listed as ``not implemented``; remote instances are only probed.
+daemon) gets a host subprocess of its own (:mod:`rosaos.devices.host`).
+
+Liveness is checked per host, not per instance (:mod:`rosaos.devices.liveness`): the host's
+heartbeat, a line its event loop writes every second, speaks for all the instances it serves.
+A late beat changes nothing; only after several checks without a fresh beat *and* a failed real
+call (``get_state`` with a generous timeout, during which no beat came either) is the host
+called down and restarted. A host that exits is restarted at once. Restarts
+back off exponentially, and a crash restarts the instances of that host and no other. An instance
+that cannot start in the shared host is retried in a host of its own. A host that cannot start is
+reported (log, status, run file) and retried, never fatal. Placeholder drivers are listed as
+``not implemented``; remote instances are only probed, with ``get_state``, and are called
+``unreachable`` after several failures in a row.
 
 :meth:`DeviceSupervisor.start` returns once every instance has had its first start attempt,
 except those whose driver starts in the background (``DriverSpec.background_start``): they stay
 ``starting`` until they answer, and :meth:`DeviceSupervisor.settle` waits for them.
 
 The run file ``<data_dir>/run/devices.json`` tells other commands (``rosaos devices list``,
-``rosaos devices check``) which instances are being served, and where.
+``rosaos devices check``) which instances are being served, and where. It is rewritten when a
+status changes, not on every probe.
 ``rosaos serve-device`` records its one instance in ``<data_dir>/run/serve-device/<name>.json``.
 """
 
@@ -37,6 +44,7 @@ from rosaos.devices.client import DeviceClient
 from rosaos.devices.directory import DirectoryEntry, SafeStopOutcome, safe_stop_entry
 from rosaos.devices.host import START_TIMEOUT, HostJob
 from rosaos.devices.host_process import HostProcess
+from rosaos.devices.liveness import LivenessRule
 from rosaos.devices.run_files import (
     DeviceStatus,
     RunFile,
@@ -80,6 +88,8 @@ class _Hosted:
     host: HostProcess | None = None
     port: int | None = None
     restarts: int = 0
+    remote_misses: int = 0
+    """Failed ``get_state`` probes in a row, for a remote instance."""
     settled: asyncio.Event = field(default_factory=asyncio.Event)
     """Set after the first start attempt (or first probe, for remote instances)."""
 
@@ -107,6 +117,7 @@ class DeviceSupervisor:
         health_interval: float = 5.0,
         health_timeout: float = 3.0,
         unhealthy_after: int = 3,
+        real_call_timeout: float = 20.0,
         backoff_base: float = 0.5,
         backoff_cap: float = 30.0,
         start_timeout: float = START_TIMEOUT,
@@ -125,13 +136,20 @@ class DeviceSupervisor:
         self.health_interval = health_interval
         self.health_timeout = health_timeout
         self.unhealthy_after = unhealthy_after
-        """Consecutive failed health checks before a live host is restarted."""
+        """Missed liveness probes in a row before a real call decides whether a host is down."""
+        self.real_call_timeout = real_call_timeout
+        self.heartbeat = min(1.0, health_interval / 2)
+        """Seconds between a host's heartbeat lines: at least two per check."""
+        """Seconds that real call may take: generous, so that a busy machine is not a dead host."""
         self.backoff_base = backoff_base
         self.backoff_cap = backoff_cap
         self.start_timeout = start_timeout
         self.stop_grace = stop_grace
         self._devices: dict[str, _Hosted] = {}
         self._tasks: list[asyncio.Task[None]] = []
+        self.version = 0
+        """Bumped whenever an instance's status, URL or error changes: the kernel caches its
+        device list until then, so an event costs no walk over every device."""
         self.on_status_change: StatusListener | None = None
         """Called as ``(instance, old, new, error)`` whenever an instance's status changes."""
         self._save_lock = asyncio.Lock()
@@ -232,6 +250,11 @@ class DeviceSupervisor:
             async with self._save_lock:
                 await asyncio.to_thread(self.runtime_file.unlink, missing_ok=True)
 
+    def host_of(self, name: str) -> str:
+        """Which host serves ``name``: the shared host's name, or the instance's own name."""
+        hosted = self._devices.get(name)
+        return SHARED_HOST if hosted is not None and hosted.shares_host else name
+
     def directory(self) -> dict[str, DirectoryEntry]:
         """Every instance with its URL, token and status: what the kernel grants to workers."""
         return {
@@ -290,9 +313,12 @@ class DeviceSupervisor:
                 hosted.settled.set()
             await self._save()
             if len(group) > 1 and all(hosted.status == "failed" for hosted in group):
-                # The shared host does not start at all: each instance on its own finds the culprit.
-                for hosted in group:
-                    self._run(self._keep_serving([hosted], self.backoff_base), hosted.instance.name)
+                # The shared host does not start at all: halves find the culprit, a host per
+                # instance only in the end. Never one process per instance at once: three
+                # hundred hosts starting together would bring the machine to its knees.
+                middle = len(group) // 2
+                for half in (group[:middle], group[middle:]):
+                    self._run(self._keep_serving(half, self.backoff_base), _names(half[:1]))
                 return
             lived = asyncio.get_running_loop().time() - started
             # A host that ran for a while earned a fresh start; a crash loop backs off to the cap.
@@ -322,6 +348,7 @@ class DeviceSupervisor:
                 self._token_file,
                 self.world.source,
                 host=self.host,
+                heartbeat=self.heartbeat,
                 port=hosted.instance.port or 0,
                 preferred_port=None if hosted.instance.port else hosted.port,
             )
@@ -346,15 +373,25 @@ class DeviceSupervisor:
             hosted.host, hosted.url = host, host.urls[name]
             hosted.port = urlsplit(hosted.url).port
             log.info("%s: serving at %s (pid %s)", name, hosted.url, host.pid)
-        await asyncio.gather(*(self._probe(hosted) for hosted in group))
+        await self._first_answer(group)
+
+    async def _first_answer(self, group: list[_Hosted]) -> None:
+        """One ``get_state`` for the whole host (its instances share its process): healthy, or not yet.
+
+        The budget is the start-up one: a host that has just said it serves is slow, not broken,
+        when a busy machine delays its first answer."""
+        error = await self._real_call(group[0], self.start_timeout)
+        for hosted in group:
+            self._set(hosted, "healthy" if error is None else "unhealthy", error=error)
+        await self._save()
 
     async def _watch_local(self, group: list[_Hosted]) -> None:
-        """Probe until the host dies, or one instance fails ``unhealthy_after`` checks in a row."""
+        """Probe the host until it exits, or misses probes and then fails a real call (see the module)."""
         host = group[0].host
         assert host is not None
         exited = asyncio.create_task(host.wait())
+        rule = LivenessRule(self.unhealthy_after)
         try:
-            failures = {hosted.instance.name: 0 if hosted.status == "healthy" else 1 for hosted in group}
             while True:
                 await asyncio.wait({exited}, timeout=self.health_interval)
                 if exited.done():
@@ -363,38 +400,68 @@ class DeviceSupervisor:
                     for hosted in group:
                         self._set(hosted, "restarting", url=None, error=error)
                     return
-                answers = await asyncio.gather(*(self._probe(hosted) for hosted in group))
-                for hosted, answered in zip(group, answers, strict=True):
-                    name = hosted.instance.name
-                    failures[name] = 0 if answered else failures[name] + 1
-                    if failures[name] >= self.unhealthy_after:
+                verdict = rule.observe(self._beating(host))
+                if verdict == "late":
+                    log.info("%s: no heartbeat at check %d; not down yet", _names(group), rule.misses)
+                    continue
+                if verdict == "ask":
+                    last_beat = host.last_tick
+                    failure = await self._real_call(group[0], self.real_call_timeout)
+                    if failure is not None and host.last_tick == last_beat and not exited.done():
                         log.warning(
-                            "%s: unhealthy %d times in a row; restarting its host", name, failures[name]
+                            "%s: no heartbeat for %d checks and get_state failed (%s); restarting the host",
+                            _names(group),
+                            rule.misses,
+                            failure,
                         )
+                        for hosted in group:
+                            self._set(hosted, "unhealthy", error=failure)
+                        await self._save()
                         return
+                    rule.real_call_answered()
+                await self._mark_healthy(group)
         finally:
             exited.cancel()
 
-    async def _probe(self, hosted: _Hosted) -> bool:
-        """One health check: get_state over HTTP. Updates the status; True when it answered."""
+    def _beating(self, host: HostProcess) -> bool:
+        """The host's one liveness signal: a heartbeat within the last ``health_timeout`` (plus a beat)."""
+        return asyncio.get_running_loop().time() - host.last_tick <= self.health_timeout + self.heartbeat
+
+    async def _real_call(self, hosted: _Hosted, timeout: float) -> str | None:
+        """``get_state`` on one instance: None when it answered, else the error."""
         assert hosted.url is not None
         token = hosted.instance.token or self.token
         try:
-            await DeviceClient(hosted.url, token, self.health_timeout, hosted.instance.name).get_state()
+            await DeviceClient(hosted.url, token, timeout, hosted.instance.name).get_state()
         except DeviceError as error:
-            bad: DeviceStatus = "unreachable" if hosted.instance.is_remote else "unhealthy"
-            self._set(hosted, bad, error=str(error))
+            return str(error)
+        return None
+
+    async def _mark_healthy(self, group: list[_Hosted]) -> None:
+        changed = [hosted for hosted in group if hosted.status != "healthy"]
+        for hosted in changed:
+            self._set(hosted, "healthy", error=None)
+        if changed:
             await self._save()
-            return False
-        self._set(hosted, "healthy", error=None)
-        await self._save()
-        return True
+
+    async def _probe_remote(self, hosted: _Hosted) -> None:
+        """One check of a remote instance: ``get_state``; ``unreachable`` after several failures."""
+        error = await self._real_call(hosted, self.health_timeout)
+        if error is None:
+            hosted.remote_misses = 0
+            if hosted.status != "healthy":
+                self._set(hosted, "healthy", error=None)
+            return
+        hosted.remote_misses += 1
+        first = not hosted.settled.is_set()
+        if first or hosted.remote_misses >= self.unhealthy_after:
+            self._set(hosted, "unreachable", error=error)
 
     async def _watch_remote(self, hosted: _Hosted) -> None:
         """Remote instances are someone else's to restart; only report whether they answer."""
         hosted.url = hosted.instance.url
         while True:
-            await self._probe(hosted)
+            await self._probe_remote(hosted)
             hosted.settled.set()
             await asyncio.sleep(self.health_interval)
 
@@ -410,6 +477,7 @@ class DeviceSupervisor:
         self, hosted: _Hosted, status: DeviceStatus, *, error: str | None = None, **changes: Any
     ) -> None:
         old = hosted.status
+        self.version += 1
         if status != old:
             hosted.since = now()
         hosted.status = status

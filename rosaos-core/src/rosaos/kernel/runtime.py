@@ -114,6 +114,10 @@ class Kernel:
         self._started = False
         self.login_codes = LoginCodes()
         self.url = ""
+        self.status_updates: DeviceStatusUpdates | None = None
+        self._endpoints: tuple[int, dict[str, DeviceEndpoint]] | None = None
+        """``endpoints()`` as of the supervisor's ``version``."""
+        """Publishes devices going down and back (None when the devices are hosted elsewhere)."""
 
     # --- KernelRuntime ---------------------------------------------------------------------------
 
@@ -268,7 +272,13 @@ class Kernel:
             await self.supervisor.settle(self.world.instances)
 
     def endpoints(self) -> dict[str, DeviceEndpoint]:
-        """The world's devices as the process manager grants them."""
+        """The world's devices as the process manager grants them.
+
+        Built again only when the supervisor's ``version`` says a device changed: a burst of
+        events then costs no walk over a hundred devices each (callers must not mutate it)."""
+        version = getattr(self.supervisor, "version", None)
+        if version is not None and self._endpoints is not None and self._endpoints[0] == version:
+            return self._endpoints[1]
         endpoints = {}
         for name, entry in self.supervisor.directory().items():
             instance = self.world.instances[name]
@@ -287,6 +297,8 @@ class Kernel:
                 attached_tools=tuple(spec.attached_tools),
                 attached_prompt=spec.attached_prompt,
             )
+        if version is not None:
+            self._endpoints = (version, endpoints)
         return endpoints
 
     def _confirm_rule(self, name: str) -> ConfirmRule:
@@ -330,9 +342,15 @@ class Kernel:
             self.world, self.data_dir, self._token, defer_background=True
         )
         if isinstance(self.supervisor, DeviceSupervisor):
-            self.supervisor.on_status_change = DeviceStatusUpdates(self._updates).changed
+            self.status_updates = DeviceStatusUpdates(self._updates, self.supervisor.host_of)
+            self.supervisor.on_status_change = self.status_updates.changed
         kernel = self.config.kernel
-        pool = WorkerPool(size=kernel.pool_size, env=self._worker_env, fork_server=kernel.fork_server)
+        pool = WorkerPool(
+            size=kernel.pool_size,
+            env=self._worker_env,
+            fork_server=kernel.fork_server,
+            max_workers=kernel.max_workers,
+        )
         self.manager = ProcessManager(
             devices=self.endpoints,
             model=self._process_model,

@@ -113,6 +113,7 @@ class ProcessManager:
         keeps it on disk and passes it in at start, so a restart does not unlatch it."""
         pool.on_ended = self._worker_ended
         pool.on_progress = self.record_progress
+        pool.on_started = self._worker_started
         pool.preload.extend(preload_modules(model))
 
     @property
@@ -162,7 +163,9 @@ class ProcessManager:
 
         ``before_start(info)`` runs once the leases are granted and before any worker has the job
         (the kernel records the launch durably there); if it fails, nothing is started.
-        Returns as soon as a worker has the job. Raises :class:`LaunchRefused` when the task is
+        Returns as soon as a worker has the job, or the job waits in the pool's queue because
+        ``max_workers`` processes run already (it starts, in order, when one ends). Raises
+        :class:`LaunchRefused` when the task is
         empty, a device is unknown, unavailable, or held exclusively by another process.
         """
         task = task.strip()
@@ -254,6 +257,12 @@ class ProcessManager:
             )
         except (TypeError, ValueError):
             log.warning("process %d: a progress line that does not read: %s", process_id, line)
+
+    def _worker_started(self, process_id: int, worker_pid: int) -> None:
+        """A queued process got its worker (the pool had ``max_workers`` running when it launched)."""
+        info = self._processes.get(process_id)
+        if info is not None:
+            info.worker_pid = worker_pid
 
     def record_callback(self, callback: WorkerCallback) -> None:
         """Mark the process ended as ``callback`` says and release its leases. Idempotent.

@@ -2,6 +2,9 @@
 
 Importing pydantic-ai and FastMCP takes seconds, so workers are started ahead of time and reused.
 When every warm worker is busy, a one-off worker is spawned for the job and retired after it.
+At most ``max_workers`` jobs run at once (default sized to the machine,
+:mod:`rosaos.processes.capacity`); a job beyond that waits in the pool's queue, in order, and
+starts when a running one ends. Nothing is refused for being one too many.
 Warm and one-off workers alike are forked by the fork server (:mod:`rosaos.processes.forking`),
 which did those imports once, so a worker starts in milliseconds and shares the server's memory;
 when the fork server is off or not available, a worker is started as a new Python process.
@@ -26,14 +29,16 @@ import logging
 import os
 import signal
 import sys
+from collections import deque
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
+from rosaos.processes.capacity import default_max_workers
 from rosaos.processes.forking import ForkServer, ForkServerError
 from rosaos.processes.jobs import WorkerCallback, WorkerJob
-from rosaos.processes.watcher import OnEnded, Watcher, Worker, WorkerProcess, describe_exit
+from rosaos.processes.watcher import OnEnded, Watcher, Worker, WorkerProcess, describe_exit, ended
 
 log = logging.getLogger(__name__)
 
@@ -51,8 +56,11 @@ class JobHandle:
     """Where a job runs."""
 
     process_id: int
-    worker_pid: int
+    worker_pid: int | None
+    """None while the job waits in the queue for a free worker."""
     one_off: bool
+    queued: int = 0
+    """Jobs ahead of this one in the queue, plus one; 0 when it runs at once."""
 
 
 @dataclass(frozen=True)
@@ -87,14 +95,19 @@ class WorkerPool:
         start_timeout: float = 60.0,
         fork_server: bool = True,
         preload: Sequence[str] = (),
+        max_workers: int | None = None,
     ) -> None:
         if size < 0:
             raise ValueError("pool size must be 0 or more")
         self.size = size
+        self.max_workers = max(1, size, max_workers or default_max_workers())
+        """Jobs that may run at once; more wait in the queue (see the module docstring)."""
         self.python = python
         self.on_ended = on_ended
         """Where job ends are reported; the process manager sets it."""
         self.on_progress: Callable[[int, dict[str, Any]], None] | None = None
+        self.on_started: Callable[[int, int], None] | None = None
+        """Called as (process id, worker pid) when a queued job gets its worker."""
         """Where a running job's progress lines go (``process_id``, the line); the manager sets it."""
         self.kill_grace = kill_grace
         self.start_timeout = start_timeout
@@ -113,6 +126,11 @@ class WorkerPool:
         )
         self._stopping = False
         self._start_failures = 0
+        self._queue: deque[WorkerJob] = deque()
+        self._running: set[int] = set()
+        """Process ids holding a slot: on a worker, or having one started for them."""
+        self._cancelled: set[int] = set()
+        """Terminated while a worker was being started for them: killed once it is there."""
 
     async def start(self) -> None:
         """Start the warm workers and the fork server; wait until they have finished their imports.
@@ -149,21 +167,61 @@ class WorkerPool:
             log.warning("the fork server is not ready; workers start the slow way until it is")
 
     async def run(self, job: WorkerJob) -> JobHandle:
-        """Give ``job`` to an idle warm worker, or to a new one-off worker if all are busy."""
+        """Give ``job`` to an idle warm worker, or a new one-off worker if all are busy; or queue it
+        when ``max_workers`` jobs run already (the handle then has no worker pid)."""
         if self._stopping:
             raise PoolError("the worker pool is stopped")
-        if self._worker_for(job.process_id) is not None:
+        if job.process_id in self._running or any(q.process_id == job.process_id for q in self._queue):
             raise ValueError(f"process {job.process_id} is already running")
-        idle = [worker for worker in self._workers if self._is_idle(worker)]
-        # A warm worker that is still importing is still faster than a fresh one-off.
-        idle.sort(key=lambda worker: not worker.ready.is_set())
-        if idle:
-            worker = idle[0]
-            self._assign(worker, job)
-        else:
-            worker = await self._spawn(one_off=True, job=job)
+        if self._queue or len(self._running) >= self.max_workers:
+            self._queue.append(job)
+            log.info("process %d waits for a worker (%d queued)", job.process_id, len(self._queue))
+            return JobHandle(job.process_id, None, False, queued=len(self._queue))
+        return await self._start_job(job)
+
+    async def _start_job(self, job: WorkerJob) -> JobHandle:
+        self._running.add(job.process_id)
+        try:
+            idle = [worker for worker in self._workers if self._is_idle(worker)]
+            # A warm worker that is still importing is still faster than a fresh one-off.
+            idle.sort(key=lambda worker: not worker.ready.is_set())
+            if idle:
+                worker = idle[0]
+                self._assign(worker, job)
+            else:
+                worker = await self._spawn(one_off=True, job=job)
+        except BaseException:
+            self._running.discard(job.process_id)
+            raise
         await self._send(worker, job)
+        if job.process_id in self._cancelled:
+            worker.kill("terminated")
         return JobHandle(job.process_id, worker.pid, worker.one_off)
+
+    def queued(self) -> int:
+        """Jobs waiting for a worker."""
+        return len(self._queue)
+
+    def _dispatch(self) -> None:
+        """Start queued jobs, oldest first, while there is room."""
+        while self._queue and len(self._running) < self.max_workers and not self._stopping:
+            job = self._queue.popleft()
+            self._running.add(job.process_id)  # counted now, so the loop does not overfill
+            task = asyncio.create_task(self._start_queued(job))
+            self._spawning.add(task)
+            task.add_done_callback(self._spawning.discard)
+
+    async def _start_queued(self, job: WorkerJob) -> None:
+        try:
+            handle = await self._start_job(job)
+        except PoolError as failure:
+            self._running.discard(job.process_id)
+            await self._report(
+                ended(job, "error", f"could not start a worker for the process: {failure}"), False
+            )
+            return
+        if self.on_started is not None and handle.worker_pid is not None:
+            self.on_started(job.process_id, handle.worker_pid)
 
     def _progress(self, process_id: int, line: dict[str, Any]) -> None:
         if self.on_progress is not None:
@@ -174,8 +232,15 @@ class WorkerPool:
 
         Returns False when no worker is running that process (it already ended).
         """
+        for job in self._queue:
+            if job.process_id == process_id:
+                self._queue.remove(job)
+                await self._report(ended(job, "terminated", "the process was terminated on request"), False)
+                return True
         worker = self._worker_for(process_id)
         if worker is None:
+            if process_id in self._running:  # its worker is being started: kill it once it is there
+                self._cancelled.add(process_id)
             return False
         worker.kill("terminated")
         await worker.exited.wait()
@@ -184,6 +249,9 @@ class WorkerPool:
     async def stop(self) -> None:
         """Kill every worker (jobs still running are reported ``terminated``) and wait for them."""
         self._stopping = True
+        while self._queue:
+            job = self._queue.popleft()
+            await self._report(ended(job, "terminated", "rosaOS stopped before the process started"), False)
         for task in list(self._spawning):
             task.cancel()
         await asyncio.gather(*self._spawning, return_exceptions=True)
@@ -336,7 +404,10 @@ class WorkerPool:
         return delay
 
     async def _report(self, callback: WorkerCallback, delivered: bool) -> None:
-        """Pass a job's end on to ``on_ended`` (the watcher calls this once per job)."""
+        """Pass a job's end on to ``on_ended`` (the watcher calls this once per job); start the next."""
+        self._running.discard(callback.process_id)
+        self._cancelled.discard(callback.process_id)
+        self._dispatch()
         if self.on_ended is None:
             log.info("process %d ended: %s", callback.process_id, callback.status)
             return

@@ -180,7 +180,7 @@ class Watcher:
             job, worker.job = worker.job, None
             worker.cancel_deadline()
             await self._report(
-                _ended(job, "error", f"the worker rejected the job: {event.get('error')}"), False
+                ended(job, "error", f"the worker rejected the job: {event.get('error')}"), False
             )
 
     async def _on_done(self, worker: Worker, event: dict[str, Any]) -> None:
@@ -193,7 +193,7 @@ class Watcher:
         try:
             callback = WorkerCallback.model_validate(event.get("callback"))
         except ValidationError as invalid:  # a worker from another rosaOS version, say
-            callback = _ended(job, "error", f"the worker sent an invalid callback: {invalid}")
+            callback = ended(job, "error", f"the worker sent an invalid callback: {invalid}")
         if worker.one_off:
             worker.retire()
         await self._report(callback, bool(event.get("delivered")))
@@ -211,7 +211,7 @@ class Watcher:
                 f"({describe_exit(returncode)}); the task may be half done, so check the "
                 "devices' state before retrying"
             )
-        await self._report(_ended(job, status, error), False)
+        await self._report(ended(job, status, error), False)
 
 
 def describe_exit(returncode: int) -> str:
@@ -224,5 +224,5 @@ def describe_exit(returncode: int) -> str:
     return f"exit code {returncode}"
 
 
-def _ended(job: WorkerJob, status: ProcessStatus, error: str) -> WorkerCallback:
+def ended(job: WorkerJob, status: ProcessStatus, error: str) -> WorkerCallback:
     return WorkerCallback(process_id=job.process_id, status=status, error=error, task=job.task)
