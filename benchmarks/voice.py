@@ -103,13 +103,24 @@ def spoken_command(work: Path) -> Path:
     return path
 
 
-async def start_kernel(work: Path, world: str = WORLD) -> tuple[asyncio.subprocess.Process, Any]:
+async def start_kernel(
+    work: Path, world: str = WORLD, port: int = 0
+) -> tuple[asyncio.subprocess.Process, Any]:
     """``rosaos up`` with ``world`` in its own process on a free port; returns it once its API
     answers and every device is healthy."""
     (work / "rosaos.toml").write_text(f'data_dir = "{work / "data"}"\n' + world)
     log = (work / "kernel.log").open("wb")
     process = await asyncio.create_subprocess_exec(
-        *(sys.executable, "-m", "rosaos.cli", "up", "--config", str(work / "rosaos.toml"), "--port", "0"),
+        *(
+            sys.executable,
+            "-m",
+            "rosaos.cli",
+            "up",
+            "--config",
+            str(work / "rosaos.toml"),
+            "--port",
+            str(port),
+        ),
         stdout=log,
         stderr=subprocess.STDOUT,
         cwd=work,
@@ -284,7 +295,7 @@ async def main_async(options: argparse.Namespace) -> dict[str, Any]:
         began = time.perf_counter()
         stt = MoonshineSTT()
         load_seconds = time.perf_counter() - began
-        kernel, config = await start_kernel(work)
+        kernel, config = await start_kernel(work, port=options.port)
         try:
             endpoint = next(d for d in await _devices(config) if d["name"] == "kitchen_light")
             token = (config.data_dir / "token").read_text().strip()
@@ -325,6 +336,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--json", type=Path, default=DEFAULT_JSON)
+    parser.add_argument("--port", type=int, default=0, help="the kernel's port (0: any free one)")
     options = parser.parse_args()
     results = asyncio.run(main_async(options))
     report(results)

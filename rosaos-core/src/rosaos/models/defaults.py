@@ -14,6 +14,7 @@ from rosaos.models.select import ModelSpec, build_model
 if TYPE_CHECKING:
     from rosaos.devices.world import World
     from rosaos.kernel.events import Event
+    from rosaos.models.kernel_model import LocalIntentModel
 
 
 @dataclass
@@ -26,6 +27,9 @@ class KernelModels:
     notice: str | None
     for_event: Callable[[Event], Model | None]
     """Per-event override of the kernel model (the offline fast path), None for the default."""
+    local: LocalIntentModel | None = None
+    """The offline engine, also when an LLM is the kernel (None only for a test's override model):
+    the voice front end asks it whether a draft transcript is a whole command (``POST /understand``)."""
 
 
 OFFLINE_NOTICE = (
@@ -74,8 +78,10 @@ def kernel_models(config: RosaosConfig, world: World, override: Model | None = N
     speaker = next((i.name for i in world.instances.values() if i.spec.always_attached), None)
     local = LocalIntentModel(device_vocabularies(world), language=config.models.language, speaker=speaker)
     if spec.model is None:
-        return KernelModels(local, process, "offline local-intent engine", OFFLINE_NOTICE, lambda event: None)
+        return KernelModels(
+            local, process, "offline local-intent engine", OFFLINE_NOTICE, lambda event: None, local
+        )
     llm = build_model(spec)
     router = KernelRouter(local, llm, prefer_local=spec.prefer_local)
     description = spec.describe() + (" (exact commands run offline)" if spec.prefer_local else "")
-    return KernelModels(llm, process, description, None, router.model_for_event)
+    return KernelModels(llm, process, description, None, router.model_for_event, local)

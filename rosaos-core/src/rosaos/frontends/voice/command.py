@@ -35,6 +35,7 @@ from rosaos.frontends.voice.sources import (
     require_media,
 )
 from rosaos.frontends.voice.stt import OpenAITranscriptionSTT, build_stt
+from rosaos.frontends.voice.turn import KernelJudge
 from rosaos.frontends.voice.vad import EnergyClassifier, FrameClassifier, Segmenter, SileroClassifier
 from rosaos.frontends.voice.wake import EyeContact, HaarFaceDetector, WakeGate
 from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
@@ -92,6 +93,7 @@ async def _run(
                 silence_seconds=voice.silence_seconds,
                 min_speech_seconds=voice.min_speech_seconds,
                 max_utterance_seconds=voice.max_utterance_seconds,
+                complete_silence_seconds=voice.complete_silence_seconds,
             )
             pipeline = VoicePipeline(
                 source,
@@ -107,6 +109,7 @@ async def _run(
                 replies=replies,
                 barge_in=_barge_in(voice, segmenter),
                 early_transcription=voice.early_transcription and voice.stt == "local",
+                judge=KernelJudge(client),
             )
             pipeline.report(
                 Heard("ready", _describe(voice, source, pipeline, client), {"kernel": client.base_url})
