@@ -178,6 +178,9 @@ class VoiceConfig(BaseModel):
     stt_timeout: float = Field(default=30.0, gt=0, le=300)
     language: str = "en"
     """Spoken language (the local engine is English-only)."""
+    vocabulary_bias: bool = True
+    """The local engine hears this world's words more readily: device names and aliases, rooms,
+    catalog tracks and artists, command words ("turtlebot", not "turtle not")."""
     speak_replies: bool = True
     """Say the kernel's replies to what was heard through the Reachy Mini's ``speak`` (when served)."""
     early_transcription: bool = True

@@ -34,9 +34,10 @@ from rosaos.frontends.voice.sources import (
     open_reachy_media,
     require_media,
 )
-from rosaos.frontends.voice.stt import OpenAITranscriptionSTT, build_stt
+from rosaos.frontends.voice.stt import MoonshineSTT, OpenAITranscriptionSTT, build_stt
 from rosaos.frontends.voice.turn import KernelJudge
 from rosaos.frontends.voice.vad import EnergyClassifier, FrameClassifier, Segmenter, SileroClassifier
+from rosaos.frontends.voice.vocabulary import world_phrases
 from rosaos.frontends.voice.wake import EyeContact, HaarFaceDetector, WakeGate
 from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
 
@@ -85,6 +86,8 @@ async def _run(
             stt = build_stt(voice)
             if isinstance(stt, OpenAITranscriptionSTT):
                 closers.append(stt.aclose)
+            if isinstance(stt, MoonshineSTT) and voice.vocabulary_bias:
+                stt.bias_toward(world_phrases({n: d.model_dump() for n, d in config.devices.items()}))
             robot = await find_reachy(client, token)
             report = _printer(json_output)
             replies = ReplyFollower(client, robot, _reply_reporter(report)) if voice.speak_replies else None
