@@ -87,7 +87,8 @@ async def _run(
             if isinstance(stt, OpenAITranscriptionSTT):
                 closers.append(stt.aclose)
             if isinstance(stt, MoonshineSTT) and voice.vocabulary_bias:
-                stt.bias_toward(world_phrases({n: d.model_dump() for n, d in config.devices.items()}))
+                devices = {name: device.model_dump() for name, device in config.devices.items()}
+                stt.bias_toward([*world_phrases(devices), voice.wake_phrase, *voice.wake_aliases])
             robot = await find_reachy(client, token)
             report = _printer(json_output)
             replies = ReplyFollower(client, robot, _reply_reporter(report)) if voice.speak_replies else None

@@ -151,4 +151,5 @@ class MoonshineOnnx:
                 # branch the decoder passes back placeholders for them, so keep the first ones.
                 if step == 0 or ".decoder." in key:
                     past[key] = value
-        return detokenize(self._tokens, ids)
+        text = detokenize(self._tokens, ids)
+        return self.bias.correct(text) if self.bias is not None else text
