@@ -46,9 +46,14 @@ async def kernel(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Kern
         yield kernel
 
 
-async def test_spoken_turtlebot_command_reaches_the_turtlebot(kernel: Kernel, tmp_path: Path) -> None:
-    wav = tmp_path / "forward.wav"
-    subprocess.run(["espeak-ng", "-w", str(wav), "hello. drive the turtlebot forward one meter"], check=True)
+@pytest.fixture
+def wav(tmp_path: Path) -> Path:
+    path = tmp_path / "forward.wav"
+    subprocess.run(["espeak-ng", "-w", str(path), "hello. drive the turtlebot forward one meter"], check=True)
+    return path
+
+
+async def test_spoken_turtlebot_command_reaches_the_turtlebot(kernel: Kernel, wav: Path) -> None:
     start = (await device_state(kernel, "turtlebot"))["x"]
 
     code, heard, stderr = await rosaos_voice(kernel, wav)
