@@ -12,7 +12,9 @@ from typing import Any
 from rosaos.kernel.runtime import Kernel
 
 
-async def rosaos_voice(kernel: Kernel, wav: Path) -> tuple[int, list[dict[str, Any]], str]:
+async def rosaos_voice(
+    kernel: Kernel, wav: Path, timeout: float = 120
+) -> tuple[int, list[dict[str, Any]], str]:
     """Run ``rosaos voice --wav FILE --url URL --json`` as its own process, as a user would."""
     env = {**os.environ, "ROSAOS_DATA_DIR": str(kernel.data_dir)}
     env.pop("ROSAOS_CONFIG", None)
@@ -31,7 +33,7 @@ async def rosaos_voice(kernel: Kernel, wav: Path) -> tuple[int, list[dict[str, A
         stdout=asyncio.subprocess.PIPE,
         stderr=asyncio.subprocess.PIPE,
     )
-    out, err = await asyncio.wait_for(process.communicate(), timeout=120)
+    out, err = await asyncio.wait_for(process.communicate(), timeout=timeout)
     lines = [json.loads(line) for line in out.decode().splitlines() if line.startswith("{")]
     assert process.returncode is not None
     return process.returncode, lines, err.decode()
