@@ -139,3 +139,16 @@ async def _is_on(kernel: Kernel) -> bool:
 async def _spoken_since(kernel: Kernel, before: Any) -> Any:
     spoken = (await device_state(kernel, "reachy")).get("last_spoken")
     return spoken if spoken and spoken != before else None
+
+
+async def test_understand_says_whether_a_draft_is_a_whole_command(api: httpx.AsyncClient) -> None:
+    """``POST /understand``, the voice front end's end-of-turn judge: the kernel's own offline engine,
+    and nothing is queued for it."""
+    before = (await api.get("/updates", params={"after": 0, "limit": 1000})).json()["updates"]
+    whole = (await api.post("/understand", json={"text": "turn on the kitchen light"})).json()
+    begun = (await api.post("/understand", json={"text": "turn on the"})).json()
+    assert whole == {"text": "turn on the kitchen light", "complete": True, "kind": "plans"}
+    assert begun["complete"] is False
+    assert (await api.post("/understand", json={"text": "  "})).status_code == 422
+    after = (await api.get("/updates", params={"after": 0, "limit": 1000})).json()["updates"]
+    assert len(after) == len(before)

@@ -87,7 +87,8 @@ class Bias:
         ``word`` is the word being spelled so far (lower case, no marker); ``pieces`` maps each
         token id to its text, lower case, with a leading space where the token starts a word.
         """
-        top = np.argpartition(logits, -TOP_K)[-TOP_K:]
+        k = min(TOP_K, logits.size)
+        top = np.argpartition(logits, -k)[-k:]
         best, score = int(np.argmax(logits)), float(logits.max())
         for candidate in (int(c) for c in top):
             piece = pieces[candidate]
@@ -136,7 +137,7 @@ class Bias:
             if abs(len(name) - len(letters)) > 2:
                 continue
             distance = _edits(letters, name)
-            if distance <= max(1, len(name) // 5) and (best is None or distance < best[0]):
+            if distance <= max(1, len(name) // 4) and (best is None or distance < best[0]):
                 best = (distance, name)
         return best[1] if best else None
 
