@@ -52,7 +52,7 @@ from typing import Any
 import numpy as np
 from rich.console import Console
 from rich.table import Table
-from voice_accuracy import scores, transcripts
+from voice_accuracy import CONDITIONS, scores, transcripts
 
 from rosaos.config import load_config
 from rosaos.devices.client import DeviceClient
@@ -287,7 +287,7 @@ async def main_async(options: argparse.Namespace) -> dict[str, Any]:
         finally:
             kernel.terminate()  # rosaos up stops its devices and workers on SIGTERM
             await asyncio.wait_for(kernel.wait(), timeout=30)
-    heard = transcripts(stt, Path(tmp_accuracy.name), bias=not options.no_bias)
+    heard = transcripts(stt, Path(tmp_accuracy.name), not options.no_bias, options.condition)
     peak_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # before the engine is loaded
     speech = float(runs[0]["speech_seconds"])
     return {
@@ -335,6 +335,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--runs", type=int, default=5)
     parser.add_argument("--json", type=Path, default=DEFAULT_JSON)
+    parser.add_argument(
+        "--condition", action="append", choices=list(CONDITIONS), help="accuracy in these conditions only"
+    )
     parser.add_argument("--no-bias", action="store_true", help="transcribe the sentences without the bias")
     parser.add_argument("--port", type=int, default=0, help="the kernel's port (0: any free one)")
     options = parser.parse_args()

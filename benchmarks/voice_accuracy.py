@@ -119,15 +119,17 @@ def command_reader(world: dict[str, Any]) -> Callable[[str], Any]:
 
 def scores(heard: dict[str, list[dict[str, Any]]]) -> dict[str, Any]:
     """Word and command error rates per condition, and what was misheard."""
-    readers: dict[str, Callable[[str], Any]] = {}
+    readers: dict[int, Callable[[str], Any]] = {}
     out: dict[str, Any] = {}
     for condition, rows in heard.items():
         edits = words = 0.0
         wrong_commands = 0
         misheard = []
         for row in rows:
-            key = json.dumps(row["world"], sort_keys=True, default=str)
-            read = readers.setdefault(key, command_reader(row["world"]))
+            key = id(row["world"])  # one world object per task file (its keys are not all strings)
+            if key not in readers:
+                readers[key] = command_reader(row["world"])
+            read = readers[key]
             count = len(row["said"].split())
             errors = word_error_rate(row["said"], row["heard"]) * count
             edits, words = edits + errors, words + count
