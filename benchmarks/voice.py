@@ -133,7 +133,7 @@ async def start_kernel(
         cwd=work,
     )
     config = load_config(work / "rosaos.toml")
-    deadline = time.monotonic() + 120
+    deadline = time.monotonic() + 300  # a loaded machine starts it slowly
     while time.monotonic() < deadline:
         if process.returncode is not None:
             raise SystemExit(f"rosaos up exited with {process.returncode}: see {work / 'kernel.log'}")
@@ -145,7 +145,7 @@ async def start_kernel(
                         return process, config
         await asyncio.sleep(0.2)
     process.terminate()
-    raise SystemExit("rosaos up did not become ready within 120 s")
+    raise SystemExit("rosaos up did not become ready within 300 s")
 
 
 async def one_run(
