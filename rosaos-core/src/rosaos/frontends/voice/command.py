@@ -87,8 +87,9 @@ async def _run(
             if isinstance(stt, OpenAITranscriptionSTT):
                 closers.append(stt.aclose)
             if isinstance(stt, MoonshineSTT) and voice.vocabulary_bias:
-                devices = {name: device.model_dump() for name, device in config.devices.items()}
-                stt.bias_toward([*world_phrases(devices), voice.wake_phrase, *voice.wake_aliases])
+                stt.bias_toward(
+                    [*await _world_phrases(config, client), voice.wake_phrase, *voice.wake_aliases]
+                )
             robot = await find_reachy(client, token)
             report = _printer(json_output)
             replies = ReplyFollower(client, robot, _reply_reporter(report)) if voice.speak_replies else None
@@ -126,6 +127,18 @@ async def _run(
             if asyncio.iscoroutine(result):
                 await result
     return _exit_code(stats)
+
+
+async def _world_phrases(config: RosaosConfig, client: KernelClient) -> list[str]:
+    """The words of the kernel's world (its devices, even when this rosaos.toml has none) and of
+    this configuration's device tables (aliases, rooms, catalogs)."""
+    devices: dict[str, Any] = {name: device.model_dump() for name, device in config.devices.items()}
+    try:
+        for device in await client.request("GET", "/devices") or []:
+            devices.setdefault(str(device["name"]), device)
+    except KernelUnavailable:
+        pass  # the config's devices only
+    return world_phrases(devices)
 
 
 def _source(
