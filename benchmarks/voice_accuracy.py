@@ -112,7 +112,8 @@ def command_reader(world: dict[str, Any]) -> Callable[[str], Any]:
         result = matcher.match(sentence)
         if not result.is_exact:
             return None
-        return sorted((p.devices, json.dumps(p.plan.model_dump(), sort_keys=True)) for p in result.processes)
+        plans = (json.dumps(p.plan.model_dump(), sort_keys=True).lower() for p in result.processes)
+        return sorted(plans)  # case aside: "Here Comes the Sun" and "here comes the sun" play the same
 
     return read
 
