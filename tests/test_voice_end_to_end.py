@@ -10,12 +10,8 @@ configured, so the offline local-intent engine plans the process.
 
 from __future__ import annotations
 
-import asyncio
-import json
-import os
 import shutil
 import subprocess
-import sys
 from collections.abc import AsyncIterator
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,6 +21,7 @@ import httpx
 import pytest
 import pytest_asyncio
 from e2e_support import device_state, eventually, kernel_api, running_kernel
+from voice_e2e_support import rosaos_voice
 
 from rosaos.kernel.runtime import Kernel
 from rosaos.plugins import load_drivers
@@ -73,31 +70,6 @@ async def kernel(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Kern
 async def api(kernel: Kernel) -> AsyncIterator[httpx.AsyncClient]:
     async with kernel_api(kernel) as client:
         yield client
-
-
-async def rosaos_voice(kernel: Kernel, wav: Path) -> tuple[int, list[dict[str, Any]], str]:
-    """Run ``rosaos voice --wav FILE --url URL --json`` as its own process, as a user would."""
-    env = {**os.environ, "ROSAOS_DATA_DIR": str(kernel.data_dir)}
-    env.pop("ROSAOS_CONFIG", None)
-    process = await asyncio.create_subprocess_exec(
-        sys.executable,
-        "-m",
-        "rosaos.cli",
-        "voice",
-        "--wav",
-        str(wav),
-        "--url",
-        kernel.url,
-        "--json",
-        env=env,
-        cwd=wav.parent,  # no rosaos.toml there: the defaults, offline
-        stdout=asyncio.subprocess.PIPE,
-        stderr=asyncio.subprocess.PIPE,
-    )
-    out, err = await asyncio.wait_for(process.communicate(), timeout=120)
-    lines = [json.loads(line) for line in out.decode().splitlines() if line.startswith("{")]
-    assert process.returncode is not None
-    return process.returncode, lines, err.decode()
 
 
 @dataclass
@@ -167,3 +139,17 @@ async def _is_on(kernel: Kernel) -> bool:
 async def _spoken_since(kernel: Kernel, before: Any) -> Any:
     spoken = (await device_state(kernel, "reachy")).get("last_spoken")
     return spoken if spoken and spoken != before else None
+
+
+async def test_understand_says_whether_a_draft_is_a_whole_command(api: httpx.AsyncClient) -> None:
+    """``POST /understand``, the voice front end's end-of-turn judge: the kernel's own offline engine,
+    and nothing is queued for it."""
+    before = (await api.get("/updates", params={"after": 0, "limit": 1000})).json()["updates"]
+    whole = (await api.post("/understand", json={"text": "turn on the kitchen light"})).json()
+    # (Not "turn on the": in a world of one light the engine reads it as that light, and acts.)
+    begun = (await api.post("/understand", json={"text": "set the kitchen light to"})).json()
+    assert whole == {"text": "turn on the kitchen light", "complete": True, "kind": "plans"}
+    assert begun["complete"] is False
+    assert (await api.post("/understand", json={"text": "  "})).status_code == 422
+    after = (await api.get("/updates", params={"after": 0, "limit": 1000})).json()["updates"]
+    assert len(after) == len(before)

@@ -182,9 +182,12 @@ class VoiceConfig(BaseModel):
     """For ``vad = "energy"``: frames louder than this (dBFS) count as speech."""
     silence_seconds: float = Field(default=0.55, ge=0.1, le=5)
     """Silence that ends an utterance."""
+    complete_silence_seconds: float = Field(default=0.18, ge=0.06, le=5)
+    """Silence that ends an utterance already heard as a whole command (the offline engine judges
+    the draft transcript; needs ``early_transcription``). Not above ``silence_seconds``."""
     min_speech_seconds: float = Field(default=0.35, ge=0.05, le=5)
     """Shorter bursts of speech (coughs, clicks) are dropped."""
-    chunk_seconds: float = Field(default=0.12, ge=0.02, le=1)
+    chunk_seconds: float = Field(default=0.032, ge=0.02, le=1)
     """Audio is processed in chunks this long; end-of-speech is noticed within one chunk."""
     max_utterance_seconds: float = Field(default=20.0, ge=1, le=120)
     """An utterance is cut here even if the speaker has not paused."""
@@ -209,12 +212,16 @@ class VoiceConfig(BaseModel):
     stt_timeout: float = Field(default=30.0, gt=0, le=300)
     language: str = "en"
     """Spoken language (the local engine is English-only)."""
+    vocabulary_bias: bool = True
+    """The local engine hears this world's words more readily: device names and aliases, rooms,
+    catalog tracks and artists, command words ("turtlebot", not "turtle not")."""
     speak_replies: bool = True
     """Say the kernel's replies to what was heard through the Reachy Mini's ``speak`` (when served)."""
     early_transcription: bool = True
     """Start transcribing once the speaker has paused briefly, while waiting for ``silence_seconds``
-    to be sure the utterance ended; the transcript is ready sooner. Local engine only (a cloud
-    engine would be sent every pause)."""
+    to be sure the utterance ended; the transcript is ready sooner, and a whole command ends the
+    turn after ``complete_silence_seconds``. Local engine only (a cloud engine would be sent every
+    pause)."""
     barge_in: bool = True
     """Let the user talk over the robot: it stops speaking and listens (a live source only)."""
     barge_in_margin_db: float = Field(default=10.0, ge=0, le=40)

@@ -14,7 +14,7 @@ from typing import Any
 
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.login_codes import LoginCodes
-from rosaos.kernel.api.schemas import DeviceView, EmergencyStopReport, EmergencyStopState
+from rosaos.kernel.api.schemas import DeviceView, EmergencyStopReport, EmergencyStopState, Understanding
 from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.events import EventStore
 from rosaos.kernel.timers import TimerBook
@@ -97,6 +97,9 @@ class TestRuntime:
         return EmergencyStopState(
             latched=self.estop_reason is not None, reason=self.estop_reason, time=self.estop_time
         )
+
+    async def understand(self, text: str) -> Understanding:
+        return Understanding(text=text, complete=False, kind="no_engine")  # no engine here
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         self.callbacks.append((event_id, callback))

@@ -37,7 +37,13 @@ from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
 from rosaos.kernel.api.app import create_app
 from rosaos.kernel.api.kernel_client import kernel_file, running_kernel_url
 from rosaos.kernel.api.login_codes import LoginCodes, login_url
-from rosaos.kernel.api.schemas import DeviceSafeStop, DeviceView, EmergencyStopReport, EmergencyStopState
+from rosaos.kernel.api.schemas import (
+    DeviceSafeStop,
+    DeviceView,
+    EmergencyStopReport,
+    EmergencyStopState,
+    Understanding,
+)
 from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people, record_confirmation
 from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
 from rosaos.kernel.device_status import DeviceStatusUpdates
@@ -140,6 +146,14 @@ class Kernel:
     @property
     def model_description(self) -> str:
         return self._models.description
+
+    async def understand(self, text: str) -> Understanding:
+        local = self._models.local
+        if local is None:
+            return Understanding(text=text, complete=False, kind="no_engine")
+        # Matching a sentence that does not fit takes up to a few hundred ms: not on the loop.
+        result = await asyncio.to_thread(local.match, text)
+        return Understanding(text=text, complete=result.is_exact, kind=result.kind)
 
     @property
     def model_notice(self) -> str | None:

@@ -28,7 +28,9 @@ class KernelModels:
     for_event: Callable[[Event], Model | None]
     """Per-event override of the kernel model (the offline fast path), None for the default."""
     local: LocalIntentModel | None = None
-    """The offline engine, when one runs (alone or as the fast path): the kernel gives it memory."""
+    """The offline engine, also when an LLM is the kernel (None only for a test's override model).
+    The kernel gives it memory (aliases, places), and the voice front end asks it whether a draft
+    transcript is a whole command (``POST /understand``)."""
 
 
 OFFLINE_NOTICE = (

@@ -53,8 +53,10 @@ def test_the_defaults_are_offline_and_near_the_issue_s_timings() -> None:
     assert (voice_config.silence_seconds, voice_config.min_speech_seconds, voice_config.chunk_seconds) == (
         0.55,
         0.35,
-        0.12,
+        0.032,
     )
+    # A whole command ends after a pause people leave between turns (~200 ms); issue 25.
+    assert voice_config.complete_silence_seconds == 0.18 and voice_config.vocabulary_bias
 
 
 def test_a_bad_voice_setting_names_the_key(tmp_path: Path, wav: Path) -> None:

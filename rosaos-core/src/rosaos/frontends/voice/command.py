@@ -34,8 +34,10 @@ from rosaos.frontends.voice.sources import (
     open_reachy_media,
     require_media,
 )
-from rosaos.frontends.voice.stt import OpenAITranscriptionSTT, build_stt
+from rosaos.frontends.voice.stt import MoonshineSTT, OpenAITranscriptionSTT, build_stt
+from rosaos.frontends.voice.turn import KernelJudge
 from rosaos.frontends.voice.vad import EnergyClassifier, FrameClassifier, Segmenter, SileroClassifier
+from rosaos.frontends.voice.vocabulary import world_phrases
 from rosaos.frontends.voice.wake import EyeContact, HaarFaceDetector, WakeGate
 from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
 
@@ -84,6 +86,10 @@ async def _run(
             stt = build_stt(voice)
             if isinstance(stt, OpenAITranscriptionSTT):
                 closers.append(stt.aclose)
+            if isinstance(stt, MoonshineSTT) and voice.vocabulary_bias:
+                stt.bias_toward(
+                    [*await _world_phrases(config, client), voice.wake_phrase, *voice.wake_aliases]
+                )
             robot = await find_reachy(client, token)
             report = _printer(json_output)
             replies = ReplyFollower(client, robot, _reply_reporter(report)) if voice.speak_replies else None
@@ -92,6 +98,7 @@ async def _run(
                 silence_seconds=voice.silence_seconds,
                 min_speech_seconds=voice.min_speech_seconds,
                 max_utterance_seconds=voice.max_utterance_seconds,
+                complete_silence_seconds=voice.complete_silence_seconds,
             )
             pipeline = VoicePipeline(
                 source,
@@ -107,6 +114,7 @@ async def _run(
                 replies=replies,
                 barge_in=_barge_in(voice, segmenter),
                 early_transcription=voice.early_transcription and voice.stt == "local",
+                judge=KernelJudge(client),
             )
             pipeline.report(
                 Heard("ready", _describe(voice, source, pipeline, client), {"kernel": client.base_url})
@@ -119,6 +127,18 @@ async def _run(
             if asyncio.iscoroutine(result):
                 await result
     return _exit_code(stats)
+
+
+async def _world_phrases(config: RosaosConfig, client: KernelClient) -> list[str]:
+    """The words of the kernel's world (its devices, even when this rosaos.toml has none) and of
+    this configuration's device tables (aliases, rooms, catalogs)."""
+    devices: dict[str, Any] = {name: device.model_dump() for name, device in config.devices.items()}
+    try:
+        for device in await client.request("GET", "/devices") or []:
+            devices.setdefault(str(device["name"]), device)
+    except KernelUnavailable:
+        pass  # the config's devices only
+    return world_phrases(devices)
 
 
 def _source(

@@ -1,13 +1,15 @@
 """Early transcription: start speech-to-text while the VAD still waits to be sure an utterance ended.
 
 An utterance ends after ``silence_seconds`` (0.55 s) without speech: a shorter pause may be the
-speaker drawing breath. The audio the engine gets, though, is fixed well before that: the speech
-plus ``POST_ROLL_SECONDS`` (0.3 s) of trailing silence. So once that much silence has passed, the
-segmenter hands out a *draft* of the utterance, and :class:`EarlyTranscriber` starts transcribing
-it at once. If the silence lasts, the final utterance has exactly the draft's samples and its
-transcript is (nearly) ready; if the speaker goes on, the draft's transcript is thrown away and
-the longer utterance is transcribed as usual. Nothing is decided earlier than before: only the
-waiting overlaps with the thinking.
+speaker drawing breath. The speech the engine gets, though, is fixed as soon as the speaker
+pauses. So after a short pause (``DRAFT_SILENCE_SECONDS``) the segmenter hands out a *draft* of
+the utterance (its post-roll padded with zeros), and :class:`EarlyTranscriber` starts transcribing
+it at once. If the pause lasts, the final utterance has the draft's speech and its transcript is
+(nearly) ready; if the speaker goes on, the draft's transcript is thrown away and the longer
+utterance is transcribed as usual.
+
+The draft's transcript is also what the pipeline judges (:mod:`rosaos.frontends.voice.turn`):
+a whole command ends the turn after a short pause instead of the full ``silence_seconds``.
 
 Only for the local engine: with a cloud engine every draft would be a request (and a bill).
 """
@@ -34,9 +36,10 @@ class Transcript:
     """Made from the draft, while the VAD was still waiting."""
 
 
-def draft_key(segment: SpeechSegment) -> tuple[float, int]:
-    """Segments with the same start and length hold the same samples (the segmenter is deterministic)."""
-    return (segment.start, int(segment.samples.size))
+def draft_key(segment: SpeechSegment) -> tuple[float, float]:
+    """Segments with the same start and end hold the same speech (the segmenter is deterministic);
+    only how much of the trailing silence is real differs, and it is silence either way."""
+    return (segment.start, segment.end)
 
 
 class EarlyTranscriber:
@@ -45,7 +48,7 @@ class EarlyTranscriber:
     def __init__(self, stt: SpeechToText, early: bool = True) -> None:
         self.stt = stt
         self.early = early
-        self._key: tuple[float, int] | None = None
+        self._key: tuple[float, float] | None = None
         self._task: asyncio.Task[Transcript] | None = None
         self.drafts = 0
         self.used = 0
@@ -58,6 +61,18 @@ class EarlyTranscriber:
         self.drafts += 1
         self._key = draft_key(segment)
         self._task = asyncio.create_task(self._timed(segment), name="voice: early transcription")
+
+    async def of_draft(self, segment: SpeechSegment) -> Transcript | None:
+        """The transcript of draft ``segment`` once it is made; None if it failed or a newer draft
+        replaced it. Waiting here never cancels the transcription."""
+        task = self._task
+        if task is None or self._key != draft_key(segment):
+            return None
+        try:
+            result = await asyncio.shield(task)
+        except Exception:  # the final utterance retries it (transcribe)
+            return None
+        return result if self._task is task else None
 
     async def transcribe(self, segment: SpeechSegment) -> Transcript:
         """The transcript of a final utterance: the draft's if it had the same samples, else made now."""

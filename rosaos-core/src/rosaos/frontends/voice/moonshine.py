@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from rosaos.frontends.voice.sources import SAMPLE_RATE, Samples, VoiceError
+from rosaos.frontends.voice.vocabulary import Bias
 
 WEIGHTS_PACKAGE = "moonshine-cpp"
 """The PyPI package whose wheel carries the weights (``pip install 'rosaos[voice]'``)."""
@@ -92,6 +93,10 @@ class MoonshineOnnx:
         folder = folder or weights_dir()
         options = ort.SessionOptions()
         options.add_session_config_entry("session.load_model_format", "ORT")
+        # The weights are int8, turned to float32 by Cast/Mul/Add nodes on every run. A memory
+        # pattern plans one block for all of them at once; without it the arena reuses each
+        # buffer once its MatMul is done: 230 MiB less at the peak, at the same speed.
+        options.enable_mem_pattern = False
         if threads:
             options.intra_op_num_threads = threads
         providers = ["CPUExecutionProvider"]
@@ -102,6 +107,11 @@ class MoonshineOnnx:
             str(folder / "decoder_model_merged.ort"), options, providers=providers
         )
         self._tokens = read_tokenizer(folder / "tokenizer.bin")
+        self._pieces = [
+            token.decode("utf-8", errors="ignore").replace(WORD_START, " ").lower() for token in self._tokens
+        ]
+        self.bias: Bias | None = None
+        """Nudges decoding toward this world's words (:mod:`rosaos.frontends.voice.vocabulary`)."""
         past = [i for i in self._decoder.get_inputs() if i.name.startswith("past_key_values.")]
         self._cache = _Cache([i.name for i in past], int(past[0].shape[1]), int(past[0].shape[3]))
         self._outputs = [o.name for o in self._decoder.get_outputs()]
@@ -115,6 +125,7 @@ class MoonshineOnnx:
         past = dict.fromkeys(self._cache.names, empty)
         ids: list[int] = []
         token = BOS
+        word = ""  # the word being spelled, for the bias
         for step in range(limit):
             feed = {
                 "input_ids": np.array([[token]], dtype=np.int64),
@@ -123,14 +134,22 @@ class MoonshineOnnx:
                 **past,
             }
             logits, *present = self._decoder.run(self._outputs, feed)
-            token = int(np.argmax(logits[0, -1]))
+            bias = self.bias
+            token = (
+                int(np.argmax(logits[0, -1]))
+                if bias is None
+                else bias.choose(logits[0, -1], word, self._pieces)
+            )
             if token == EOS:
                 break
             ids.append(token)
+            piece = self._pieces[token] if token < len(self._pieces) else ""
+            word = piece.strip() if piece.startswith(" ") else word + piece
             for name, value in zip(self._outputs[1:], present, strict=True):
                 key = name.replace("present.", "past_key_values.", 1)
                 # The encoder's keys and values are computed on the first step only; on the cached
                 # branch the decoder passes back placeholders for them, so keep the first ones.
                 if step == 0 or ".decoder." in key:
                     past[key] = value
-        return detokenize(self._tokens, ids)
+        text = detokenize(self._tokens, ids)
+        return self.bias.correct(text) if self.bias is not None else text

@@ -33,6 +33,7 @@ from rosaos.frontends.voice.sources import (
     VoiceError,
 )
 from rosaos.frontends.voice.stt import SpeechToText
+from rosaos.frontends.voice.turn import TurnJudge, is_whole_command
 from rosaos.frontends.voice.vad import Segmenter, SpeechSegment
 from rosaos.frontends.voice.wake import EyeContact, WakeGate, is_noise
 from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
@@ -138,7 +139,7 @@ class VoicePipeline:
         handoff: Handoff,
         report: Reporter,
         *,
-        chunk_seconds: float = 0.12,
+        chunk_seconds: float = 0.032,
         robot: RobotLink | None = None,
         camera: FrameSource | None = None,
         eye_contact: EyeContact | None = None,
@@ -146,6 +147,7 @@ class VoicePipeline:
         reply_wait_seconds: float = 60.0,
         barge_in: BargeIn | None = None,
         early_transcription: bool = False,
+        judge: TurnJudge | None = None,
     ) -> None:
         self.source = source
         self.segmenter = segmenter
@@ -163,6 +165,9 @@ class VoicePipeline:
         self.transcriber = EarlyTranscriber(stt, early=early_transcription)
         if early_transcription:
             segmenter.drafts = True  # the drafts early transcription starts from
+        self.judge = judge if early_transcription else None
+        """Ends a turn after a short pause when its draft is a whole command (rosaos.frontends.voice.turn)."""
+        self._utterances: asyncio.Queue[SpeechSegment | None] = asyncio.Queue()
         self.stats = PipelineStats()
         self._background: set[asyncio.Task[Any]] = set()
         self._t0 = time.monotonic()
@@ -176,7 +181,7 @@ class VoicePipeline:
         self._t0 = time.monotonic()
         if self.replies is not None:
             await self.replies.start()
-        utterances: asyncio.Queue[SpeechSegment | None] = asyncio.Queue()
+        utterances = self._utterances = asyncio.Queue()
         understand = asyncio.create_task(self._understand(utterances), name="voice: understand")
         helpers = []
         if self.source.live:
@@ -258,7 +263,20 @@ class VoicePipeline:
         for segment in segments:
             if segment.draft:
                 self.transcriber.draft(segment)
+                if self.judge is not None:
+                    self._in_background(self._judge_draft(segment, self.judge))
         return [segment for segment in segments if not segment.draft]
+
+    async def _judge_draft(self, draft: SpeechSegment, judge: TurnJudge) -> None:
+        """A draft that is a whole command ends its turn after the short pause, not the long one."""
+        result = await self.transcriber.of_draft(draft)
+        if result is None or not self.segmenter.holds(draft):
+            return  # replaced, or the speaker went on, or the turn already ended
+        if not await is_whole_command(judge, result.text, self.gate.phrases):
+            return
+        final = self.segmenter.complete(draft)  # None: feed() ends it once the pause is long enough
+        if final is not None:
+            self._utterances.put_nowait(self._announce(final))
 
     def _barged_in(self, barge_in: BargeIn, chunk: AudioChunk) -> list[SpeechSegment]:
         """The user talks over the robot: stop it, listen from just before they began."""

@@ -23,11 +23,12 @@ import asyncio
 import logging
 import math
 import time
-from typing import Any, Protocol
+from typing import TYPE_CHECKING, Any, Protocol
 
-from rosaos.devices.client import DeviceClient
-from rosaos.drivers import DeviceError
 from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
+
+if TYPE_CHECKING:  # imported when a Reachy is found: the MCP client costs the voice process ~45 MiB
+    from rosaos.devices.client import DeviceClient
 
 log = logging.getLogger(__name__)
 
@@ -110,7 +111,11 @@ class ReachyLink:
     """The reachy instance's MCP tools, through a :class:`DeviceClient`."""
 
     def __init__(self, device: DeviceClient) -> None:
+        from rosaos.drivers import DeviceError
+
         self.device = device
+        self._errors: tuple[type[Exception], ...] = (DeviceError,)
+        """What a failed tool call raises (imported with the MCP client, only when there is a robot)."""
         self.muted_until = 0.0
         self._last_spoken: str | None = None
         self._failed: set[str] = set()
@@ -132,7 +137,7 @@ class ReachyLink:
     async def say(self, text: str) -> bool:
         try:
             report = await self.device.call("speak", {"text": text})
-        except DeviceError as error:
+        except self._errors as error:
             log.warning("reachy could not say %r: %s", text, error)
             return False
         # Stop listening at once rather than at the next get_state poll: the voice starts now.
@@ -171,7 +176,7 @@ class ReachyLink:
     async def stop_speaking(self) -> bool:
         try:
             report = await self.device.call("stop_speaking", {})
-        except DeviceError as error:
+        except self._errors as error:
             log.warning("reachy could not stop speaking: %s", error)
             return False
         stopped = report.get("stopped") if isinstance(report, dict) else getattr(report, "stopped", False)
@@ -195,7 +200,7 @@ class ReachyLink:
         try:
             await self.device.call(tool, args)
             return True
-        except DeviceError as error:
+        except self._errors as error:
             if tool not in self._failed:  # say it once, not on every wake
                 self._failed.add(tool)
                 log.warning("reachy %s failed, skipping it: %s", tool, error)
@@ -216,6 +221,8 @@ async def find_reachy(kernel: KernelClient, token: str) -> RobotLink:
         if not device.get("url") or state.get("implemented") is False:
             log.info("no robot gestures: reachy instance %r is not served", device.get("name"))
             return NoRobot()
+        from rosaos.devices.client import DeviceClient
+
         return ReachyLink(DeviceClient(device["url"], token, timeout=5, name=device.get("name")))
     log.info("no robot gestures: the kernel serves no reachy instance")
     return NoRobot()

@@ -18,6 +18,7 @@ import numpy as np
 
 from rosaos.config import VoiceConfig
 from rosaos.frontends.voice.sources import SAMPLE_RATE, Samples, VoiceError
+from rosaos.frontends.voice.vocabulary import Bias
 from rosaos.native import probe
 
 GROQ_BASE_URL = "https://api.groq.com/openai/v1"
@@ -67,6 +68,10 @@ class MoonshineSTT:
                 )
         self._engine = MoonshineOnnx()
         self._lock = threading.Lock()  # one decoder cache at a time
+
+    def bias_toward(self, phrases: list[str]) -> None:
+        """Hear these words (device names, rooms, catalog entries) more readily; [] to stop."""
+        self._engine.bias = Bias(phrases) if phrases else None
 
     async def transcribe(self, samples: Samples) -> str:
         return await asyncio.to_thread(self.transcribe_sync, samples)

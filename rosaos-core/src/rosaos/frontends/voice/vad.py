@@ -6,6 +6,10 @@ hiss) or :class:`EnergyClassifier` (a loudness threshold, no dependency). The
 :class:`Segmenter` turns those per-frame answers into :class:`SpeechSegment` s: an utterance
 ends after ``silence_seconds`` without speech, and one with less than ``min_speech_seconds``
 of speech is dropped as a cough or a click.
+
+End of turn by meaning: when the pipeline finds a draft's transcript is a whole command, it calls
+:meth:`Segmenter.complete`, and that utterance ends after only ``complete_silence_seconds``; an
+unfinished one ("turn on the …") still waits ``silence_seconds``.
 """
 
 from __future__ import annotations
@@ -22,6 +26,11 @@ PRE_ROLL_SECONDS = 0.25
 """Audio kept from before the first speech frame: onsets ("h" of "hello") are quiet."""
 POST_ROLL_SECONDS = 0.3
 """Trailing silence kept after the last speech frame: Moonshine misreads words cut off short."""
+DRAFT_SILENCE_SECONDS = 0.064
+"""A draft is handed out after this much silence (two Silero frames): transcribing it then leaves
+time to judge it before a short end-of-turn pause is over. Its missing post-roll is zeros."""
+COMPLETE_SILENCE_SECONDS = 0.18
+"""The pause that ends a turn whose draft is a complete command (people answer after ~200 ms)."""
 
 
 class FrameClassifier(Protocol):
@@ -121,6 +130,8 @@ class _Utterance:
     last_speech_index: int = 0
     """Index in ``frames`` of the last speech frame."""
     doas: list[float] = field(default_factory=list)
+    complete: bool = False
+    """Its draft is a whole command: end it after the short pause (``Segmenter.complete``)."""
 
 
 class Segmenter:
@@ -134,12 +145,19 @@ class Segmenter:
         min_speech_seconds: float = 0.35,
         max_utterance_seconds: float = 20.0,
         drafts: bool = False,
+        complete_silence_seconds: float = COMPLETE_SILENCE_SECONDS,
     ) -> None:
         self.classifier = classifier
         self.drafts = drafts
-        """Also hand out a draft of an utterance once the post-roll of silence has passed."""
+        """Also hand out a draft of an utterance once the speaker has paused briefly."""
         self.frame_seconds = classifier.frame_samples / SAMPLE_RATE
         self.silence_frames = max(1, round(silence_seconds / self.frame_seconds))
+        self.complete_frames = min(
+            self.silence_frames, max(1, round(complete_silence_seconds / self.frame_seconds))
+        )
+        self._draft_frames = min(
+            self.complete_frames, max(1, round(DRAFT_SILENCE_SECONDS / self.frame_seconds))
+        )
         self.min_speech_frames = max(1, round(min_speech_seconds / self.frame_seconds))
         self.max_frames = max(1, round(max_utterance_seconds / self.frame_seconds))
         self._pre_roll: deque[Samples] = deque(maxlen=max(1, round(PRE_ROLL_SECONDS / self.frame_seconds)))
@@ -182,6 +200,33 @@ class Segmenter:
         self._pending = np.zeros(0, np.float32)
         self.classifier.reset()
 
+    def complete(self, draft: SpeechSegment) -> SpeechSegment | None:
+        """``draft``'s transcript is a whole command: end its utterance after the short pause.
+
+        Returns the final segment at once when the pause has already lasted that long; otherwise
+        :meth:`feed` ends it when it has. Nothing happens when the speaker went on after the draft
+        (the utterance is no longer the draft's), or it has already ended.
+        """
+        utterance = self._utterance
+        if utterance is None or not self._holds(utterance, draft):
+            return None
+        utterance.complete = True
+        if len(utterance.frames) - 1 - utterance.last_speech_index < self.complete_frames:
+            return None
+        self._utterance = None
+        return self._close(utterance, detected_at=self._frame_start)
+
+    def holds(self, draft: SpeechSegment) -> bool:
+        """The utterance in progress is ``draft``'s: no speech since it was handed out."""
+        return self._utterance is not None and self._holds(self._utterance, draft)
+
+    def _holds(self, utterance: _Utterance, draft: SpeechSegment) -> bool:
+        return round(utterance.start, 4) == draft.start and round(self._end(utterance), 4) == draft.end
+
+    def _end(self, utterance: _Utterance) -> float:
+        """Stream seconds just after the utterance's last speech frame."""
+        return utterance.start + (utterance.last_speech_index + 1 - utterance.pre_roll) * self.frame_seconds
+
     @property
     def in_speech(self) -> bool:
         """Someone is speaking right now (an utterance is open)."""
@@ -203,27 +248,35 @@ class Segmenter:
             )
         utterance.frames.append(frame)
         if speech:
+            utterance.complete = False  # the speaker went on: the judged draft is not the end
             utterance.speech_frames += 1
             utterance.last_speech_index = len(utterance.frames) - 1
             if doa is not None:
                 utterance.doas.append(doa)
         silent_for = len(utterance.frames) - 1 - utterance.last_speech_index
-        if silent_for >= self.silence_frames or len(utterance.frames) >= self.max_frames:
+        if (
+            silent_for >= self.silence_frames
+            or len(utterance.frames) >= self.max_frames
+            or (utterance.complete and silent_for >= self.complete_frames)
+        ):
             self._utterance = None
             return self._close(utterance, detected_at=chunk_end)
-        if self.drafts and silent_for == self._post_roll_frames and silent_for < self.silence_frames:
-            # Every sample the final segment would keep is here now (see _close): a draft.
+        if self.drafts and silent_for == self._draft_frames and silent_for < self.silence_frames:
+            # All the speech is here; the rest of the post-roll is padded with zeros (see _close).
             return self._close(utterance, detected_at=chunk_end, draft=True)
         return None
 
     def _close(self, utterance: _Utterance, detected_at: float, draft: bool = False) -> SpeechSegment | None:
         if utterance.speech_frames < self.min_speech_frames:
             return None
-        keep = min(len(utterance.frames), utterance.last_speech_index + 1 + self._post_roll_frames)
-        speech_frames_span = utterance.last_speech_index + 1 - utterance.pre_roll
-        end = utterance.start + speech_frames_span * self.frame_seconds
+        wanted = utterance.last_speech_index + 1 + self._post_roll_frames
+        keep = min(len(utterance.frames), wanted)
+        end = self._end(utterance)
+        frames = utterance.frames[:keep]
+        if draft and keep < wanted:  # Moonshine misreads a last word cut off short: pad it
+            frames = [*frames, np.zeros((wanted - keep) * self.classifier.frame_samples, np.float32)]
         return SpeechSegment(
-            samples=np.concatenate(utterance.frames[:keep]),
+            samples=np.concatenate(frames),
             start=round(utterance.start, 4),
             end=round(end, 4),
             detected_at=round(max(detected_at, end), 4),

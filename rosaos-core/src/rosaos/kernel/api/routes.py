@@ -42,6 +42,8 @@ from rosaos.kernel.api.schemas import (
     LoginToken,
     ProcessView,
     SayRequest,
+    Understanding,
+    UnderstandRequest,
     UpdatesPage,
 )
 from rosaos.kernel.events import (
@@ -133,6 +135,16 @@ async def speech(body: SayRequest, runtime: Runtime, idempotency_key: Idempotenc
     """The voice front end heard the user: enqueue a ``user_said`` event."""
     fields = _user_text(body, "stt", idempotency_key)
     return await _accept(runtime, UserSaidEvent(kind="user_said", **fields))
+
+
+@protected.post("/understand")
+async def understand(body: UnderstandRequest, runtime: Runtime) -> Understanding:
+    """Would the offline engine act on this sentence as it stands? Nothing is queued or run.
+
+    The voice front end asks this of its draft transcript to end a turn after a short pause when
+    the command is already whole, and to wait longer when it is not ("turn on the …").
+    """
+    return await runtime.understand(body.text)
 
 
 def _user_text(body: SayRequest, default_source: str, header_key: str | None) -> dict[str, Any]:

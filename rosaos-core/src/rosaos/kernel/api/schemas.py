@@ -85,6 +85,9 @@ class KernelRuntime(Protocol):
     def emergency_stop_state(self) -> EmergencyStopState:
         """Whether the emergency stop is latched, why and since when; survives a restart."""
 
+    async def understand(self, text: str) -> Understanding:
+        """Whether the offline engine can act on ``text`` as it stands; launches nothing."""
+
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         """Called once a ``worker_callback`` is committed (also for a duplicate), so leases are
         released at once. Must be idempotent, e.g. ``ProcessManager.record_callback``."""
@@ -103,6 +106,29 @@ class SayRequest(BaseModel):
     )
     idempotency_key: IdempotencyKey | None = None
     source: Source | None = Field(default=None, description="Defaults to 'chat' or 'stt'.")
+
+
+class UnderstandRequest(BaseModel):
+    """``POST /understand``: a sentence to judge, e.g. the voice front end's draft transcript."""
+
+    model_config = ConfigDict(extra="forbid", str_strip_whitespace=True)
+
+    text: str = Field(
+        min_length=1, max_length=4000, pattern=r"\S", description="Stripped; must not be blank."
+    )
+
+
+class Understanding(BaseModel):
+    """What the offline engine makes of a sentence, without acting on it.
+
+    ``complete`` is true when the sentence is a whole command the engine would run as it stands
+    ("turn on the kitchen light"); false for a beginning ("turn on the"), a question back, or
+    nothing understood. The voice front end ends a turn early only on ``complete``.
+    """
+
+    text: str
+    complete: bool
+    kind: str = Field(description="The engine's verdict: plans, clarify, no_match, or no_engine.")
 
 
 class Accepted(BaseModel):

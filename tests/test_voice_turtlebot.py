@@ -1,0 +1,71 @@
+"""A spoken "turtlebot" reaches the turtlebot (issue 25, "heard right").
+
+Moonshine alone hears espeak-ng's "turtlebot" as "turtle not" or "total not", and the command then
+names no device. ``rosaos voice`` biases the decoder toward the world's words (the device names in
+rosaos.toml), so "hello. drive the turtlebot forward one meter" is heard as said, the offline
+engine plans it, and the TurtleBot 4 simulator drives forward. Real parts: the voice CLI in its own process, the kernel
+and its worker, the ROS driver's simulator over MCP HTTP.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+from collections.abc import AsyncIterator
+from pathlib import Path
+
+import pytest
+import pytest_asyncio
+from e2e_support import device_state, eventually, running_kernel
+from voice_e2e_support import rosaos_voice
+
+from rosaos.kernel.runtime import Kernel
+
+pytestmark = [
+    pytest.mark.asyncio(loop_scope="module"),
+    pytest.mark.skipif(
+        shutil.which("espeak-ng") is None, reason="espeak-ng is not installed: apt-get install espeak-ng"
+    ),
+]
+WORLD = """
+[devices.turtlebot]
+driver = "ros"
+profile = "turtlebot4"
+description = "TurtleBot4 wheeled mobile robot with a camera and a charging dock"
+sim = { docked = false }
+
+[devices.kitchen_light]
+driver = "tapo"
+description = "Ceiling light in the kitchen"
+"""
+
+
+@pytest_asyncio.fixture(scope="module", loop_scope="module")
+async def kernel(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Kernel]:
+    async with running_kernel(tmp_path_factory.mktemp("voice-turtlebot"), WORLD) as kernel:
+        yield kernel
+
+
+@pytest.fixture
+def wav(tmp_path: Path) -> Path:
+    path = tmp_path / "forward.wav"
+    subprocess.run(["espeak-ng", "-w", str(path), "hello. drive the turtlebot forward one meter"], check=True)
+    return path
+
+
+async def test_spoken_turtlebot_command_reaches_the_turtlebot(kernel: Kernel, wav: Path) -> None:
+    start = (await device_state(kernel, "turtlebot"))["x"]
+
+    # The drive and the reply it waits for take a while on a loaded machine.
+    code, heard, stderr = await rosaos_voice(kernel, wav, timeout=400)
+
+    assert code == 0, stderr
+    sent = [h["text"] for h in heard if h["kind"] == "sent"]
+    transcripts = [h["text"] for h in heard if h["kind"] == "transcript"]
+    assert len(sent) == 1, f"heard {transcripts}; {stderr}"
+    assert "turtlebot" in sent[0].lower()
+
+    async def moved() -> bool:
+        return bool((await device_state(kernel, "turtlebot"))["x"] > start + 0.5)
+
+    await eventually(moved, timeout=120)
