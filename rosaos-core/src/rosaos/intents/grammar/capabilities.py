@@ -20,7 +20,8 @@ speed or a blind's height: "up", "down", "to half" reach it as they reach bright
 (:data:`MEANINGS`), and ``fixed`` gives arguments passed as written. ``values`` names a list of
 the same file whose values the argument takes (a colour the bulb knows). ``if_described`` limits
 the capability to instances whose description says one of those words (a ROS robot has a dock
-only when it is described with one). The same ``does`` may appear twice, absolute and relative
+only when it is described with one). ``limits`` gives an argument's range (``{kelvin: [2500,
+6500]}``): a value outside it is refused, never clipped. The same ``does`` may appear twice, absolute and relative
 (``level`` and ``change``): the engine picks the one the sentence asks for.
 """
 
@@ -93,6 +94,16 @@ class Capability(BaseModel):
     """A list of the same file (``lists:``) whose values the ``colour`` argument takes."""
     if_described: tuple[str, ...] = ()
     """Only instances whose description says one of these words have this capability."""
+    limits: dict[str, tuple[float, float]] = Field(default_factory=dict)
+    """Argument → the lowest and highest value the tool takes (``{kelvin: [2500, 6500]}``); a
+    sentence asking for more is refused by the engine, never clipped."""
+
+    def allows(self, argument: str, value: Any) -> bool:
+        """Whether ``value`` is within this capability's limits for ``argument`` (if any)."""
+        if argument not in self.limits or not isinstance(value, int | float):
+            return True
+        low, high = self.limits[argument]
+        return low <= value <= high
 
     @model_validator(mode="after")
     def _one_meaning_each(self) -> Capability:

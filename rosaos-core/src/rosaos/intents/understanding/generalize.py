@@ -70,7 +70,7 @@ def understand(
             return found
         if rephrased.addressed is not None and found.kind == "clarify" and first.kind == "no_match":
             first = found
-    composed = compose(text, focus) if compose is not None else None
+    composed = compose(text, focus) if compose is not None and not first.refusal else None
     if composed is not None and (composed.is_exact or first.kind == "no_match"):
         return composed
     if fuzzy is None or first.kind != "no_match" or first.refusal:

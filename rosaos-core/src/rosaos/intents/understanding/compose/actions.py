@@ -77,7 +77,7 @@ _TOGGLE = re.compile(r"\b(?:toggle|flip)\b")
 
 SIZES: dict[str, dict[Size, float]] = {
     "change": {"small": 10, "normal": 20, "large": 40},
-    "kelvin_change": {"small": 300, "normal": 700, "large": 1500},
+    "kelvin_change": {"small": 500, "normal": 700, "large": 1500},
     "distance": {"small": 0.3, "normal": 0.5, "large": 1.0},
     "angle": {"small": 30, "normal": 90, "large": 180},
 }
@@ -128,7 +128,10 @@ def read_action(clause: str, colours: frozenset[str]) -> Said | None:
     looked = _LOOK.search(plain)
     if looked:
         return Said("look", {"direction": looked.group("direction")}, _cut(plain, _LOOK))
-    return _motion(plain, quantity, size) or _light_or_sound(plain, quantity, size, colours)
+    said = _motion(plain, quantity, size) or _light_or_sound(plain, quantity, size, colours)
+    if said is not None and quantity is not None and not said.values:
+        return None  # a number the action does not take: not this reader's to guess
+    return said
 
 
 def _motion(text: str, quantity: Quantity | None, size: Size) -> Said | None:
@@ -183,6 +186,7 @@ def _light_or_sound(text: str, quantity: Quantity | None, size: Size, colours: f
             return Said("level", {"change": change}, _cut(text, *level_words), family)
         if 0 <= value <= 100:
             return Said("level", {"level": round(value)}, _cut(text, *level_words), family)
+        return None  # a level out of range is refused by the engine's range check, never clipped
     down, up = _DOWN.search(text), _UP.search(text)
     if (down or up) and not (_OFF.search(text) and not down):
         if not (up and _ON.search(text) and not family and re.search(r"\b(?:light up|power up|fire up)\b", text)):

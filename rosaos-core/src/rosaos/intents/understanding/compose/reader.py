@@ -44,6 +44,9 @@ _TOO_LOUD = re.compile(r"\b(?:too|so|very|way too|really) loud\b|\bcan'?t hear m
 _TOO_QUIET = re.compile(r"\b(?:too|so|very|really) quiet\b|\bcan'?t hear (?:it|the music|anything)\b")
 
 
+_COMMENT = re.compile(r"^(?:it'?s|it is|that'?s|that is|this is|i'?m|i am|we'?re|so|wow|man|god|gosh)\b")
+
+
 @dataclass(frozen=True)
 class _Clause:
     text: str
@@ -96,8 +99,8 @@ class Composer:
                 reading = self._reading(clause.text, last_said, clause.reference, before, focus)
             elif clause.said is None:
                 reading = literal(clause.text, focus) if clause.reference.named else None
-                if reading is None and not clause.reference.named:
-                    continue  # commentary around a command
+                if reading is None and (not clause.reference.named or _COMMENT.match(clause.text)):
+                    continue  # commentary around a command: "ugh, it's so bright, ..."
             else:
                 reading = self._reading(clause.text, clause.said, clause.reference, before, focus)
                 if reading is None or not (reading.actionable or reading.issue):
@@ -160,7 +163,10 @@ class Composer:
             return self.context.clarify(text, 0, RANK_DRIVER, list(able))
         if reference.both and len(able) != 2:
             return self.context.clarify(text, 0, RANK_DRIVER, list(able))
-        calls = {device: [self._step(device, capability, said)] for device, capability in able.items()}
+        steps = {device: self._step(device, capability, said) for device, capability in able.items()}
+        calls = {device: [step] for device, step in steps.items() if step is not None}
+        if len(calls) != len(steps):
+            return None
         return Reading(text, RANK_DRIVER, len(text), calls=calls)
 
     def _capability(self, device: str, said: Said) -> Capability | None:
@@ -181,12 +187,14 @@ class Composer:
         return None
 
     @staticmethod
-    def _step(device: str, capability: Capability, said: Said) -> PlanStep:
+    def _step(device: str, capability: Capability, said: Said) -> PlanStep | None:
         args = dict(capability.fixed)
         for meaning, value in said.values.items():
             name = capability.argument(meaning)
             if name is not None:
                 args[name] = int(value) if isinstance(value, float) and value.is_integer() else value
+                if not capability.allows(name, value):
+                    return None  # out of the device's range: the engine refuses, never clips
         return PlanStep(device=device, tool=capability.tool, args=args)
 
     def _need(self, text: str, focus: Focus) -> Reading | None:
@@ -209,8 +217,8 @@ class Composer:
         if len(fitting) == 1 or (not fitting and len(able) == 1):
             [device] = fitting or able
             capability = self._capability(device, said)
-            assert capability is not None
-            return Reading(text, RANK_DRIVER, len(text), calls={device: [self._step(device, capability, said)]})
+            step = self._step(device, capability, said) if capability is not None else None
+            return Reading(text, RANK_DRIVER, len(text), calls={device: [step]}) if step else None
         if len(able) > 1:
             return self.context.clarify(text, 0, RANK_DRIVER, fitting or able)
         return None

@@ -28,6 +28,7 @@ _FUNCTION_WORDS = frozenset(
     "let tell ask send bring take set put turn switch go please just now also again into onto out off "
     "little bit way much lot lots more less than as".split()
 )
+_DETERMINERS = frozenset({"the", "my", "our", "your", "this", "that", "these", "those", "its", "their", "a", "an"})
 _GROUP = frozenset({"all", "every", "each", "both", "everything", "everywhere", "whole", "entire"})
 _PRONOUNS = frozenset({"it", "them", "that", "this", "those", "these", "one", "him", "her"})
 _EXCEPT = re.compile(
@@ -127,6 +128,8 @@ class References:
         if heads and self._unknown_before(tokens, heads, others):
             return Reference(unknown=True, named=True)
         if not heads and not modifiers:
+            if self._unknown_object(tokens):
+                return Reference(unknown=True, named=True)
             everything = "everything" in tokens or ("all" in tokens and len(tokens) <= 2)
             if everything:
                 return Reference(tuple(known.name for known in self._known), plural=True, named=True)
@@ -155,6 +158,14 @@ class References:
                 index -= 1
             if index >= 0 and index in unknown:
                 return True
+        return False
+
+    def _unknown_object(self, tokens: list[str]) -> bool:
+        """A thing the sentence names that no device is ("turn on the tv", "open the blinds")."""
+        for before, token in zip(["", *tokens], tokens, strict=False):
+            if (before in _DETERMINERS or not before) and token not in _FUNCTION_WORDS and token not in _GROUP:
+                if not token[0].isdigit() and not any(self._has_word(known, token) for known in self._known):
+                    return True
         return False
 
     @staticmethod
