@@ -45,6 +45,8 @@ _LOOK = re.compile(r"\blook\w*\b(?:\s+\w+){0,3}?\s+(?P<direction>left|right|up|d
 _LEFT = re.compile(r"\b(?:left|counter-?clockwise|anti-?clockwise)\b")
 _RIGHT = re.compile(r"\b(?:right|clockwise)\b")
 _AROUND = re.compile(r"\b(?:around|round|about)\b")
+_COUNTS = {"once": 1, "twice": 2, "2 times": 2, "3 times": 3, "thrice": 3}
+_TIMES = re.compile(r"\b(?:once|twice|thrice|[23] times)\b")
 _TURN_VERB = re.compile(r"\b(?:turn|rotate|spin|pivot|swivel|face|twist)\w*\b")
 _MOVE_VERB = re.compile(
     r"\b(?:drive|go|goes|move|walk|roll|scoot|step|head|come|advance|creep|inch|travel|trot|run|zoom|"
@@ -54,6 +56,9 @@ _BACKWARD = re.compile(r"\b(?:back(?:\s+\w+){0,3}?\s+up|backwards?|back|reverse|
 _FORWARD = re.compile(r"\b(?:forwards?|ahead|onwards?|closer|towards? me|straight)\b")
 _COOLER = re.compile(r"\b(?:cooler|colder|bluer|whiter|crisper|less warm|less yellow)\b")
 _WARMER = re.compile(r"\b(?:warmer|cozier|cosier|yellower|softer white|less cool|less blue|more yellow)\b")
+_WARM = re.compile(r"\b(?:warm|cozy|cosy|candle-?like)\b")
+_COOL = re.compile(r"\b(?:cool|cold|crisp|icy)\b")
+WARM_KELVIN, COOL_KELVIN = 2700, 5500
 _VOLUME_WORD = re.compile(r"\b(?:volume|loud\w*|quiet\w*|soft\w*|sound|music|noise)\b")
 _LEVEL_NOUN = re.compile(r"\b(?:volume|loud\w*|quiet\w*|soft\w*|sound)\b")
 _BRIGHT_WORD = re.compile(r"\b(?:bright\w*|dim\w*|dark\w*|lighter|light level)\b")
@@ -124,7 +129,8 @@ def read_action(clause: str, colours: frozenset[str]) -> Said | None:
         return Said("resume", rest=_cut(plain, _RESUME))
     played = _PLAY.match(clause)
     if played:
-        return Said("play", {"query": played.group("query")}, rest="")
+        query = re.sub(r"^(?:some|something|anything|a bit of|a little)\s+(?:by\s+|from\s+)?", "", played.group("query"))
+        return Said("play", {"query": query}, rest="")
     looked = _LOOK.search(plain)
     if looked:
         return Said("look", {"direction": looked.group("direction")}, _cut(plain, _LOOK))
@@ -137,7 +143,9 @@ def read_action(clause: str, colours: frozenset[str]) -> Said | None:
 def _motion(text: str, quantity: Quantity | None, size: Size) -> Said | None:
     angle_unit = quantity is not None and quantity.unit in ("degree", "turn")
     sideways = _LEFT.search(text) or _RIGHT.search(text) or _AROUND.search(text)
-    if _TURN_VERB.search(text) and (sideways or angle_unit) and not re.search(r"\b(?:on|off|up|down)\b", text):
+    distance_unit = quantity is not None and quantity.unit in METRES_PER
+    turning = _TURN_VERB.search(text) or (_MOVE_VERB.search(text) and sideways and not distance_unit)
+    if turning and (sideways or angle_unit) and not re.search(r"\b(?:on|off|up|down)\b", text):
         if quantity is not None and quantity.unit == "turn":
             degrees = quantity.value * 360
         elif quantity is not None and quantity.unit == "degree":
@@ -147,11 +155,13 @@ def _motion(text: str, quantity: Quantity | None, size: Size) -> Said | None:
         else:
             degrees = SIZES["angle"][size]
         sign = -1 if _RIGHT.search(text) and not _LEFT.search(text) else 1
-        return Said("turn", {"angle": sign * degrees}, _cut(text, _TURN_VERB, _LEFT, _RIGHT, _AROUND))
-    distance_unit = quantity is not None and quantity.unit in METRES_PER
+        times = _TIMES.search(text)
+        degrees *= _COUNTS[times.group(0)] if times else 1
+        return Said("turn", {"angle": sign * degrees}, _cut(text, _TURN_VERB, _MOVE_VERB, _LEFT, _RIGHT, _AROUND, _TIMES))
     backward = _BACKWARD.search(text)
     forward = _FORWARD.search(text)
-    if _MOVE_VERB.search(text) and (backward or forward or distance_unit):
+    # A verb, or a direction with a distance ("turtlebot forward 1.5 metres"): never a bare "back".
+    if (_MOVE_VERB.search(text) and (backward or forward or distance_unit)) or (distance_unit and (backward or forward)):
         if quantity is not None and quantity.unit in METRES_PER:
             metres = quantity.value * METRES_PER[quantity.unit]
         else:
@@ -172,6 +182,10 @@ def _light_or_sound(text: str, quantity: Quantity | None, size: Size, colours: f
         return Said("colour_temperature", {"kelvin_change": -SIZES["kelvin_change"][size]}, _cut(text, _WARMER))
     if _COOLER.search(text):
         return Said("colour_temperature", {"kelvin_change": SIZES["kelvin_change"][size]}, _cut(text, _COOLER))
+    if _WARM.search(text) and not _COOL.search(text):
+        return Said("colour_temperature", {"kelvin": WARM_KELVIN}, _cut(text, _WARM))
+    if _COOL.search(text) and not _WARM.search(text):
+        return Said("colour_temperature", {"kelvin": COOL_KELVIN}, _cut(text, _COOL))
     family = "volume" if _VOLUME_WORD.search(text) and not _BRIGHT_WORD.search(text) else None
     family = "brightness" if _BRIGHT_WORD.search(text) and family is None and not _VOLUME_WORD.search(text) else family
     level_words = (_UP, _DOWN, _MAX, _LEVEL_NOUN, _BRIGHT_WORD, re.compile(r"\b(?:to|at|by|level|percent)\b|%"))

@@ -114,6 +114,7 @@ def spell_numbers(text: str) -> str:
     """``text`` with number words, fractions and mixed numbers written as digits."""
     text = re.sub(r"(\d),(\d{3})\b", r"\1\2", text)
     text = _RUN.sub(_spell_run, text)
+    text = re.sub(r"\b(\d+)\s+point\s+(\d+)\b", r"\1.\2", text, flags=re.I)
     # "2 and a half", "1 and 3 quarters"
     text = re.sub(
         rf"\b({_DIGITS})\s+and\s+(?:an?\s+|({_DIGITS})\s+)?({_FRACTION_WORD})\b",
