@@ -24,7 +24,9 @@ from rosaos.plugins import load_drivers
 
 
 def _calls(result: Any) -> list[tuple[str, str, dict[str, Any]]]:
-    return [(step.device, step.tool, step.args) for process in result.processes for step in process.plan.steps]
+    return [
+        (step.device, step.tool, step.args) for process in result.processes for step in process.plan.steps
+    ]
 
 
 @pytest.fixture(scope="module")
@@ -72,7 +74,10 @@ def test_quantities_are_read_from_words_and_units(said: str, value: float, unit:
 
 def test_discourse_around_a_command_is_peeled_off_and_clauses_are_cut() -> None:
     assert clauses(normalise("Oh man, could ya turn on the lamp real quick?")) == ["turn on the lamp"]
-    assert clauses(normalise("would you be a dear and dim the lamp, then play jazz")) == ["dim the lamp", "play jazz"]
+    assert clauses(normalise("would you be a dear and dim the lamp, then play jazz")) == [
+        "dim the lamp",
+        "play jazz",
+    ]
     # A number's "and" is not a clause boundary.
     assert clauses(normalise("drive two and a half metres and stop")) == ["drive 2.5 metres", "stop"]
 
@@ -90,7 +95,10 @@ def test_discourse_around_a_command_is_peeled_off_and_clauses_are_cut() -> None:
         ("switch all the lamps off", [("bedroom_lamp", "turn_off", {}), ("desk_lamp", "turn_off", {})]),
         ("turn on both lamps", [("bedroom_lamp", "turn_on", {}), ("desk_lamp", "turn_on", {})]),
         # quantities
-        ("put the bedroom lamp at three quarters brightness", [("bedroom_lamp", "set_brightness", {"brightness": 75})]),
+        (
+            "put the bedroom lamp at three quarters brightness",
+            [("bedroom_lamp", "set_brightness", {"brightness": 75})],
+        ),
         ("set the reading lamp to 3000 kelvin", [("desk_lamp", "set_color_temp", {"kelvin": 3000})]),
         ("volume to sixty", [("spotify", "set_volume", {"volume": 60})]),
         ("scoot the robot forward thirty centimetres", [("turtlebot", "move_distance", {"meters": 0.3})]),
@@ -105,7 +113,11 @@ def test_discourse_around_a_command_is_peeled_off_and_clauses_are_cut() -> None:
         # several clauses
         (
             "kitchen light on, hall light off, music louder",
-            [("kitchen_light", "turn_on", {}), ("hall_light", "turn_off", {}), ("spotify", "change_volume", {"delta": 20})],
+            [
+                ("kitchen_light", "turn_on", {}),
+                ("hall_light", "turn_off", {}),
+                ("spotify", "change_volume", {"delta": 20}),
+            ],
         ),
         # needs
         ("I need some light to sew at the table", [("desk_lamp", "set_brightness", {"brightness": 100})]),
@@ -121,7 +133,12 @@ def test_everyday_sentences_act_on_the_devices_they_mean(
 
 def test_every_light_except_one(home: IntentMatcher) -> None:
     result = home.match("turn off every light except the hall light")
-    assert {device for device, _, _ in _calls(result)} == {"kitchen_light", "stair_light", "bedroom_lamp", "desk_lamp"}
+    assert {device for device, _, _ in _calls(result)} == {
+        "kitchen_light",
+        "stair_light",
+        "bedroom_lamp",
+        "desk_lamp",
+    }
 
 
 @pytest.mark.parametrize("said", ["move the robot forward", "turn the robot left"])
@@ -150,5 +167,7 @@ def test_a_driver_with_capabilities_and_no_templates_is_understood() -> None:
     assert load_intents_file(fan).capabilities is not None
     matcher = IntentMatcher([DeviceVocabulary(name="fan", driver="fan", description="Desk fan", intents=fan)])
     assert _calls(matcher.match("could you turn the fan on")) == [("fan", "start", {})]
-    assert _calls(matcher.match("fan to half please")) == [("fan", "set_speed", {"ramp": True, "percent": 50})]
+    assert _calls(matcher.match("fan to half please")) == [
+        ("fan", "set_speed", {"ramp": True, "percent": 50})
+    ]
     assert _calls(matcher.match("turn the fan up a bit")) == [("fan", "change_speed", {"by": 10})]

@@ -23,7 +23,9 @@ from rosaos.intents.understanding.compose.quantities import (
 )
 
 DET = r"(?:(?:the|its|his|her|their|your|my|our|a)\s+)?"
-_DOCK_PLACE = r"(?:docking station|charging station|charging dock|charging base|home base|dock|base|charger|home)"
+_DOCK_PLACE = (
+    r"(?:docking station|charging station|charging dock|charging base|home base|dock|base|charger|home)"
+)
 _UNDOCK = re.compile(
     rf"\bundock\w*\b|\b(?:off|out of|away from|leave|leaves|leaving)\s+{DET}(?:dock|base|charger|charging station)\b"
 )
@@ -69,11 +71,11 @@ _DOWN = re.compile(
     r"\b(?:down|dim|dimmer|darker|quieter|softer|lower|decrease|reduce|less|tone|knock|turn down|"
     r"dimmed|not so loud|not so bright)\b"
 )
-_MAX = re.compile(r"\b(?:max(?:imum)?|full(?:\s+(?:brightness|volume|blast|power))?|all the way up|100 percent)\b")
-_SET_WORD = re.compile(r"\b(?:to|at)\s+[\d.]+|\b(?:brightness|volume|level|percent)\b|%")
-_OFF = re.compile(
-    r"\b(?:off|kill|shut|out|extinguish|cut|deactivate|disable|power down)\b"
+_MAX = re.compile(
+    r"\b(?:max(?:imum)?|full(?:\s+(?:brightness|volume|blast|power))?|all the way up|100 percent)\b"
 )
+_SET_WORD = re.compile(r"\b(?:to|at)\s+[\d.]+|\b(?:brightness|volume|level|percent)\b|%")
+_OFF = re.compile(r"\b(?:off|kill|shut|out|extinguish|cut|deactivate|disable|power down)\b")
 _ON = re.compile(
     r"\b(?:turn|switch|put|power|flick|click|flip|get|leave)\s+on\b|\bon$|\bon\b(?!\s+(?:the|my|our|its|your|a|an|top|to)\b)"
     r"|\b(?:light up|power up|activate|enable|illuminate|fire up)\b"
@@ -129,7 +131,9 @@ def read_action(clause: str, colours: frozenset[str]) -> Said | None:
         return Said("resume", rest=_cut(plain, _RESUME))
     played = _PLAY.match(clause)
     if played:
-        query = re.sub(r"^(?:some|something|anything|a bit of|a little)\s+(?:by\s+|from\s+)?", "", played.group("query"))
+        query = re.sub(
+            r"^(?:some|something|anything|a bit of|a little)\s+(?:by\s+|from\s+)?", "", played.group("query")
+        )
         return Said("play", {"query": query}, rest="")
     looked = _LOOK.search(plain)
     if looked:
@@ -157,11 +161,17 @@ def _motion(text: str, quantity: Quantity | None, size: Size) -> Said | None:
         sign = -1 if _RIGHT.search(text) and not _LEFT.search(text) else 1
         times = _TIMES.search(text)
         degrees *= _COUNTS[times.group(0)] if times else 1
-        return Said("turn", {"angle": sign * degrees}, _cut(text, _TURN_VERB, _MOVE_VERB, _LEFT, _RIGHT, _AROUND, _TIMES))
+        return Said(
+            "turn",
+            {"angle": sign * degrees},
+            _cut(text, _TURN_VERB, _MOVE_VERB, _LEFT, _RIGHT, _AROUND, _TIMES),
+        )
     backward = _BACKWARD.search(text)
     forward = _FORWARD.search(text)
     # A verb, or a direction with a distance ("turtlebot forward 1.5 metres"): never a bare "back".
-    if (_MOVE_VERB.search(text) and (backward or forward or distance_unit)) or (distance_unit and (backward or forward)):
+    if (_MOVE_VERB.search(text) and (backward or forward or distance_unit)) or (
+        distance_unit and (backward or forward)
+    ):
         if quantity is not None and quantity.unit in METRES_PER:
             metres = quantity.value * METRES_PER[quantity.unit]
         else:
@@ -173,26 +183,47 @@ def _motion(text: str, quantity: Quantity | None, size: Size) -> Said | None:
 
 def _light_or_sound(text: str, quantity: Quantity | None, size: Size, colours: frozenset[str]) -> Said | None:
     if quantity is not None and quantity.unit == "kelvin":
-        return Said("colour_temperature", {"kelvin": quantity.value}, _cut(text, re.compile(r"\b(?:colou?r temperature|temperature)\b")))
+        return Said(
+            "colour_temperature",
+            {"kelvin": quantity.value},
+            _cut(text, re.compile(r"\b(?:colou?r temperature|temperature)\b")),
+        )
     for colour in sorted(colours, key=len, reverse=True):
         pattern = re.compile(rf"\b{re.escape(colour)}\b")
         if pattern.search(text):
             return Said("colour", {"colour": colour}, _cut(text, pattern))
     if _WARMER.search(text):
-        return Said("colour_temperature", {"kelvin_change": -SIZES["kelvin_change"][size]}, _cut(text, _WARMER))
+        return Said(
+            "colour_temperature", {"kelvin_change": -SIZES["kelvin_change"][size]}, _cut(text, _WARMER)
+        )
     if _COOLER.search(text):
-        return Said("colour_temperature", {"kelvin_change": SIZES["kelvin_change"][size]}, _cut(text, _COOLER))
+        return Said(
+            "colour_temperature", {"kelvin_change": SIZES["kelvin_change"][size]}, _cut(text, _COOLER)
+        )
     if _WARM.search(text) and not _COOL.search(text):
         return Said("colour_temperature", {"kelvin": WARM_KELVIN}, _cut(text, _WARM))
     if _COOL.search(text) and not _WARM.search(text):
         return Said("colour_temperature", {"kelvin": COOL_KELVIN}, _cut(text, _COOL))
     family = "volume" if _VOLUME_WORD.search(text) and not _BRIGHT_WORD.search(text) else None
-    family = "brightness" if _BRIGHT_WORD.search(text) and family is None and not _VOLUME_WORD.search(text) else family
-    level_words = (_UP, _DOWN, _MAX, _LEVEL_NOUN, _BRIGHT_WORD, re.compile(r"\b(?:to|at|by|level|percent)\b|%"))
+    family = (
+        "brightness"
+        if _BRIGHT_WORD.search(text) and family is None and not _VOLUME_WORD.search(text)
+        else family
+    )
+    level_words = (
+        _UP,
+        _DOWN,
+        _MAX,
+        _LEVEL_NOUN,
+        _BRIGHT_WORD,
+        re.compile(r"\b(?:to|at|by|level|percent)\b|%"),
+    )
     if _MAX.search(text):
         return Said("level", {"level": 100}, _cut(text, *level_words), family)
-    if quantity is not None and quantity.unit in (None, "percent") and (
-        _SET_WORD.search(f"{text} {quantity.text}") or quantity.is_fraction or family
+    if (
+        quantity is not None
+        and quantity.unit in (None, "percent")
+        and (_SET_WORD.search(f"{text} {quantity.text}") or quantity.is_fraction or family)
     ):
         value = quantity.value * 100 if quantity.is_fraction else quantity.value
         if re.search(r"\bby\b", text) and (_UP.search(text) or _DOWN.search(text)):
@@ -202,10 +233,10 @@ def _light_or_sound(text: str, quantity: Quantity | None, size: Size, colours: f
             return Said("level", {"level": round(value)}, _cut(text, *level_words), family)
         return None  # a level out of range is refused by the engine's range check, never clipped
     down, up = _DOWN.search(text), _UP.search(text)
-    if (down or up) and not (_OFF.search(text) and not down):
-        if not (up and _ON.search(text) and not family and re.search(r"\b(?:light up|power up|fire up)\b", text)):
-            change = SIZES["change"][size] * (-1 if down else 1)
-            return Said("level", {"change": change}, _cut(text, *level_words), family)
+    switched_on = up and not family and re.search(r"\b(?:light up|power up|fire up)\b", text)
+    if (down or up) and not (_OFF.search(text) and not down) and not switched_on:
+        change = SIZES["change"][size] * (-1 if down else 1)
+        return Said("level", {"change": change}, _cut(text, *level_words), family)
     if _OFF.search(text):
         return Said("switch_off", rest=_cut(text, _OFF, _TURN_VERB, re.compile(r"\b(?:switch|put|power)\b")))
     if _ON.search(text):

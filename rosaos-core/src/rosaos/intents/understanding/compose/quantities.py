@@ -31,9 +31,7 @@ _FRACTIONS = {
 _NUMBER_WORD = "|".join(sorted([*_UNITS_WORDS, *_TENS_WORDS, *_SCALES], key=len, reverse=True))
 _FRACTION_WORD = "|".join(sorted(_FRACTIONS, key=len, reverse=True))
 # A run of number words ("twenty five", "one hundred and twenty", "two thousand seven hundred").
-_RUN = re.compile(
-    rf"\b(?:{_NUMBER_WORD})(?:(?:[\s-]+|\s+and\s+)(?:{_NUMBER_WORD}))*\b", re.IGNORECASE
-)
+_RUN = re.compile(rf"\b(?:{_NUMBER_WORD})(?:(?:[\s-]+|\s+and\s+)(?:{_NUMBER_WORD}))*\b", re.IGNORECASE)
 _DIGITS = r"\d+(?:\.\d+)?"
 UNITS: dict[str, str] = {
     "%": "percent", "percent": "percent", "per cent": "percent", "pc": "percent",
@@ -50,7 +48,14 @@ UNITS: dict[str, str] = {
     "second": "second", "seconds": "second", "sec": "second", "secs": "second",
     "minute": "minute", "minutes": "minute", "min": "minute", "mins": "minute",
 }  # fmt: skip
-METRES_PER = {"metre": 1.0, "centimetre": 0.01, "millimetre": 0.001, "foot": 0.3048, "inch": 0.0254, "step": 0.25}
+METRES_PER = {
+    "metre": 1.0,
+    "centimetre": 0.01,
+    "millimetre": 0.001,
+    "foot": 0.3048,
+    "inch": 0.0254,
+    "step": 0.25,
+}
 _UNIT = "|".join(re.escape(unit) for unit in sorted(UNITS, key=len, reverse=True))
 _QUANTITY = re.compile(rf"(?<![\w.])(?P<value>-?{_DIGITS})\s*(?P<unit>(?:{_UNIT})(?![\w]))?", re.IGNORECASE)
 
@@ -158,7 +163,9 @@ def find_quantity(text: str) -> Quantity | None:
     if match is None:
         return None
     unit = match.group("unit")
-    return Quantity(float(match.group("value")), UNITS[unit.lower()] if unit else None, match.group(0).strip())
+    return Quantity(
+        float(match.group("value")), UNITS[unit.lower()] if unit else None, match.group(0).strip()
+    )
 
 
 def vague_size(text: str) -> Size:

@@ -177,7 +177,9 @@ class Composer:
         wanted = set(said.values)
         if said.action == "level":
             families = [said.family] if said.family else ["brightness", "volume", "level"]
-            options = [capability for family in families for capability in declared.doing(family, description)]
+            options = [
+                capability for family in families for capability in declared.doing(family, description)
+            ]
         else:
             options = declared.doing(said.action, description)
         for capability in options:

@@ -22,13 +22,106 @@ from rosaos.intents.grammar.capabilities import Capabilities
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 
 _FUNCTION_WORDS = frozenset(
-    "the a an my our your this that these those its it their his her of in on at by to for with over "
-    "above under below near next beside from up down some any please me us you i and is are be so very "
-    "too there here one ones thing things them which who can could would will want need get have make "
-    "let tell ask send bring take set put turn switch go please just now also again into onto out off "
-    "little bit way much lot lots more less than as".split()
+    [
+        "the",
+        "a",
+        "an",
+        "my",
+        "our",
+        "your",
+        "this",
+        "that",
+        "these",
+        "those",
+        "its",
+        "it",
+        "their",
+        "his",
+        "her",
+        "of",
+        "in",
+        "on",
+        "at",
+        "by",
+        "to",
+        "for",
+        "with",
+        "over",
+        "above",
+        "under",
+        "below",
+        "near",
+        "next",
+        "beside",
+        "from",
+        "up",
+        "down",
+        "some",
+        "any",
+        "please",
+        "me",
+        "us",
+        "you",
+        "i",
+        "and",
+        "is",
+        "are",
+        "be",
+        "so",
+        "very",
+        "too",
+        "there",
+        "here",
+        "one",
+        "ones",
+        "thing",
+        "things",
+        "them",
+        "which",
+        "who",
+        "can",
+        "could",
+        "would",
+        "will",
+        "want",
+        "need",
+        "get",
+        "have",
+        "make",
+        "let",
+        "tell",
+        "ask",
+        "send",
+        "bring",
+        "take",
+        "set",
+        "put",
+        "turn",
+        "switch",
+        "go",
+        "just",
+        "now",
+        "also",
+        "again",
+        "into",
+        "onto",
+        "out",
+        "off",
+        "little",
+        "bit",
+        "way",
+        "much",
+        "lot",
+        "lots",
+        "more",
+        "less",
+        "than",
+        "as",
+    ]
 )
-_DETERMINERS = frozenset({"the", "my", "our", "your", "this", "that", "these", "those", "its", "their", "a", "an"})
+_DETERMINERS = frozenset(
+    {"the", "my", "our", "your", "this", "that", "these", "those", "its", "their", "a", "an"}
+)
 _GROUP = frozenset({"all", "every", "each", "both", "everything", "everywhere", "whole", "entire"})
 _PRONOUNS = frozenset({"it", "them", "that", "this", "those", "these", "one", "him", "her"})
 _EXCEPT = re.compile(
@@ -122,9 +215,14 @@ class References:
         others = [
             (index, token)
             for index, token in enumerate(tokens)
-            if index not in heads and token not in _FUNCTION_WORDS and token not in _GROUP and not token[0].isdigit()
+            if index not in heads
+            and token not in _FUNCTION_WORDS
+            and token not in _GROUP
+            and not token[0].isdigit()
         ]
-        modifiers = [token for _, token in others if any(self._has_word(known, token) for known in self._known)]
+        modifiers = [
+            token for _, token in others if any(self._has_word(known, token) for known in self._known)
+        ]
         if heads and self._unknown_before(tokens, heads, others):
             return Reference(unknown=True, named=True)
         if not heads and not modifiers:
@@ -139,7 +237,9 @@ class References:
         if not candidates:
             return Reference(unknown=True, named=True)
         if modifiers:
-            scores = {known.name: sum(self._has_word(known, word) for word in modifiers) for known in candidates}
+            scores = {
+                known.name: sum(self._has_word(known, word) for word in modifiers) for known in candidates
+            }
             best = max(scores.values())
             if best == 0:
                 return Reference(unknown=True, named=True)
@@ -154,7 +254,11 @@ class References:
         unknown = {index for index, token in others if not any(self._has_word(k, token) for k in self._known)}
         for head in heads:
             index = head - 1
-            while index >= 0 and (index in heads or index not in unknown) and tokens[index] not in _FUNCTION_WORDS:
+            while (
+                index >= 0
+                and (index in heads or index not in unknown)
+                and tokens[index] not in _FUNCTION_WORDS
+            ):
                 index -= 1
             if index >= 0 and index in unknown:
                 return True
@@ -163,10 +267,18 @@ class References:
     def _unknown_object(self, tokens: list[str]) -> bool:
         """A thing the sentence names that no device is ("turn on the tv", "open the blinds")."""
         for before, token in zip(["", *tokens], tokens, strict=False):
-            if (before in _DETERMINERS or not before) and token not in _FUNCTION_WORDS and token not in _GROUP:
-                if not token[0].isdigit() and not any(self._has_word(known, token) for known in self._known):
-                    return True
+            said_as_object = (before in _DETERMINERS or not before) and token not in _FUNCTION_WORDS
+            if (
+                said_as_object
+                and token not in _GROUP
+                and not token[0].isdigit()
+                and not self._known_word(token)
+            ):
+                return True
         return False
+
+    def _known_word(self, token: str) -> bool:
+        return any(self._has_word(known, token) for known in self._known)
 
     @staticmethod
     def _has_word(known: _Known, word: str) -> bool:
