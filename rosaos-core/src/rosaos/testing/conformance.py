@@ -189,7 +189,9 @@ class DriverConformance:
     def test_intents_file_parses(self, rosaos_driver: DriverInfo) -> None:
         """The intents file parses with hassil, and every intent names a tool."""
         intents = _intents_file(rosaos_driver.spec)
-        assert intents.actions, f"{intents.path}: declares no intent"
+        assert intents.actions or intents.capabilities, (
+            f"{intents.path}: declares no intent and no capabilities"
+        )
 
     def test_declared_notices_validate(self, rosaos_driver: DriverInfo) -> None:
         """Every notice in ``DriverSpec.notices`` has a valid name, a schema, and an example that validates."""
@@ -332,8 +334,9 @@ class DriverConformance:
     def test_intents_name_existing_tools(
         self, rosaos_driver: DriverInfo, shared_tools: list[mcp_types.Tool]
     ) -> None:
-        """Every intent calls a tool the server has, with arguments that tool takes; a question
-        (an intent with ``answer`` or ``reply``) calls a read-only tool, so asking moves nothing."""
+        """Every intent and every capability calls a tool the server has, with arguments that tool
+        takes; a question (an intent with ``answer`` or ``reply``) calls a read-only tool, so asking
+        moves nothing."""
         intents = _intents_file(rosaos_driver.spec)
         tools = {tool.name: tool for tool in shared_tools}
         problems = []
@@ -353,6 +356,21 @@ class DriverConformance:
                 problems.append(
                     f"{intent}: a question (answer/reply) must call a read-only tool such as get_state; "
                     f"{action.tool} is not annotated readOnlyHint=true"
+                )
+        for capability in intents.capabilities.can if intents.capabilities else ():
+            where = f"capabilities: {capability.does} ({capability.tool})"
+            tool = tools.get(capability.tool)
+            if tool is None:
+                problems.append(f"{where}: no tool {capability.tool!r}; tools: {', '.join(sorted(tools))}")
+                continue
+            accepted = set(tool.input_schema.get("properties") or {})
+            required = set(tool.input_schema.get("required") or [])
+            given = set(capability.args) | set(capability.fixed)
+            if unknown := sorted(given - accepted):
+                problems.append(f"{where}: {capability.tool} takes no argument {', '.join(unknown)}")
+            if missing := sorted(required - given):
+                problems.append(
+                    f"{where}: {capability.tool} needs {', '.join(missing)}; give their meaning under args"
                 )
         assert not problems, f"{intents.path}:\n" + "\n".join(problems)
 

@@ -8,7 +8,13 @@
     assert probe.match("dim the kitchen light") == ("kitchen_light", "adjust_brightness", {"change": -25})
     assert probe.match("turn on the garage light") is None
 
-The probe runs the engine's own code for a driver's templates (:mod:`rosaos.intents.understanding.readings`):
+:meth:`IntentProbe.understand` runs the whole engine instead (templates, then the compositional
+reader over the file's ``capabilities:``), for everyday sentences no template lists::
+
+    assert probe.understand("oh, could you put the kitchen light at half?") == (
+        "kitchen_light", "set_brightness", {"brightness": 50})
+
+The probe's ``match`` runs the engine's own code for a driver's templates (:mod:`rosaos.intents.understanding.readings`):
 the same recognition, the same ``{device}`` names, the same choice among several parses, the same
 slot filling (``"{slot}"`` arguments; whole numbers as ``int``). It reads the file alone, one
 sentence as one command: Home Assistant's templates and skip words (which the engine adds when the
@@ -29,7 +35,7 @@ from hassil.intents import TextSlotList
 from rosaos.drivers import DriverSpec
 from rosaos.intents.grammar.intents_file import IntentsFile
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
-from rosaos.intents.understanding.matching import MAX_RESULTS_PER_SOURCE
+from rosaos.intents.understanding.matching import MAX_RESULTS_PER_SOURCE, IntentMatcher
 from rosaos.intents.understanding.readings import Reading, ReadingContext, driver_reading
 
 PROBE_DRIVER = "probe"
@@ -85,6 +91,8 @@ class IntentProbe:
         self.intents_file: IntentsFile = file
         """The loaded file, for tests of its lists and ``homeassistant:`` table."""
         self.language = language
+        self._sources = list(sources.values())
+        self._matcher: IntentMatcher | None = None
         self._context = ReadingContext(sources, language)
         self._intents = file.intents()
         self._devices = list(sources)
@@ -104,6 +112,17 @@ class IntentProbe:
             return None
         [step] = [step for steps in best.calls.values() for step in steps]  # a template calls one tool
         return IntentMatch(step.device, step.tool, step.args)
+
+    def understand(self, sentence: str) -> IntentMatch | None:
+        """The one tool call the whole offline engine makes for ``sentence``, or None when it would
+        not make exactly one (it asks, refuses, or does not understand)."""
+        if self._matcher is None:
+            self._matcher = IntentMatcher(self._sources, self.language)
+        result = self._matcher.match(sentence)
+        steps = [step for process in result.processes for step in process.plan.steps]
+        if not result.is_exact or len(steps) != 1:
+            return None
+        return IntentMatch(steps[0].device, steps[0].tool, steps[0].args)
 
     def _best(self, clause: str) -> Reading | None:
         """The engine's pick among the parses of ``clause`` (``IntentMatcher`` does the same per driver)."""

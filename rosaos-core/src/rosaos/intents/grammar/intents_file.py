@@ -46,6 +46,11 @@ local-intent engine both read intents through this one function.
 
 A second, optional extension maps Home Assistant's built-in (multilingual) intents onto the
 driver's tools: a top-level ``homeassistant:`` table, described in :mod:`rosaos.intents.grammar.ha_mapping`.
+
+A third, ``capabilities:``, says what the driver can do and what each tool argument means, with
+no sentences at all; the engine's compositional reader understands everyday language from it
+(:mod:`rosaos.intents.grammar.capabilities`). A file may hold only ``capabilities:`` and no
+``intents:``: a new driver needs no templates.
 """
 
 from __future__ import annotations
@@ -58,10 +63,12 @@ import yaml
 from hassil import Intents
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
+from rosaos.intents.grammar.capabilities import Capabilities
 from rosaos.intents.grammar.ha_mapping import HomeAssistantMapping
 
 ROSAOS_KEY = "rosaos"
 HOMEASSISTANT_KEY = "homeassistant"
+CAPABILITIES_KEY = "capabilities"
 ACTION_KEYS = ("tool", "args", "answer", "reply", "every")
 DEFAULT_LANGUAGE = "en"
 _SLOT_REFERENCE = re.compile(r"^\{(\w+)\}$")
@@ -148,6 +155,20 @@ class IntentsFile(BaseModel):
     """Intent name → the tool call it stands for. Every intent has exactly one."""
     homeassistant: HomeAssistantMapping | None = None
     """How Home Assistant's built-in intents map onto this driver's tools, if it says."""
+    capabilities: Capabilities | None = None
+    """What the driver can do and what its tools' arguments mean, if it says."""
+
+    def list_values(self, name: str) -> list[str]:
+        """The plain output values of the hassil list ``name`` (``lists: {color: {values: ...}}``)."""
+        declared = self.hassil.get("lists", {}).get(name, {})
+        values = declared.get("values", []) if isinstance(declared, dict) else []
+        found = []
+        for value in values:
+            if isinstance(value, dict):
+                value = value.get("out", value.get("in"))
+            if isinstance(value, str) and re.fullmatch(r"[\w' -]+", value):
+                found.append(value.lower())
+        return found
 
     def intents(self) -> Intents:
         """The hassil :class:`~hassil.Intents` ready for recognition."""
@@ -166,12 +187,18 @@ def load_intents_file(path: Path) -> IntentsFile:
         raise IntentsFileError(f"{path}: cannot read: {error.strerror}") from None
     except yaml.YAMLError as error:
         raise IntentsFileError(f"{path}: not valid YAML: {error}") from None
-    if not isinstance(raw, dict) or not isinstance(raw.get("intents"), dict) or not raw["intents"]:
+    if not isinstance(raw, dict):
+        raise IntentsFileError(f"{path}: expected a mapping with 'intents:' or 'capabilities:'")
+    if raw.get(CAPABILITIES_KEY) is not None and not raw.get("intents"):
+        raw = {**raw, "intents": {}}
+    elif not isinstance(raw.get("intents"), dict) or not raw["intents"]:
         raise IntentsFileError(
             f"{path}: expected a mapping with a non-empty 'intents:' table (hassil format)"
+            " or a 'capabilities:' table"
         )
 
-    hassil_dict = {key: value for key, value in raw.items() if key not in (ROSAOS_KEY, HOMEASSISTANT_KEY)}
+    own_keys = (ROSAOS_KEY, HOMEASSISTANT_KEY, CAPABILITIES_KEY)
+    hassil_dict = {key: value for key, value in raw.items() if key not in own_keys}
     hassil_dict.setdefault("language", DEFAULT_LANGUAGE)
     top_level = raw.get(ROSAOS_KEY) or {}
     if not isinstance(top_level, dict):
@@ -212,6 +239,23 @@ def load_intents_file(path: Path) -> IntentsFile:
         hassil=hassil_dict,
         actions=actions,
         homeassistant=_homeassistant(path, raw.get(HOMEASSISTANT_KEY)),
+        capabilities=_capabilities(path, raw.get(CAPABILITIES_KEY)),
+    )
+
+
+def _capabilities(path: Path, declared: object) -> Capabilities | None:
+    if declared is None:
+        return None
+    try:
+        return Capabilities.model_validate(declared)
+    except ValidationError as error:
+        raise IntentsFileError(f"{path}: {CAPABILITIES_KEY}: {_problems(error)}") from None
+
+
+def _problems(error: ValidationError) -> str:
+    return "; ".join(
+        f"{'.'.join(str(part) for part in problem['loc']) or 'value'}: {problem['msg']}"
+        for problem in error.errors()
     )
 
 

@@ -7,7 +7,10 @@ not an exact command, :func:`understand` tries, in order, and stops at the first
    name and nothing else is tried (no rephrasing, no guessing);
 2. **rephrasings** (:mod:`rosaos.intents.understanding.rephrase`): fillers dropped, a split name joined, a name
    said first or last ("dog, a bit closer") taken as the device the command is for;
-3. **the fuzzy model** (:mod:`rosaos.intents.understanding.fuzzy`), only when the literal reading found nothing
+3. **the compositional reader** (:mod:`rosaos.intents.understanding.compose`): actions from a
+   lexicon, devices from their names, kinds, places and descriptions, quantities with units,
+   several clauses; a clear sentence is acted on, a real ambiguity asks "which one?";
+4. **the fuzzy model** (:mod:`rosaos.intents.understanding.fuzzy`), only when the literal reading found nothing
    at all (a question or a refusal stands): a close guess acts; a weaker one asks "Did you mean
    …?" and does nothing; questions are never guessed into actions.
 
@@ -26,6 +29,7 @@ from rosaos.intents.understanding.readings import Focus
 from rosaos.intents.understanding.rephrase import negated, rephrasings, strip_fillers
 
 Literal = Callable[[str, Focus], MatchResult]
+Compose = Callable[[str, Focus], MatchResult | None]
 QUESTION_START: dict[str, re.Pattern[str]] = {
     "en": re.compile(
         r"^(is|are|was|were|what|what's|whats|how|where|who|why|when|which|does|do|did|has|have)\b", re.I
@@ -41,6 +45,7 @@ def understand(
     fuzzy: FuzzyMatcher | None,
     language: str,
     whole: Literal | None = None,
+    compose: Compose | None = None,
 ) -> MatchResult:
     """What ``text`` means (see the module docstring). ``literal`` reads a sentence exactly as
     said (whole, split or elided); ``whole`` (default: ``literal``) only as one whole command,
@@ -65,6 +70,9 @@ def understand(
             return found
         if rephrased.addressed is not None and found.kind == "clarify" and first.kind == "no_match":
             first = found
+    composed = compose(text, focus) if compose is not None and not first.refusal else None
+    if composed is not None and (composed.is_exact or first.kind == "no_match"):
+        return composed
     if fuzzy is None or first.kind != "no_match" or first.refusal:
         return first
     return _guess(text, first, whole or literal, fuzzy, focus, language)

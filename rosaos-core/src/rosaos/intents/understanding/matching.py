@@ -37,11 +37,13 @@ from rosaos.intents.grammar.ha_intents import NO_AREA, load_ha_intents
 from rosaos.intents.grammar.intents_file import IntentsFile
 from rosaos.intents.grammar.phrases import confirms, conjunctions, pronouns
 from rosaos.intents.grammar.vocabulary import ARTICLES, DeviceVocabulary
+from rosaos.intents.understanding.compose.reader import Composer
 from rosaos.intents.understanding.fuzzy import FuzzyMatcher
 from rosaos.intents.understanding.generalize import understand
 from rosaos.intents.understanding.match_result import MatchResult, ProcessPlan, build_result, no_match
 from rosaos.intents.understanding.ranges import refuse_bad_number
 from rosaos.intents.understanding.readings import (
+    RANK_ANY,
     Focus,
     Reading,
     ReadingContext,
@@ -125,6 +127,7 @@ class IntentMatcher:
         if self._ha is not None:
             grammars.append(Grammar(self._ha, self._ha_lists, True, None))
         self._unknown_names = UnknownNames(self.context, grammars, self._recognize)
+        self._composer = Composer(self.context, devices, language)
 
     def _driver_intents(self) -> list[_DriverIntents]:
         by_driver: dict[str, list[DeviceVocabulary]] = {}
@@ -183,8 +186,23 @@ class IntentMatcher:
         if not text:
             return no_match(self.context, text)
         return understand(
-            text, focus, self._literal, self.context.names, self._fuzzy, self.language, self._whole
+            text,
+            focus,
+            self._literal,
+            self.context.names,
+            self._fuzzy,
+            self.language,
+            self._whole,
+            self._compose,
         )
+
+    def _compose(self, text: str, focus: Focus = None) -> MatchResult | None:
+        return self._composer.read(text, focus, self._clause_reading)
+
+    def _clause_reading(self, clause: str, focus: Focus) -> Reading | None:
+        """One clause read as an exact template match, for the compositional reader."""
+        found = self._best(clause, focus)
+        return found if found is not None and found.actionable and not self._hides_command(found) else None
 
     def _whole(self, text: str, focus: Focus = None) -> MatchResult:
         return self._exact(text, focus)
@@ -193,6 +211,12 @@ class IntentMatcher:
         """``text`` read against the templates as said: whole, split at conjunctions, or elided."""
         whole = self._best(text, focus)
         if whole is not None and whole.actionable and not self._hides_command(whole):
+            if whole.rank == RANK_ANY:
+                # A template that names no target ("turn off all the lights" for "all the
+                # lamps") ignored what the sentence says of its devices; the reader does not.
+                composed = self._compose(text, focus)
+                if composed is not None and composed.is_exact:
+                    return composed
             return build_result(self.context, text, [whole], focus is not None)
         pieces = self._splitter.split(text)
         if 3 <= len(pieces) <= 2 * MAX_PIECES - 1:

@@ -1,0 +1,246 @@
+"""What a clause asks to be done: a lexicon of verbs, particles and adjectives → an action.
+
+The actions are the ones drivers declare (:data:`rosaos.intents.grammar.capabilities.ACTIONS`),
+plus ``level``: "up", "down", "louder", "dim", "to sixty" change whichever level the device has
+(brightness for a bulb, volume for a player), so one word list serves every driver. Each rule
+reads the *kind* of thing said (a motion verb and a direction, a level word and a quantity), not a
+sentence; the words it used are taken out (:attr:`Said.rest`), and what is left names the device.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from typing import Any
+
+from rosaos.intents.understanding.compose.quantities import (
+    METRES_PER,
+    Quantity,
+    Size,
+    find_quantity,
+    remove_vague,
+    vague_size,
+)
+
+DET = r"(?:(?:the|its|his|her|their|your|my|our|a)\s+)?"
+_DOCK_PLACE = (
+    r"(?:docking station|charging station|charging dock|charging base|home base|dock|base|charger|home)"
+)
+_UNDOCK = re.compile(
+    rf"\bundock\w*\b|\b(?:off|out of|away from|leave|leaves|leaving)\s+{DET}(?:dock|base|charger|charging station)\b"
+)
+_DOCK = re.compile(
+    rf"\b(?:re)?dock\b|\b(?:go|goes|head|come|return|get|send|drive|take|back|park|walk|roll|move)\b(?:\s+\w+){{0,3}}?"
+    rf"\s+(?:back\s+)?(?:to|on|onto|into|at|toward|towards)?\s*{DET}{_DOCK_PLACE}\b|\bgo\s+(?:and\s+)?charge\b|\brecharge\b"
+)
+_SHUFFLE_OFF = re.compile(r"\b(?:un-?shuffle|stop shuffling|no shuffle|shuffle off|in order)\b")
+_SHUFFLE = re.compile(r"\b(?:shuffle|mix(?:\s+\w+){0,3}\s+up|mix it up|randomi[sz]e|random order)\b")
+_NEXT = re.compile(r"\b(?:skip\w*|next (?:song|track|tune|one)|another (?:song|track|tune))\b|^next$")
+_PREVIOUS = re.compile(
+    r"\b(?:previous(?:\s+(?:song|track|tune))?|last (?:song|track|tune)|back (?:a|one) (?:song|track|tune)"
+    r"|go back(?:\s+to the (?:last|previous))?\s+(?:song|track|tune)|play that (?:again|one again)|replay)\b"
+)
+_PAUSE = re.compile(r"\bpause\w*\b")
+_RESUME = re.compile(r"\b(?:resume|unpause|un-pause|keep playing|continue playing|continue|carry on)\b")
+_PLAY = re.compile(r"^(?:play|put on|queue up|throw on)\s+(?P<query>.+)$")
+_LOOK = re.compile(r"\blook\w*\b(?:\s+\w+){0,3}?\s+(?P<direction>left|right|up|down)\b")
+_LEFT = re.compile(r"\b(?:left|counter-?clockwise|anti-?clockwise)\b")
+_RIGHT = re.compile(r"\b(?:right|clockwise)\b")
+_AROUND = re.compile(r"\b(?:around|round|about)\b")
+_COUNTS = {"once": 1, "twice": 2, "2 times": 2, "3 times": 3, "thrice": 3}
+_TIMES = re.compile(r"\b(?:once|twice|thrice|[23] times)\b")
+_TURN_VERB = re.compile(r"\b(?:turn|rotate|spin|pivot|swivel|face|twist)\w*\b")
+_MOVE_VERB = re.compile(
+    r"\b(?:drive|go|goes|move|walk|roll|scoot|step|head|come|advance|creep|inch|travel|trot|run|zoom|"
+    r"nudge|shuffle|wheel|get|bring|take|back|reverse|retreat)\w*\b"
+)
+_BACKWARD = re.compile(r"\b(?:back(?:\s+\w+){0,3}?\s+up|backwards?|back|reverse|retreat|away from me)\b")
+_FORWARD = re.compile(r"\b(?:forwards?|ahead|onwards?|closer|towards? me|straight)\b")
+_COOLER = re.compile(r"\b(?:cooler|colder|bluer|whiter|crisper|less warm|less yellow)\b")
+_WARMER = re.compile(r"\b(?:warmer|cozier|cosier|yellower|softer white|less cool|less blue|more yellow)\b")
+_WARM = re.compile(r"\b(?:warm|cozy|cosy|candle-?like)\b")
+_COOL = re.compile(r"\b(?:cool|cold|crisp|icy)\b")
+WARM_KELVIN, COOL_KELVIN = 2700, 5500
+_VOLUME_WORD = re.compile(r"\b(?:volume|loud\w*|quiet\w*|soft\w*|sound|music|noise)\b")
+_LEVEL_NOUN = re.compile(r"\b(?:volume|loud\w*|quiet\w*|soft\w*|sound)\b")
+_BRIGHT_WORD = re.compile(r"\b(?:bright\w*|dim\w*|dark\w*|lighter|light level)\b")
+_UP = re.compile(
+    r"\b(?:up|brighter|brighten|lighter|louder|raise|increase|boost|crank|pump|more|higher|amp)\b"
+)
+_DOWN = re.compile(
+    r"\b(?:down|dim|dimmer|darker|quieter|softer|lower|decrease|reduce|less|tone|knock|turn down|"
+    r"dimmed|not so loud|not so bright)\b"
+)
+_MAX = re.compile(
+    r"\b(?:max(?:imum)?|full(?:\s+(?:brightness|volume|blast|power))?|all the way up|100 percent)\b"
+)
+_SET_WORD = re.compile(r"\b(?:to|at)\s+[\d.]+|\b(?:brightness|volume|level|percent)\b|%")
+_OFF = re.compile(r"\b(?:off|kill|shut|out|extinguish|cut|deactivate|disable|power down)\b")
+_ON = re.compile(
+    r"\b(?:turn|switch|put|power|flick|click|flip|get|leave)\s+on\b|\bon$|\bon\b(?!\s+(?:the|my|our|its|your|a|an|top|to)\b)"
+    r"|\b(?:light up|power up|activate|enable|illuminate|fire up)\b"
+)
+_TOGGLE = re.compile(r"\b(?:toggle|flip)\b")
+
+SIZES: dict[str, dict[Size, float]] = {
+    "change": {"small": 10, "normal": 20, "large": 40},
+    "kelvin_change": {"small": 500, "normal": 700, "large": 1500},
+    "distance": {"small": 0.3, "normal": 0.5, "large": 1.0},
+    "angle": {"small": 30, "normal": 90, "large": 180},
+}
+
+
+@dataclass(frozen=True)
+class Said:
+    """One action a clause asks for: what, its values by meaning, and the words left over."""
+
+    action: str
+    values: dict[str, Any] = field(default_factory=dict)
+    rest: str = ""
+    family: str | None = None
+    """For ``level``: ``brightness`` or ``volume`` when the words say which."""
+
+
+def _cut(text: str, *patterns: re.Pattern[str]) -> str:
+    for pattern in patterns:
+        text = pattern.sub(" ", text)
+    return " ".join(text.split())
+
+
+def read_action(clause: str, colours: frozenset[str]) -> Said | None:
+    """The action ``clause`` asks for, or None when it names no action this lexicon knows."""
+    quantity = find_quantity(clause)
+    text = clause.replace(quantity.text, " ", 1) if quantity else clause
+    size = vague_size(text)
+    plain = remove_vague(text)
+    if _UNDOCK.search(plain):
+        return Said("undock", rest=_cut(plain, _UNDOCK, _MOVE_VERB))
+    if _DOCK.search(plain):
+        return Said("dock", rest=_cut(plain, _DOCK, _MOVE_VERB))
+    if _SHUFFLE_OFF.search(plain):
+        return Said("shuffle", {"flag": False}, _cut(plain, _SHUFFLE_OFF))
+    if _SHUFFLE.search(plain):
+        return Said("shuffle", {"flag": True}, _cut(plain, _SHUFFLE))
+    if _PREVIOUS.search(plain):
+        return Said("previous", rest=_cut(plain, _PREVIOUS))
+    if _NEXT.search(plain):
+        return Said("next", rest=_cut(plain, _NEXT))
+    if _PAUSE.search(plain):
+        return Said("pause", rest=_cut(plain, _PAUSE))
+    if _RESUME.search(plain):
+        return Said("resume", rest=_cut(plain, _RESUME))
+    played = _PLAY.match(clause)
+    if played:
+        query = re.sub(
+            r"^(?:some|something|anything|a bit of|a little)\s+(?:by\s+|from\s+)?", "", played.group("query")
+        )
+        return Said("play", {"query": query}, rest="")
+    looked = _LOOK.search(plain)
+    if looked:
+        return Said("look", {"direction": looked.group("direction")}, _cut(plain, _LOOK))
+    said = _motion(plain, quantity, size) or _light_or_sound(plain, quantity, size, colours)
+    if said is not None and quantity is not None and not said.values:
+        return None  # a number the action does not take: not this reader's to guess
+    return said
+
+
+def _motion(text: str, quantity: Quantity | None, size: Size) -> Said | None:
+    angle_unit = quantity is not None and quantity.unit in ("degree", "turn")
+    sideways = _LEFT.search(text) or _RIGHT.search(text) or _AROUND.search(text)
+    distance_unit = quantity is not None and quantity.unit in METRES_PER
+    turning = _TURN_VERB.search(text) or (_MOVE_VERB.search(text) and sideways and not distance_unit)
+    if turning and (sideways or angle_unit) and not re.search(r"\b(?:on|off|up|down)\b", text):
+        if quantity is not None and quantity.unit == "turn":
+            degrees = quantity.value * 360
+        elif quantity is not None and quantity.unit == "degree":
+            degrees = quantity.value
+        elif _AROUND.search(text) and not (_LEFT.search(text) or _RIGHT.search(text)):
+            degrees = 180
+        else:
+            degrees = SIZES["angle"][size]
+        sign = -1 if _RIGHT.search(text) and not _LEFT.search(text) else 1
+        times = _TIMES.search(text)
+        degrees *= _COUNTS[times.group(0)] if times else 1
+        return Said(
+            "turn",
+            {"angle": sign * degrees},
+            _cut(text, _TURN_VERB, _MOVE_VERB, _LEFT, _RIGHT, _AROUND, _TIMES),
+        )
+    backward = _BACKWARD.search(text)
+    forward = _FORWARD.search(text)
+    # A verb, or a direction with a distance ("turtlebot forward 1.5 metres"): never a bare "back".
+    if (_MOVE_VERB.search(text) and (backward or forward or distance_unit)) or (
+        distance_unit and (backward or forward)
+    ):
+        if quantity is not None and quantity.unit in METRES_PER:
+            metres = quantity.value * METRES_PER[quantity.unit]
+        else:
+            metres = SIZES["distance"][size]
+        sign = -1 if backward else 1
+        return Said("move", {"distance": sign * metres}, _cut(text, _BACKWARD, _FORWARD, _MOVE_VERB))
+    return None
+
+
+def _light_or_sound(text: str, quantity: Quantity | None, size: Size, colours: frozenset[str]) -> Said | None:
+    if quantity is not None and quantity.unit == "kelvin":
+        return Said(
+            "colour_temperature",
+            {"kelvin": quantity.value},
+            _cut(text, re.compile(r"\b(?:colou?r temperature|temperature)\b")),
+        )
+    for colour in sorted(colours, key=len, reverse=True):
+        pattern = re.compile(rf"\b{re.escape(colour)}\b")
+        if pattern.search(text):
+            return Said("colour", {"colour": colour}, _cut(text, pattern))
+    if _WARMER.search(text):
+        return Said(
+            "colour_temperature", {"kelvin_change": -SIZES["kelvin_change"][size]}, _cut(text, _WARMER)
+        )
+    if _COOLER.search(text):
+        return Said(
+            "colour_temperature", {"kelvin_change": SIZES["kelvin_change"][size]}, _cut(text, _COOLER)
+        )
+    if _WARM.search(text) and not _COOL.search(text):
+        return Said("colour_temperature", {"kelvin": WARM_KELVIN}, _cut(text, _WARM))
+    if _COOL.search(text) and not _WARM.search(text):
+        return Said("colour_temperature", {"kelvin": COOL_KELVIN}, _cut(text, _COOL))
+    family = "volume" if _VOLUME_WORD.search(text) and not _BRIGHT_WORD.search(text) else None
+    family = (
+        "brightness"
+        if _BRIGHT_WORD.search(text) and family is None and not _VOLUME_WORD.search(text)
+        else family
+    )
+    level_words = (
+        _UP,
+        _DOWN,
+        _MAX,
+        _LEVEL_NOUN,
+        _BRIGHT_WORD,
+        re.compile(r"\b(?:to|at|by|level|percent)\b|%"),
+    )
+    if _MAX.search(text):
+        return Said("level", {"level": 100}, _cut(text, *level_words), family)
+    if (
+        quantity is not None
+        and quantity.unit in (None, "percent")
+        and (_SET_WORD.search(f"{text} {quantity.text}") or quantity.is_fraction or family)
+    ):
+        value = quantity.value * 100 if quantity.is_fraction else quantity.value
+        if re.search(r"\bby\b", text) and (_UP.search(text) or _DOWN.search(text)):
+            change = -value if _DOWN.search(text) else value
+            return Said("level", {"change": change}, _cut(text, *level_words), family)
+        if 0 <= value <= 100:
+            return Said("level", {"level": round(value)}, _cut(text, *level_words), family)
+        return None  # a level out of range is refused by the engine's range check, never clipped
+    down, up = _DOWN.search(text), _UP.search(text)
+    switched_on = up and not family and re.search(r"\b(?:light up|power up|fire up)\b", text)
+    if (down or up) and not (_OFF.search(text) and not down) and not switched_on:
+        change = SIZES["change"][size] * (-1 if down else 1)
+        return Said("level", {"change": change}, _cut(text, *level_words), family)
+    if _OFF.search(text):
+        return Said("switch_off", rest=_cut(text, _OFF, _TURN_VERB, re.compile(r"\b(?:switch|put|power)\b")))
+    if _ON.search(text):
+        return Said("switch_on", rest=_cut(text, _ON, _TURN_VERB, re.compile(r"\b(?:switch|put|power|on)\b")))
+    if _TOGGLE.search(text):
+        return Said("toggle", rest=_cut(text, _TOGGLE))
+    return None

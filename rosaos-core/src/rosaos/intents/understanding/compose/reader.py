@@ -1,0 +1,226 @@
+"""Compositional reading: a sentence → clauses → (action, devices, quantities) → tool calls.
+
+This is the engine's general reader, used when a sentence is not an exact template match
+(:func:`rosaos.intents.understanding.generalize.understand`). It knows no sentence: it peels off
+discourse (:mod:`.speech`), cuts clauses, reads each clause's action from a lexicon
+(:mod:`.actions`) and its devices from their names, kinds, places and descriptions
+(:mod:`.references`), and turns the action into a call of the capability the device's driver
+declares (:mod:`rosaos.intents.grammar.capabilities`), filling each argument by its meaning.
+
+A clause that names no device means the device of the clause before ("undock the turtlebot then
+roll it forward"), else the one device that can do it ("louder" with one speaker). A clause that
+is only a device repeats the action before ("turn off the kitchen light and the desk lamp"), or
+addresses the next ("robot, return to base"). A clause that is neither a command nor a device
+("ugh, it's so bright, …") is commentary and dropped when another clause is a command. A need
+("I need some light to sew at the table", "it's too dark in the kitchen") is the action that
+meets it, on the one device that fits the place it names.
+
+Never guessed: negations, questions, "stop" (another part of the engine answers those), a
+device the world does not have. Several devices where one was meant get "which one?".
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from rosaos.intents.grammar.capabilities import Capabilities, Capability
+from rosaos.intents.grammar.vocabulary import DeviceVocabulary
+from rosaos.intents.planning.plan import PlanStep
+from rosaos.intents.understanding.compose.actions import Said, read_action
+from rosaos.intents.understanding.compose.references import Reference, References
+from rosaos.intents.understanding.compose.speech import asks, clauses, negated, normalise, says_stop
+from rosaos.intents.understanding.match_result import MatchResult, build_result
+from rosaos.intents.understanding.readings import RANK_DRIVER, Focus, Reading, ReadingContext
+
+LiteralReading = Callable[[str, Focus], Reading | None]
+_NEED_LIGHT = re.compile(
+    r"\b(?:need|want|could use|would like|give me|get me|some)\b.*\b(?:light|lighting)\b"
+    r"|\bcan'?t see\b|\b(?:too|so|very|pretty|quite|really) dark\b|\bpitch black\b|\bdark in here\b"
+)
+_TOO_BRIGHT = re.compile(r"\b(?:too|so|very|way too|really) bright\b|\bhurts my eyes\b")
+_TOO_LOUD = re.compile(r"\b(?:too|so|very|way too|really) loud\b|\bcan'?t hear myself\b")
+_TOO_QUIET = re.compile(r"\b(?:too|so|very|really) quiet\b|\bcan'?t hear (?:it|the music|anything)\b")
+
+
+_COMMENT = re.compile(r"^(?:it'?s|it is|that'?s|that is|this is|i'?m|i am|we'?re|so|wow|man|god|gosh)\b")
+
+
+@dataclass(frozen=True)
+class _Clause:
+    text: str
+    said: Said | None
+    reference: Reference
+
+
+class Composer:
+    """Reads sentences compositionally against one world's devices and their capabilities."""
+
+    def __init__(self, context: ReadingContext, devices: Sequence[DeviceVocabulary], language: str) -> None:
+        self.context = context
+        self.language = language
+        self.capabilities: dict[str, Capabilities] = {}
+        self.descriptions = {device.name: device.description for device in devices}
+        colours: set[str] = set()
+        for device in devices:
+            file = device.mapping_file()
+            if file is None or file.capabilities is None:
+                continue
+            self.capabilities[device.name] = file.capabilities
+            for capability in file.capabilities.can:
+                if capability.values:
+                    colours |= set(file.list_values(capability.values))
+        self.colours = frozenset(colours)
+        self.references = References(devices, self.capabilities, language)
+
+    def read(self, text: str, focus: Focus, literal: LiteralReading) -> MatchResult | None:
+        """What ``text`` asks for, or None when this reader cannot say (left to the engine)."""
+        if not self.capabilities or not self.language.startswith("en"):
+            return None
+        plain = normalise(text)
+        if negated(plain) or asks(plain) or says_stop(plain):
+            return None
+        pieces = [piece for piece in clauses(plain) if piece]
+        if not pieces:
+            return None
+        parsed = [self._clause(piece) for piece in pieces]
+        parsed = self._addressed(parsed)
+        commands = [clause for clause in parsed if clause.said is not None]
+        if not commands:
+            need = self._need(plain, focus)
+            return build_result(self.context, text, [need], focus is not None) if need else None
+        readings: list[Reading] = []
+        before: tuple[str, ...] = ()
+        last_said: Said | None = None
+        for clause in parsed:
+            reading: Reading | None
+            if clause.said is None and clause.reference.named and last_said is not None:
+                reading = self._reading(clause.text, last_said, clause.reference, before, focus)
+            elif clause.said is None:
+                reading = literal(clause.text, focus) if clause.reference.named else None
+                if reading is None and (not clause.reference.named or _COMMENT.match(clause.text)):
+                    continue  # commentary around a command: "ugh, it's so bright, ..."
+            else:
+                reading = self._reading(clause.text, clause.said, clause.reference, before, focus)
+                if reading is None or not (reading.actionable or reading.issue):
+                    reading = literal(clause.text, focus) or reading
+                last_said = clause.said
+            if reading is None or not (reading.actionable or reading.issue):
+                return None
+            readings.append(reading)
+            before = tuple(reading.calls) or before
+        return build_result(self.context, text, readings, focus is not None)
+
+    def _clause(self, text: str) -> _Clause:
+        said = read_action(text, self.colours)
+        reference = self.references.resolve(said.rest if said else text)
+        return _Clause(text, said, reference)
+
+    @staticmethod
+    def _addressed(parsed: list[_Clause]) -> list[_Clause]:
+        """A clause that is only a device, before a command that names none, addresses it."""
+        merged: list[_Clause] = []
+        index = 0
+        while index < len(parsed):
+            clause = parsed[index]
+            following = parsed[index + 1] if index + 1 < len(parsed) else None
+            if (
+                clause.said is None
+                and clause.reference.named
+                and following is not None
+                and following.said is not None
+                and not following.reference.named
+            ):
+                merged.append(_Clause(f"{clause.text}, {following.text}", following.said, clause.reference))
+                index += 2
+                continue
+            merged.append(clause)
+            index += 1
+        return merged
+
+    def _reading(
+        self, text: str, said: Said, reference: Reference, before: tuple[str, ...], focus: Focus
+    ) -> Reading | None:
+        if reference.unknown:
+            return None
+        if reference.named:
+            named = list(reference.devices)
+        elif before:
+            named = list(before)
+        else:
+            named = list(self.capabilities)
+        if focus is not None:
+            named = [device for device in named if device in focus]
+        able = {device: capability for device in named if (capability := self._capability(device, said))}
+        if not able and not reference.named and before:
+            # "kitchen light on, music louder": the device before cannot, so any that can.
+            return self._reading(text, said, reference, (), focus)
+        if not able:
+            return None
+        plural = reference.plural or (not reference.named and bool(before) and len(before) > 1)
+        if len(able) > 1 and not plural:
+            return self.context.clarify(text, 0, RANK_DRIVER, list(able))
+        if reference.both and len(able) != 2:
+            return self.context.clarify(text, 0, RANK_DRIVER, list(able))
+        steps = {device: self._step(device, capability, said) for device, capability in able.items()}
+        calls = {device: [step] for device, step in steps.items() if step is not None}
+        if len(calls) != len(steps):
+            return None
+        return Reading(text, RANK_DRIVER, len(text), calls=calls)
+
+    def _capability(self, device: str, said: Said) -> Capability | None:
+        declared = self.capabilities.get(device)
+        if declared is None:
+            return None
+        description = self.descriptions.get(device, "")
+        wanted = set(said.values)
+        if said.action == "level":
+            families = [said.family] if said.family else ["brightness", "volume", "level"]
+            options = [
+                capability for family in families for capability in declared.doing(family, description)
+            ]
+        else:
+            options = declared.doing(said.action, description)
+        for capability in options:
+            meanings = set(capability.args.values())
+            if wanted <= meanings or (not wanted and not meanings):
+                return capability
+        return None
+
+    @staticmethod
+    def _step(device: str, capability: Capability, said: Said) -> PlanStep | None:
+        args = dict(capability.fixed)
+        for meaning, value in said.values.items():
+            name = capability.argument(meaning)
+            if name is not None:
+                args[name] = int(value) if isinstance(value, float) and value.is_integer() else value
+                if not capability.allows(name, value):
+                    return None  # out of the device's range: the engine refuses, never clips
+        return PlanStep(device=device, tool=capability.tool, args=args)
+
+    def _need(self, text: str, focus: Focus) -> Reading | None:
+        """A need or a complaint → the action that meets it, on the one device that fits."""
+        if _NEED_LIGHT.search(text):
+            said = Said("level", {"level": 100}, family="brightness")
+        elif _TOO_BRIGHT.search(text):
+            said = Said("level", {"change": -20}, family="brightness")
+        elif _TOO_LOUD.search(text):
+            said = Said("level", {"change": -20}, family="volume")
+        elif _TOO_QUIET.search(text):
+            said = Said("level", {"change": 20}, family="volume")
+        else:
+            return None
+        reference = self.references.resolve(text)
+        able = [device for device in self.capabilities if self._capability(device, said)]
+        if focus is not None:
+            able = [device for device in able if device in focus]
+        fitting = [device for device in able if device in reference.devices] if reference.named else []
+        if len(fitting) == 1 or (not fitting and len(able) == 1):
+            [device] = fitting or able
+            capability = self._capability(device, said)
+            step = self._step(device, capability, said) if capability is not None else None
+            return Reading(text, RANK_DRIVER, len(text), calls={device: [step]}) if step else None
+        if len(able) > 1:
+            return self.context.clarify(text, 0, RANK_DRIVER, fitting or able)
+        return None

@@ -1,0 +1,285 @@
+"""Which devices a phrase means: names, kinds, places and description words, singular or plural.
+
+Every device is known by *nouns* (its kind: "light", "lamp", "robot", "dog", "speaker"; its own
+one-word names: "turtlebot") and by *words* (everything its name, aliases, area and description
+say: "kitchen", "bedside", "stairwell", "table"). A phrase names the devices that have all its
+nouns and most of its other words: "the light over the stairs" is the light whose description
+says stairwell, "the bedroom lights" the light in the bedroom, "the robot" the only robot.
+Plurals and group words ("the lamps", "both lamps", "every light", "everything") mean all that
+fit, and "except …" takes some away. A word before the noun that no device has ("the garage
+light") means a device this world does not have: the reader then leaves the sentence to the
+engine's refusal. Words are compared loosely (plural -s, and one word a prefix of the other, of
+four letters or more: "stairs" ~ "stairwell", "hall" ~ "hallway").
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+from rosaos.intents.grammar.capabilities import Capabilities
+from rosaos.intents.grammar.vocabulary import DeviceVocabulary
+
+_FUNCTION_WORDS = frozenset(
+    [
+        "the",
+        "a",
+        "an",
+        "my",
+        "our",
+        "your",
+        "this",
+        "that",
+        "these",
+        "those",
+        "its",
+        "it",
+        "their",
+        "his",
+        "her",
+        "of",
+        "in",
+        "on",
+        "at",
+        "by",
+        "to",
+        "for",
+        "with",
+        "over",
+        "above",
+        "under",
+        "below",
+        "near",
+        "next",
+        "beside",
+        "from",
+        "up",
+        "down",
+        "some",
+        "any",
+        "please",
+        "me",
+        "us",
+        "you",
+        "i",
+        "and",
+        "is",
+        "are",
+        "be",
+        "so",
+        "very",
+        "too",
+        "there",
+        "here",
+        "one",
+        "ones",
+        "thing",
+        "things",
+        "them",
+        "which",
+        "who",
+        "can",
+        "could",
+        "would",
+        "will",
+        "want",
+        "need",
+        "get",
+        "have",
+        "make",
+        "let",
+        "tell",
+        "ask",
+        "send",
+        "bring",
+        "take",
+        "set",
+        "put",
+        "turn",
+        "switch",
+        "go",
+        "just",
+        "now",
+        "also",
+        "again",
+        "into",
+        "onto",
+        "out",
+        "off",
+        "little",
+        "bit",
+        "way",
+        "much",
+        "lot",
+        "lots",
+        "more",
+        "less",
+        "than",
+        "as",
+    ]
+)
+_DETERMINERS = frozenset(
+    {"the", "my", "our", "your", "this", "that", "these", "those", "its", "their", "a", "an"}
+)
+_GROUP = frozenset({"all", "every", "each", "both", "everything", "everywhere", "whole", "entire"})
+_PRONOUNS = frozenset({"it", "them", "that", "this", "those", "these", "one", "him", "her"})
+_EXCEPT = re.compile(
+    r"\b(?:except(?:\s+for)?|but(?:\s+not)?|other than|apart from|besides|save for|excluding|not)\b"
+)
+_WORD = re.compile(r"[a-z][a-z0-9'-]*")
+MIN_PREFIX = 4
+
+
+@dataclass(frozen=True)
+class Reference:
+    """What a phrase says about its devices."""
+
+    devices: tuple[str, ...] = ()
+    """The devices it names, before asking which of them can do the action."""
+    plural: bool = False
+    """A plural or group word: every device that fits, not "which one?"."""
+    named: bool = False
+    """The phrase names something (a noun or a device's word); False: no device said at all."""
+    unknown: bool = False
+    """It names a device this world does not have ("the garage light")."""
+    pronoun: bool = False
+    """Only "it", "them": the device of the clause before."""
+    both: bool = False
+
+
+def singular(word: str) -> str:
+    """``lights`` → ``light``, ``batteries`` → ``battery``; short words stay."""
+    if len(word) > 4 and word.endswith("ies"):
+        return word[:-3] + "y"
+    if len(word) > 3 and word.endswith("s") and not word.endswith("ss"):
+        return word[:-1]
+    return word
+
+
+def alike(said: str, known: str) -> bool:
+    """Whether ``said`` and ``known`` are the same word, loosely (see the module docstring)."""
+    said, known = singular(said), singular(known)
+    if said == known:
+        return True
+    short = min(len(said), len(known))
+    return short >= MIN_PREFIX and (said.startswith(known) or known.startswith(said))
+
+
+@dataclass(frozen=True)
+class _Known:
+    name: str
+    nouns: frozenset[str]
+    words: frozenset[str]
+
+
+class References:
+    """Resolves phrases against one world's devices."""
+
+    def __init__(
+        self, devices: Iterable[DeviceVocabulary], capabilities: dict[str, Capabilities], language: str
+    ) -> None:
+        self._known: list[_Known] = []
+        for device in devices:
+            names = device.spoken_names(language)
+            nouns = {singular(name.split()[-1]) for name in names}
+            declared = capabilities.get(device.name)
+            nouns |= set(declared.kind) if declared else set()
+            text = " ".join([*names, *device.aliases, device.description, *device.areas(language)])
+            words = {singular(word) for word in _WORD.findall(text.lower())} - _FUNCTION_WORDS
+            self._known.append(_Known(device.name, frozenset(nouns), frozenset(words | nouns)))
+        self._nouns = frozenset(noun for known in self._known for noun in known.nouns)
+
+    def resolve(self, phrase: str) -> Reference:
+        """The devices ``phrase`` names (see :class:`Reference`)."""
+        tokens = _WORD.findall(phrase.lower())
+        group = any(token in _GROUP for token in tokens)
+        excepted = _EXCEPT.search(phrase.lower()) if group or self._has_plural(tokens) else None
+        if excepted is not None:
+            kept = self.resolve(phrase.lower()[: excepted.start()])
+            removed = self.resolve(phrase.lower()[excepted.end() :])
+            if kept.unknown or removed.unknown or not removed.devices:
+                return Reference(unknown=True, named=True)
+            rest = tuple(device for device in kept.devices if device not in removed.devices)
+            return Reference(rest, plural=True, named=True)
+        return self._resolve(tokens, group)
+
+    def _has_plural(self, tokens: list[str]) -> bool:
+        return any(singular(token) in self._nouns and singular(token) != token for token in tokens)
+
+    def _resolve(self, tokens: list[str], group: bool) -> Reference:
+        heads = [index for index, token in enumerate(tokens) if singular(token) in self._nouns]
+        plural = group or any(singular(tokens[index]) != tokens[index] for index in heads)
+        both = "both" in tokens
+        head_nouns = {singular(tokens[index]) for index in heads}
+        others = [
+            (index, token)
+            for index, token in enumerate(tokens)
+            if index not in heads
+            and token not in _FUNCTION_WORDS
+            and token not in _GROUP
+            and not token[0].isdigit()
+        ]
+        modifiers = [
+            token for _, token in others if any(self._has_word(known, token) for known in self._known)
+        ]
+        if heads and self._unknown_before(tokens, heads, others):
+            return Reference(unknown=True, named=True)
+        if not heads and not modifiers:
+            if self._unknown_object(tokens):
+                return Reference(unknown=True, named=True)
+            everything = "everything" in tokens or ("all" in tokens and len(tokens) <= 2)
+            if everything:
+                return Reference(tuple(known.name for known in self._known), plural=True, named=True)
+            pronoun = any(token in _PRONOUNS for token in tokens)
+            return Reference(pronoun=pronoun)
+        candidates = [known for known in self._known if head_nouns <= known.nouns]
+        if not candidates:
+            return Reference(unknown=True, named=True)
+        if modifiers:
+            scores = {
+                known.name: sum(self._has_word(known, word) for word in modifiers) for known in candidates
+            }
+            best = max(scores.values())
+            if best == 0:
+                return Reference(unknown=True, named=True)
+            candidates = [known for known in candidates if scores[known.name] == best]
+            # A place or description word said of a plural noun ("the bedroom lights") still
+            # means every device it fits; without a noun, a place means what is there.
+            plural = plural or not heads
+        return Reference(tuple(known.name for known in candidates), plural=plural, named=True, both=both)
+
+    def _unknown_before(self, tokens: list[str], heads: list[int], others: list[tuple[int, str]]) -> bool:
+        """A word right before a noun that no device has: a device this world lacks."""
+        unknown = {index for index, token in others if not any(self._has_word(k, token) for k in self._known)}
+        for head in heads:
+            index = head - 1
+            while (
+                index >= 0
+                and (index in heads or index not in unknown)
+                and tokens[index] not in _FUNCTION_WORDS
+            ):
+                index -= 1
+            if index >= 0 and index in unknown:
+                return True
+        return False
+
+    def _unknown_object(self, tokens: list[str]) -> bool:
+        """A thing the sentence names that no device is ("turn on the tv", "open the blinds")."""
+        for before, token in zip(["", *tokens], tokens, strict=False):
+            said_as_object = (before in _DETERMINERS or not before) and token not in _FUNCTION_WORDS
+            if (
+                said_as_object
+                and token not in _GROUP
+                and not token[0].isdigit()
+                and not self._known_word(token)
+            ):
+                return True
+        return False
+
+    def _known_word(self, token: str) -> bool:
+        return any(self._has_word(known, token) for known in self._known)
+
+    @staticmethod
+    def _has_word(known: _Known, word: str) -> bool:
+        return any(alike(word, own) for own in known.words)

@@ -1,0 +1,114 @@
+"""The command inside what people say: one mechanism for fillers, politeness and speech acts.
+
+People wrap a command in discourse: interjections ("oh man", "ugh", "okay so"), request frames
+("could ya", "would you be a dear and", "I'd like you to"), and tags ("real quick", "for me",
+"please", "will you?"). None of them changes what is asked, so :func:`command_words` peels them
+off both ends of a sentence (and of each clause), repeatedly, by their *role* in the sentence,
+never by which command they wrap. :func:`clauses` then cuts the sentence at "and", "then" and
+commas. What stays is never guessed at: negations and questions are recognised
+(:func:`negated`, :func:`asks`) so the reader leaves them to the rest of the engine.
+"""
+
+from __future__ import annotations
+
+import re
+
+from rosaos.intents.understanding.compose.quantities import spell_numbers
+
+_INTERJECTIONS = (
+    "oh man", "oh boy", "oh dear", "oh my god", "oh my", "oh no", "oh", "ah", "aah", "uh", "uhh", "um",
+    "umm", "er", "erm", "hmm", "hm", "ugh", "argh", "meh", "ok", "okay", "okey", "alright", "all right",
+    "right", "hey there", "hey", "hi", "hello", "yo", "so", "well", "now", "listen", "man", "dude", "mate",
+    "buddy", "gosh", "geez", "jeez", "damn", "wow", "sorry", "excuse me", "yes", "yeah", "yep", "also",
+    "and", "then", "actually", "honestly", "quick", "quickly", "real quick", "just", "kindly",
+    "please", "pretty please", "hey assistant", "computer", "oops", "whoops", "anyway", "anyways",
+)  # fmt: skip
+_REQUEST_FRAMES = (
+    r"(?:can|could|would|will|wouldja|couldja|can't|won't)\s+(?:you|ya|u|yah)(?:\s+please)?",
+    r"(?:do|would)\s+you\s+mind(?:\s+if\s+you)?",
+    r"(?:be\s+a\s+(?:dear|darling|love|pal|sweetheart)|do\s+me\s+a\s+(?:favou?r|solid))(?:\s+and)?",
+    r"go\s+ahead\s+and",
+    r"i(?:'d|\s+would)\s+(?:like|love)\s+(?:you\s+|it\s+if\s+you\s+)?(?:to\s+)?",
+    r"i\s+(?:want|need)\s+you\s+to",
+    r"i\s+want\s+to\s+(?=turn|switch|set|make)",
+    r"(?:how\s+about|what\s+about)\s+(?:you\s+)?",
+    r"let's",
+    r"time\s+to",
+    r"try\s+(?:to|and)",
+    r"if\s+you\s+(?:can|could|would)",
+    r"for\s+me",
+    r"and",
+)
+_TAGS = (
+    "please", "pretty please", "for me", "for us", "real quick", "really quick", "quick", "quickly",
+    "right now", "now", "asap", "thanks", "thank you", "thx", "ta", "cheers", "will you", "would you",
+    "could you", "can you", "won't you", "will ya", "would ya", "could ya", "can ya", "ok", "okay",
+    "if you can", "if you could", "if you don't mind", "when you get a chance", "when you can", "yeah",
+    "mate", "buddy", "dude", "man", "then", "already", "again", "as well", "too",
+    "thanks a lot", "thanks so much", "would you kindly", "k", "pls", "plz",
+)  # fmt: skip
+
+
+def _alternatives(words: tuple[str, ...]) -> str:
+    return "|".join(re.escape(word) for word in sorted(words, key=len, reverse=True))
+
+
+_LEAD = re.compile(
+    rf"^(?:(?:{_alternatives(_INTERJECTIONS)})\b|(?:{'|'.join(_REQUEST_FRAMES)})(?=\s|$))[\s,!.?;:-]*",
+    re.IGNORECASE,
+)
+_TAIL = re.compile(rf"[\s,!.?;:-]*\b(?:{_alternatives(_TAGS)})[\s,!.?;:-]*$", re.IGNORECASE)
+_SPLIT = re.compile(
+    r"\s*(?:[,;]\s*(?:and\s+then|and|then|after\s+that|plus|also)?|\band\s+then\b|\bthen\b|\band\b"
+    r"|\bafter\s+that\b|\bafterwards\b|\bplus\b)\s*",
+    re.IGNORECASE,
+)
+_NEGATION = re.compile(
+    r"\b(?:don't|dont|do not|never|no need to|not|won't|shouldn't|mustn't|didn't|doesn't|nothing|"
+    r"no more|forget it|never mind|nevermind|cancel)\b",
+    re.IGNORECASE,
+)
+_QUESTION = re.compile(
+    r"^(?:is|are|was|were|what|what's|whats|how|where|who|why|when|which|does|has|am|should|shall|"
+    r"isn't|aren't|(?:do|did|have)\s+(?:you|i|we|they|it|any))\b",
+    re.IGNORECASE,
+)
+_STOP = re.compile(r"\b(?:stop|halt|freeze|hold it|enough|abort|emergency)\b", re.IGNORECASE)
+
+
+def normalise(text: str) -> str:
+    """Lowercase, plain apostrophes, number words as digits, no end punctuation."""
+    text = text.lower().replace("\u2019", "'").replace("\u2018", "'")
+    text = re.sub(r"[\"“”!?.]+(?=\s|$)", " ", text)
+    text = re.sub(r"\s+", " ", text).strip()
+    return spell_numbers(text)
+
+
+def command_words(text: str) -> str:
+    """``text`` without the discourse around its command, at both ends, as often as it is there."""
+    previous = None
+    while previous != text:
+        previous = text
+        text = _LEAD.sub("", text).strip()
+        text = _TAIL.sub("", text).strip()
+    return text
+
+
+def clauses(text: str) -> list[str]:
+    """``text`` cut into clauses at commas, "and", "then"; each without its own discourse."""
+    return [command_words(piece) for piece in _SPLIT.split(command_words(text))]
+
+
+def negated(text: str) -> bool:
+    """Whether ``text`` says not to do something ("don't", "never", "no need to")."""
+    return _NEGATION.search(text) is not None
+
+
+def asks(text: str) -> bool:
+    """Whether ``text`` is a question about state ("is the lamp on?"), not a request."""
+    return _QUESTION.match(command_words(text)) is not None
+
+
+def says_stop(text: str) -> bool:
+    """Whether ``text`` says stop: another part of the engine owns that, never this reader."""
+    return _STOP.search(text) is not None
