@@ -113,7 +113,8 @@ def test_a_command_that_does_what_it_says_passes(run: dict[str, Any]) -> None:
     assert trial["status"] == "pass", trial
     assert trial["reply_ok"] is True
     assert trial["latency_s"] > 0
-    assert trial["model_calls"] >= 2  # the kernel's and the process's
+    # At least the kernel's turn on the sentence (an offline plan runs without a model request).
+    assert trial["model_calls"] >= 1
     assert trial["tool_calls"] >= 2  # launch_process, then the lamp's turn_on
 
 

@@ -54,10 +54,10 @@ def test_a_notice_renders_and_reads_back() -> None:
     )
 
 
-def test_a_hand_posted_notice_keeps_the_one_line_shape() -> None:
+def test_a_hand_posted_notice_keeps_the_one_line_shape_with_its_message_quoted() -> None:
     notice = DeviceNotice(device="door", message="the door opened")
-    assert render_notice(notice) == "[Device notice] device=door importance=info the door opened"
-    assert read_notice("device=door importance=info the door opened").message == "the door opened"
+    assert render_notice(notice) == '[Device notice] device=door importance=info "the door opened"'
+    assert read_notice('device=door importance=info "the door opened"').message == "the door opened"
 
 
 async def test_a_notify_notice_is_said_through_the_speaker_device() -> None:
