@@ -19,6 +19,7 @@ drives straight to it and turns to the heading, closed loop on odometry, avoidin
 
 from __future__ import annotations
 
+import asyncio
 import math
 import time
 import uuid
@@ -36,6 +37,9 @@ if TYPE_CHECKING:
 
 MAP_POSE_MAX_AGE = 5.0
 """Seconds: a map pose older than this means localization is not running."""
+MAP_POSE_WAIT = 3.0
+"""How long a fresh connection waits for localization's first pose before calling the robot lost.
+The pose topic ticks more slowly than odometry, so its first message can come after odometry's."""
 ARRIVED = 0.05
 """Metres: on odometry, closer than this to the goal needs no drive."""
 
@@ -90,11 +94,17 @@ class Navigator:
         backend = self.backend
         navigation = backend.profile.navigation
         if navigation is None:
+            if backend.state.odometry is None:  # a fresh connection: odometry's first message
+                await backend.state.wait_for_messages(sources={"odom"})
             odometry = backend.state.latest_odometry()
             anchor = f"odom:{backend.instance}:{self.session}"
             return FramedPose(odometry.x, odometry.y, odometry.yaw, "odom", anchor)
         if self._map_pose is None:
-            await backend.state.wait_for_messages(sources={"odom"})  # the pose topic ticks alongside
+            await backend.state.wait_for_messages(sources={"odom"})
+            deadline = time.monotonic() + MAP_POSE_WAIT
+            # Polled, not an asyncio.Event: the pose callback may run on the bridge's own thread.
+            while self._map_pose is None and time.monotonic() < deadline:  # noqa: ASYNC110
+                await asyncio.sleep(0.05)
         if self._map_pose is None or time.monotonic() - self._map_pose[3] > MAP_POSE_MAX_AGE:
             raise DeviceError(
                 f"{backend.instance}: no pose on {navigation.pose.topic}: the robot is not localized on a map; "
