@@ -104,8 +104,12 @@ async def test_no_in_the_chat_cancels_and_releases_the_lease(api: httpx.AsyncCli
     assert (await device_state(kernel, "turtlebot"))["x"] == pytest.approx(x_before, abs=0.01)
     assert await lease_free(api)
     entries = (await api.get("/activity", params={"process": question["process_id"]})).json()["entries"]
-    assert [(e["tool"], e["ok"]) for e in entries] == [("move_distance", False)]
-    assert "the person said no" in entries[0]["error"]
+    calls = [e for e in entries if e["safety"] is None]
+    assert [(e["tool"], e["ok"]) for e in calls] == [("move_distance", False)]
+    assert "the person said no" in calls[0]["error"]
+    # The question and its answer are safety decisions of their own in the log (issue 22).
+    decisions = sorted(e["safety"]["decision"] for e in entries if e["safety"] is not None)
+    assert decisions == ["confirm_asked", "declined"]
 
 
 async def test_silence_times_out_and_cancels(api: httpx.AsyncClient, kernel: Kernel) -> None:
