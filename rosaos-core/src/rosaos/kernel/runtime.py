@@ -391,6 +391,9 @@ class Kernel:
         if isinstance(self.supervisor, DeviceSupervisor):
             self.supervisor.release_background()
             await self.supervisor.settle({name for p in await self._live.left() for name in p.devices})
+        # Opened before orphan recovery: a callback it republishes records its sightings.
+        self.memory = MemoryStore.open(self.data_dir)
+        self.sightings = SightingLog(self.memory, self.config.memory.sightings_days)
         self._pending_stops = PendingStops(
             self._store,
             self.supervisor.directory,
@@ -418,8 +421,6 @@ class Kernel:
             launched_before=self._live.launched_for,
         )
         add_timer_tools(tools, self.timers)
-        self.memory = MemoryStore.open(self.data_dir)
-        self.sightings = SightingLog(self.memory, self.config.memory.sightings_days)
         add_memory_tools(tools, self.memory, self.endpoints, self._launch, self.sightings)
         if self._models.local is not None:
             self._models.local.memory = self.memory
