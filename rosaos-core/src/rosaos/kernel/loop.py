@@ -16,6 +16,7 @@ from pydantic_ai import Agent
 from pydantic_ai.exceptions import UsageLimitExceeded
 from pydantic_ai.messages import ModelMessage, RetryPromptPart, ToolCallPart, ToolReturnPart
 from pydantic_ai.models import Model
+from pydantic_ai.models.wrapper import WrapperModel
 from pydantic_ai.toolsets import CombinedToolset
 from pydantic_ai.usage import UsageLimits
 
@@ -123,7 +124,7 @@ class KernelLoop:
 
     def _for_model(self, event: Event) -> bool:
         """Whether ``event`` goes to an LLM (which can read several events in one turn)."""
-        return not isinstance(self.model_for(event) or self.agent.model, LocalIntentModel)
+        return not _is_offline_engine(self.model_for(event) or self.agent.model)
 
     async def handle(self, event: Event) -> list[Output]:
         """Run the kernel agent on one event; return the updates that say what it did."""
@@ -150,7 +151,8 @@ class KernelLoop:
         prompt = render_events(events)
         model = self.model_for(events[0])
         offline = model or self.agent.model
-        if len(events) == 1 and not isinstance(offline, LocalIntentModel):
+        engine = _is_offline_engine(offline)
+        if len(events) == 1 and not engine:
             report = relayable(events[0]) if self.relay_reports else None
             if report is not None:  # nothing to decide: the process's report is the reply
                 self._remember(relayed_messages(prompt, report))
@@ -172,7 +174,9 @@ class KernelLoop:
                         prompt,
                         message_history=self.history,
                         instructions=self.instructions(),
-                        model=LaunchAckModel(offline) if offline is not None else None,
+                        # The offline engine (wrapped, e.g. by the bench's request counter) answers
+                        # its own acknowledgements and follow-ups: the LLM's short turns are not for it.
+                        model=LaunchAckModel(offline) if offline is not None and not engine else offline,
                         usage_limits=UsageLimits(request_limit=self.request_limit),
                     )
                     new_messages, output = result.new_messages(), result.output
@@ -194,6 +198,13 @@ class KernelLoop:
 
     def _remember(self, new_messages: list[ModelMessage]) -> None:
         self.history = trim_history([*self.history, *new_messages], self.history_budget, self.history_chars)
+
+
+def _is_offline_engine(model: object) -> bool:
+    """Whether ``model`` is the offline engine, also inside wrappers (the bench counts its requests)."""
+    while isinstance(model, WrapperModel):
+        model = model.wrapped
+    return isinstance(model, LocalIntentModel)
 
 
 Output = tuple[UpdateKind, str, dict[str, Any]]
