@@ -81,6 +81,20 @@ def test_state_questions_name_a_topic_and_the_devices_asked_about(
 
 
 @pytest.mark.parametrize(
+    ("said", "question"),
+    [
+        ("hmm, what can you do?", Question("help", ())),
+        ("uh, is the kitchen light on?", Question("on", ("kitchen_light",))),
+        ("ok so where is the dog?", Question("position", ("dog",))),
+    ],
+)
+def test_the_discourse_around_a_question_does_not_hide_it(
+    said: str, question: Question, refs: DeviceRefs
+) -> None:
+    assert read_question(said, refs) == question
+
+
+@pytest.mark.parametrize(
     "said", ["is the kettle on?", "turn on the kitchen light", "can you turn on the light?"]
 )
 def test_commands_and_unknown_devices_are_not_state_questions(said: str, refs: DeviceRefs) -> None:

@@ -14,6 +14,7 @@ import re
 from dataclasses import dataclass
 from typing import Literal
 
+from rosaos.intents.understanding.compose.speech import command_words
 from rosaos.intents.understanding.stop_words import DeviceRefs
 
 Topic = Literal[
@@ -71,8 +72,10 @@ def read_question(text: str, refs: DeviceRefs) -> Question | None:
     """The question ``text`` asks, or None when it is not one of the state questions."""
     said = " ".join(text.lower().replace("’", "'").replace("?", " ").replace(",", " ").split()).strip(" .!")
     said = _OPENERS.sub("", said).strip()
+    # The discourse around a question ("hmm, …", "ok so …", "… then?") is the command reader's to strip.
+    bare = command_words(said)
     for topic, form in FORMS:
-        found = form.match(said)
+        found = form.match(said) or (form.match(bare) if bare != said else None)
         if found is None:
             continue
         ref = found.groupdict().get("ref")
