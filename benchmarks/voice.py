@@ -56,13 +56,13 @@ from voice_accuracy import CONDITIONS, scores, transcripts
 
 from rosaos.config import load_config
 from rosaos.devices.client import DeviceClient
+from rosaos.frontends.voice.end_of_turn import KernelJudge
 from rosaos.frontends.voice.pipeline import Heard, KernelHandoff, VoicePipeline
 from rosaos.frontends.voice.sources import SAMPLE_RATE, WavSource, read_wav
 from rosaos.frontends.voice.stt import MoonshineSTT, wav_bytes
-from rosaos.frontends.voice.turn import KernelJudge
 from rosaos.frontends.voice.vad import Segmenter, SileroClassifier
-from rosaos.frontends.voice.vocabulary import world_phrases
 from rosaos.frontends.voice.wake import WakeGate
+from rosaos.frontends.voice.word_bias import world_phrases
 from rosaos.kernel.api.kernel_client import KernelClient, running_kernel_url
 
 HERE = Path(__file__).resolve().parent

@@ -29,7 +29,7 @@ import yaml
 
 from rosaos.frontends.voice.sources import read_wav
 from rosaos.frontends.voice.stt import MoonshineSTT, word_error_rate
-from rosaos.frontends.voice.vocabulary import world_phrases
+from rosaos.frontends.voice.word_bias import world_phrases
 
 PUBLIC_TASKS = next(
     (

@@ -20,6 +20,7 @@ from rosaos.auth import token_path
 from rosaos.cli.console import console as terminal
 from rosaos.config import ConfigError, RosaosConfig, VoiceConfig, load_config
 from rosaos.frontends.voice.bargein import BargeIn, BargeInSettings
+from rosaos.frontends.voice.end_of_turn import KernelJudge
 from rosaos.frontends.voice.pipeline import Heard, KernelHandoff, PipelineStats, VoicePipeline
 from rosaos.frontends.voice.replies import ReplyFollower
 from rosaos.frontends.voice.robot import find_reachy
@@ -35,10 +36,9 @@ from rosaos.frontends.voice.sources import (
     require_media,
 )
 from rosaos.frontends.voice.stt import MoonshineSTT, OpenAITranscriptionSTT, build_stt
-from rosaos.frontends.voice.turn import KernelJudge
 from rosaos.frontends.voice.vad import EnergyClassifier, FrameClassifier, Segmenter, SileroClassifier
-from rosaos.frontends.voice.vocabulary import world_phrases
 from rosaos.frontends.voice.wake import EyeContact, HaarFaceDetector, WakeGate
+from rosaos.frontends.voice.word_bias import world_phrases
 from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
 
 EXIT_OK = 0

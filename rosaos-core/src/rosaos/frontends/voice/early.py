@@ -8,7 +8,7 @@ it at once. If the pause lasts, the final utterance has the draft's speech and i
 (nearly) ready; if the speaker goes on, the draft's transcript is thrown away and the longer
 utterance is transcribed as usual.
 
-The draft's transcript is also what the pipeline judges (:mod:`rosaos.frontends.voice.turn`):
+The draft's transcript is also what the pipeline judges (:mod:`rosaos.frontends.voice.end_of_turn`):
 a whole command ends the turn after a short pause instead of the full ``silence_seconds``.
 
 Only for the local engine: with a cloud engine every draft would be a request (and a bill).

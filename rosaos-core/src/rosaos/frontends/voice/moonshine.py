@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from rosaos.frontends.voice.sources import SAMPLE_RATE, Samples, VoiceError
-from rosaos.frontends.voice.vocabulary import Bias
+from rosaos.frontends.voice.word_bias import Bias
 
 WEIGHTS_PACKAGE = "moonshine-cpp"
 """The PyPI package whose wheel carries the weights (``pip install 'rosaos[voice]'``)."""
@@ -111,7 +111,7 @@ class MoonshineOnnx:
             token.decode("utf-8", errors="ignore").replace(WORD_START, " ").lower() for token in self._tokens
         ]
         self.bias: Bias | None = None
-        """Nudges decoding toward this world's words (:mod:`rosaos.frontends.voice.vocabulary`)."""
+        """Nudges decoding toward this world's words (:mod:`rosaos.frontends.voice.word_bias`)."""
         past = [i for i in self._decoder.get_inputs() if i.name.startswith("past_key_values.")]
         self._cache = _Cache([i.name for i in past], int(past[0].shape[1]), int(past[0].shape[3]))
         self._outputs = [o.name for o in self._decoder.get_outputs()]

@@ -23,6 +23,7 @@ import numpy as np
 
 from rosaos.frontends.voice.bargein import BargeIn
 from rosaos.frontends.voice.early import EarlyTranscriber
+from rosaos.frontends.voice.end_of_turn import TurnJudge, is_whole_command
 from rosaos.frontends.voice.replies import ReplyFollower
 from rosaos.frontends.voice.robot import NoRobot, RobotLink
 from rosaos.frontends.voice.sources import (
@@ -33,7 +34,6 @@ from rosaos.frontends.voice.sources import (
     VoiceError,
 )
 from rosaos.frontends.voice.stt import SpeechToText
-from rosaos.frontends.voice.turn import TurnJudge, is_whole_command
 from rosaos.frontends.voice.vad import Segmenter, SpeechSegment
 from rosaos.frontends.voice.wake import EyeContact, WakeGate, is_noise
 from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
@@ -166,7 +166,7 @@ class VoicePipeline:
         if early_transcription:
             segmenter.drafts = True  # the drafts early transcription starts from
         self.judge = judge if early_transcription else None
-        """Ends a turn after a short pause when its draft is a whole command (rosaos.frontends.voice.turn)."""
+        """Ends a turn after a short pause when its draft is a whole command (rosaos.frontends.voice.end_of_turn)."""
         self._utterances: asyncio.Queue[SpeechSegment | None] = asyncio.Queue()
         self.stats = PipelineStats()
         self._background: set[asyncio.Task[Any]] = set()

@@ -18,7 +18,7 @@ import numpy as np
 
 from rosaos.config import VoiceConfig
 from rosaos.frontends.voice.sources import SAMPLE_RATE, Samples, VoiceError
-from rosaos.frontends.voice.vocabulary import Bias
+from rosaos.frontends.voice.word_bias import Bias
 from rosaos.native import probe
 
 GROQ_BASE_URL = "https://api.groq.com/openai/v1"

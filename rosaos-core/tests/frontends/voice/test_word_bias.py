@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rosaos.frontends.voice.vocabulary import Bias, world_phrases
+from rosaos.frontends.voice.word_bias import Bias, world_phrases
 
 ROBOTS = {
     "turtlebot": {"driver": "ros"},

@@ -16,9 +16,9 @@ import pytest
 from voice_support import chunks_of, needs_espeak, silence, speak
 
 from rosaos.config import DeviceConfig
+from rosaos.frontends.voice.end_of_turn import EngineJudge, TurnJudge, command_of, is_whole_command
 from rosaos.frontends.voice.sources import Samples, read_wav
 from rosaos.frontends.voice.stt import MoonshineSTT
-from rosaos.frontends.voice.turn import EngineJudge, TurnJudge, command_of, is_whole_command
 from rosaos.frontends.voice.vad import Segmenter, SileroClassifier, SpeechSegment
 from rosaos.intents.grammar.vocabulary import sources_from_config
 from rosaos.intents.understanding.matching import IntentMatcher
