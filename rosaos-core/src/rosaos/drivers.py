@@ -192,10 +192,13 @@ class DriverSpec(BaseModel, Generic[BackendT]):
     own_process: bool = False
     """Serve each instance in a host process of its own. ``rosaos up`` otherwise hosts every
     simulated instance of the drivers that do not ask for it in one shared process. Set it when a
-    backend runs a heavy daemon or native code whose crash must not take other devices along."""
+    backend runs native code *in the host's own process* whose crash must not take other devices
+    along. A daemon the backend starts as a child process (the Reachy's MuJoCo) does not need it;
+    blocking SDK calls belong in threads (``asyncio.to_thread``) wherever the device is served."""
     background_start: bool = False
     """``rosaos up`` does not wait for this device: it says "rosaOS is up" while the device is still
-    ``starting`` (a physics simulator that boots for seconds), and grants it once it answers."""
+    ``starting`` (a physics simulator that boots for seconds), and grants it once it answers. A
+    simulated instance joins the running shared host after the others serve."""
     login: Callable[[DeviceContext], int] | None = None
     """Interactive account login for ``rosaos devices login NAME`` (cloud services such as Spotify):
     called with the instance's context, talks to the user on stdin/stdout, keeps what it obtains

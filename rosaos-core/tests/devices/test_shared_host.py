@@ -110,3 +110,45 @@ async def test_a_background_device_does_not_hold_up_start_and_boots_when_release
         supervisor.release_background()
         await supervisor.settle(["slow_lamp"])
         assert supervisor.directory()["slow_lamp"].status == "healthy"
+
+
+async def test_a_background_simulator_joins_the_running_shared_host_without_holding_up_the_rest(
+    data_dir: Path,
+) -> None:
+    # As the Reachy simulator: its boot waits for the release, then it is served by the same
+    # process as the other simulators (no interpreter of its own), on its own URL.
+    from rosaos_spotify.plugin import SPEC as SPOTIFY
+    from rosaos_tapo.plugin import SPEC as TAPO
+
+    slow = SPOTIFY.model_copy(update={"background_start": True})
+    registry = load_drivers(allow={"test_drivers"}, extra_plugins={"test_drivers": plugin(TAPO, slow)})
+    world = world_of(
+        registry,
+        data_dir,
+        kitchen_light={"driver": "tapo", "sim": {"on": False}},
+        music={"driver": "spotify"},
+    )
+    changes: list[tuple[str, DeviceStatus, DeviceStatus]] = []
+    async with DeviceSupervisor(world, data_dir, TOKEN, defer_background=True, **FAST) as supervisor:
+        supervisor.on_status_change = lambda name, old, new, error: changes.append((name, old, new))
+        directory = supervisor.directory()
+        assert (directory["kitchen_light"].status, directory["music"].status) == ("healthy", "starting")
+        await asyncio.sleep(0.5)
+        assert supervisor.directory()["music"].status == "starting"  # not before the release
+        supervisor.release_background()
+        await supervisor.settle(["music"])
+        directory = supervisor.directory()
+        assert {e.status for e in directory.values()} == {"healthy"}
+        served = pids(data_dir)
+        assert served["kitchen_light"] == served["music"] != os.getpid()
+        assert directory["kitchen_light"].url != directory["music"].url
+        music = DeviceClient(directory["music"].url or "", TOKEN, 5.0, "music")
+        assert (await music.get_state())["is_playing"] is False  # its own backend, served
+        # A crash of the shared host brings the joined instance back too, again in one process.
+        os.kill(served["music"] or 0, signal.SIGKILL)
+        await eventually(
+            lambda: all(e.status == "healthy" and e.restarts == 1 for e in supervisor.directory().values())
+        )
+        again = pids(data_dir)
+        assert again["kitchen_light"] == again["music"] not in (None, served["music"])
+    assert ("music", "healthy", "restarting") in changes

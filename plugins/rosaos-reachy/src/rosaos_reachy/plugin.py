@@ -74,8 +74,10 @@ SPEC: DriverSpec[ReachyBackend] = DriverSpec(
         controls=[prompt("Say", tool="speak", argument="text", placeholder="Hello, I am Reachy!")],
         noun="desk robot",
     ),
-    own_process=True,  # the host runs the Reachy daemon (MuJoCo): hundreds of MB, native code
-    background_start=True,  # the simulator boots for seconds; everything else need not wait
+    # Served in the shared host with the other simulators (no own_process): the heavy, native
+    # part, the SDK's MuJoCo daemon, is already a child process of its own (daemon.py), and the
+    # blocking SDK calls run in threads, so an interpreter of its own only cost ~120 MiB PSS.
+    background_start=True,  # the simulator boots for seconds; it joins the shared host later
     demo={
         "reachy": DemoInstance(
             description="Reachy Mini desktop robot, the user's companion on the desk",

@@ -12,6 +12,14 @@ does not stop the others; the supervisor retries it in a process of its own. An 
 server stops after it was ready ends the whole process with code 1, so the supervisor notices at
 once and restarts the batch.
 
+An instance whose driver starts in the background (``DriverSpec.background_start``: the Reachy
+simulator, whose MuJoCo daemon boots for seconds) joins a running host later: the supervisor
+writes its :class:`HostJob` as one more line on the host's stdin, once the others are up and
+``rosaos up`` has said so, and the host answers with that instance's line. So the daemon's boot
+holds up neither the banner nor the other instances, and one interpreter serves them all (a
+second host for the Reachy alone cost about 120 MiB PSS). The daemon itself, the native and
+heavy part, stays a child process of its own (``rosaos_reachy.daemon``).
+
 At most :data:`STARTING_AT_ONCE` instances start at the same time. Started all together, a
 hundred instances share the CPU fairly and each takes a hundred times longer, so on a busy
 machine every one of them overruns its driver's own start-up timeout (a Tapo simulator allows
@@ -24,12 +32,14 @@ import asyncio
 import json
 import logging
 import os
+import sys
+from collections.abc import Callable
 from typing import Any, TextIO
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from rosaos.devices.heartbeat import beat
-from rosaos.devices.host import HostJob, install_stop_signals, serve_until_stopped, stop_on_stdin_eof
+from rosaos.devices.host import HostJob, install_stop_signals, serve_until_stopped
 from rosaos.devices.serve import ServedDevice
 from rosaos.drivers import DeviceError
 
@@ -63,11 +73,42 @@ class BatchHandshake:
         self.stream.flush()
 
 
+async def read_joining_jobs(stop: asyncio.Event, join: Callable[[HostJob], None]) -> None:
+    """Read the supervisor's later jobs from stdin, one JSON line each, until EOF, which sets ``stop``.
+
+    EOF means the supervisor is gone or let go: no orphan host lingers. A line that is not a job is
+    logged and skipped (the supervisor's wait for that instance then times out and says so).
+    """
+    loop = asyncio.get_running_loop()
+    reader = asyncio.StreamReader()
+    try:
+        await loop.connect_read_pipe(lambda: asyncio.StreamReaderProtocol(reader), sys.stdin)
+    except (ValueError, OSError):  # not a pipe (a terminal or a file): nobody to watch
+        return
+    while line := await reader.readline():
+        if not line.strip():
+            continue
+        try:
+            join(HostJob.model_validate_json(line))
+        except ValidationError as error:
+            log.error("ignoring a job line the host cannot read: %s", error)
+    stop.set()
+
+
 async def run_batch(batch: HostBatch, handshake: BatchHandshake, watch_stdin: bool) -> int:
-    """Serve every job of ``batch`` until stopped; 1 when one of them broke after it was ready."""
+    """Serve every job of ``batch``, and those that join later, until stopped; 1 when one of them
+    broke after it was ready."""
     stop = asyncio.Event()
     install_stop_signals(stop)
-    watcher = asyncio.create_task(stop_on_stdin_eof(stop)) if watch_stdin else None
+    joined: set[asyncio.Task[None]] = set()
+
+    def join(job: HostJob) -> None:
+        if stop.is_set():
+            return
+        task = asyncio.create_task(serve(job), name=f"serve {job.instance}")
+        joined.add(task)
+
+    watcher = asyncio.create_task(read_joining_jobs(stop, join)) if watch_stdin else None
     heartbeat = batch.jobs[0].heartbeat
     ticker = asyncio.create_task(beat(handshake.stream, heartbeat)) if watch_stdin else None
     broke: list[str] = []
@@ -113,6 +154,10 @@ async def run_batch(batch: HostBatch, handshake: BatchHandshake, watch_stdin: bo
 
     try:
         await asyncio.gather(*(serve(job) for job in batch.jobs))
+        # The first jobs end when the host stops (or none could start); the joined ones then too.
+        if joined:
+            stop.set()
+            await asyncio.gather(*joined)
     finally:
         for task in (watcher, ticker):
             if task is not None:

@@ -36,6 +36,8 @@ class HostProcess:
         self.last_tick = 0.0
         """Event-loop time of the host's last heartbeat line (:mod:`rosaos.devices.heartbeat`)."""
         self._ticks: asyncio.Task[None] | None = None
+        self._joining: dict[str, asyncio.Future[dict[str, Any]]] = {}
+        """Instances sent to a running shared host (:meth:`join`), waiting for their line."""
 
     def follow_heartbeat(self) -> None:
         """Read the host's heartbeat lines from now on (after the handshake), into ``last_tick``."""
@@ -46,8 +48,46 @@ class HostProcess:
         stdout = self.process.stdout
         assert stdout is not None
         loop = asyncio.get_running_loop()
-        while await stdout.readline():  # any line is a sign of life; a host writes only beats now
+        while line := await stdout.readline():  # any line is a sign of life
             self.last_tick = loop.time()
+            if line.startswith(b'{"instance"'):  # the answer of an instance that joined late
+                reply = _reply(line)
+                waiting = self._joining.pop(str(reply.get("instance")), None)
+                if waiting is not None and not waiting.done():
+                    waiting.set_result(reply)
+        for waiting in self._joining.values():  # the host exited: nobody will answer
+            if not waiting.done():
+                waiting.set_result({"error": "the host exited before the instance started"})
+
+    async def join(self, job: HostJob, start_timeout: float) -> str:
+        """Serve one more instance in this running shared host; its URL, or DeviceError saying why not.
+
+        For a driver that starts in the background (the Reachy simulator): it joins once the
+        others serve, so its boot holds up neither them nor ``rosaos up``.
+        """
+        stdin = self.process.stdin
+        assert stdin is not None, "only a host spawned by this supervisor can take more jobs"
+        if self._ticks is None or self._ticks.done():
+            raise DeviceError(f"{job.instance}: the shared host is not running; see {self.log_file}")
+        answer: asyncio.Future[dict[str, Any]] = asyncio.get_running_loop().create_future()
+        self._joining[job.instance] = answer
+        try:
+            stdin.write(job.model_dump_json().encode() + b"\n")
+            await stdin.drain()
+            async with asyncio.timeout(start_timeout):
+                reply = await answer
+        except TimeoutError:
+            raise DeviceError(
+                f"{job.instance} did not become ready within {start_timeout:g} s; see {self.log_file}"
+            ) from None
+        except (ConnectionError, RuntimeError) as error:  # the host is gone: its pipe is closed
+            raise DeviceError(f"{job.instance}: the host is gone ({error}); see {self.log_file}") from None
+        finally:
+            self._joining.pop(job.instance, None)
+        if "url" not in reply:
+            raise DeviceError(f"{reply.get('error') or 'no answer'} (log: {self.log_file})")
+        self.urls[job.instance] = str(reply["url"])
+        return self.urls[job.instance]
 
     @classmethod
     async def spawn(
@@ -74,7 +114,8 @@ class HostProcess:
     ) -> HostProcess:
         """Start one host for several instances; ``urls`` has those that serve, ``errors`` the rest.
 
-        DeviceError when none of them came up (the host is stopped then).
+        DeviceError when none of them came up (the host is stopped then). More instances may
+        :meth:`join` it later.
         """
         from rosaos.devices.host_batch import HostBatch
 

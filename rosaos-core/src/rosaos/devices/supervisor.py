@@ -2,8 +2,10 @@
 
 :class:`DeviceSupervisor` is what ``rosaos up`` runs. Every simulated instance of a driver that
 does not ask for a process of its own (``DriverSpec.own_process``) is served by one shared device
-host (:mod:`rosaos.devices.host_batch`); every other local instance (a real device, the Reachy
-daemon) gets a host subprocess of its own (:mod:`rosaos.devices.host`).
+host (:mod:`rosaos.devices.host_batch`); every other local instance (a real device) gets a host
+subprocess of its own (:mod:`rosaos.devices.host`). A simulated instance whose driver starts in
+the background (the Reachy, ``DriverSpec.background_start``) joins the running shared host once
+:meth:`DeviceSupervisor.release_background` lets it, so its boot holds nothing up.
 
 Liveness is checked per host, not per instance (:mod:`rosaos.devices.liveness`): the host's
 heartbeat, a line its event loop writes every second, speaks for all the instances it serves.
@@ -296,10 +298,11 @@ class DeviceSupervisor:
         while True:
             started = asyncio.get_running_loop().time()
             try:
-                await self._launch(group)
+                later = await self._launch(group)
                 for hosted in group:
-                    hosted.settled.set()
-                await self._watch_local(group)
+                    if hosted not in later:
+                        hosted.settled.set()
+                await self._watch_local(group, later)
             except DeviceError as error:
                 for hosted in group:
                     log.warning("%s: cannot start: %s", hosted.instance.name, error)
@@ -333,27 +336,22 @@ class DeviceSupervisor:
             for hosted in group:
                 hosted.restarts += 1
 
-    async def _launch(self, group: list[_Hosted]) -> None:
+    async def _launch(self, group: list[_Hosted]) -> list[_Hosted]:
         """Start the group's host process; wait for its ready lines and a first answer to get_state.
 
         An instance of a shared host that could not start leaves the group for a host of its own.
+        Returns the group's background-start instances, which join the running shared host later
+        (:meth:`_join_later`), unless the group has nothing else: then it waits for them.
         """
         for hosted in group:
             if hosted.status != "failed":  # a retry of a failed start stays "failed" until it works
                 self._set(hosted, "starting", error=hosted.error)
-        jobs = [
-            HostJob.for_instance(
-                hosted.instance,
-                self.data_dir,
-                self._token_file,
-                self.world.source,
-                host=self.host,
-                heartbeat=self.heartbeat,
-                port=hosted.instance.port or 0,
-                preferred_port=None if hosted.instance.port else hosted.port,
-            )
-            for hosted in group
-        ]
+        later = [hosted for hosted in group if hosted.instance.spec.background_start]
+        if len(later) == len(group):
+            await self._background_go.wait()
+            later = []
+        now = [hosted for hosted in group if hosted not in later]
+        jobs = [self._job(hosted) for hosted in now]
         if len(group) == 1:
             log_file = self.log_file(group[0].instance.name)
             host = await HostProcess.spawn(jobs[0], log_file, self.start_timeout, self.stop_grace)
@@ -361,19 +359,56 @@ class DeviceSupervisor:
         else:
             log_file = self.log_file(SHARED_HOST)
             host = await HostProcess.spawn_batch(jobs, log_file, self.start_timeout, self.stop_grace)
-        for hosted in list(group):
+        for hosted in list(now):
             name = hosted.instance.name
             if name in host.errors:
-                log.warning("%s: cannot start in the shared host: %s", name, host.errors[name])
-                self._set(hosted, "failed", url=None, error=f"{host.errors[name]} (log: {log_file})")
-                hosted.settled.set()
-                group.remove(hosted)
-                self._run(self._keep_serving([hosted], self.backoff_base), name)
+                self._leave_shared_host(group, hosted, f"{host.errors[name]} (log: {log_file})")
+                now.remove(hosted)
                 continue
             hosted.host, hosted.url = host, host.urls[name]
             hosted.port = urlsplit(hosted.url).port
             log.info("%s: serving at %s (pid %s)", name, hosted.url, host.pid)
-        await self._first_answer(group)
+        await self._first_answer(now)
+        return later
+
+    def _job(self, hosted: _Hosted) -> HostJob:
+        return HostJob.for_instance(
+            hosted.instance,
+            self.data_dir,
+            self._token_file,
+            self.world.source,
+            host=self.host,
+            heartbeat=self.heartbeat,
+            port=hosted.instance.port or 0,
+            preferred_port=None if hosted.instance.port else hosted.port,
+        )
+
+    def _leave_shared_host(self, group: list[_Hosted], hosted: _Hosted, error: str) -> None:
+        """An instance that cannot start in the shared host is retried in a host of its own."""
+        name = hosted.instance.name
+        log.warning("%s: cannot start in the shared host: %s", name, error)
+        self._set(hosted, "failed", url=None, error=error)
+        hosted.settled.set()
+        group.remove(hosted)
+        self._run(self._keep_serving([hosted], self.backoff_base), name)
+
+    async def _join_later(self, group: list[_Hosted], hosted: _Hosted, host: HostProcess) -> None:
+        """Start a background-start instance in the running shared host once it is released.
+
+        The Reachy simulator boots its MuJoCo daemon for seconds: in the shared host it neither
+        holds up the banner nor the other instances, and costs no interpreter of its own.
+        """
+        await self._background_go.wait()
+        try:
+            url = await host.join(self._job(hosted), self.start_timeout)
+        except DeviceError as error:
+            self._leave_shared_host(group, hosted, str(error))
+            await self._save()
+            return
+        hosted.host, hosted.url, hosted.port = host, url, urlsplit(url).port
+        log.info("%s: serving at %s (pid %s)", hosted.instance.name, url, host.pid)
+        await self._first_answer([hosted])
+        hosted.settled.set()
 
     async def _first_answer(self, group: list[_Hosted]) -> None:
         """One ``get_state`` for the whole host (its instances share its process): healthy, or not yet.
@@ -385,11 +420,15 @@ class DeviceSupervisor:
             self._set(hosted, "healthy" if error is None else "unhealthy", error=error)
         await self._save()
 
-    async def _watch_local(self, group: list[_Hosted]) -> None:
-        """Probe the host until it exits, or misses probes and then fails a real call (see the module)."""
-        host = group[0].host
+    async def _watch_local(self, group: list[_Hosted], later: list[_Hosted]) -> None:
+        """Probe the host until it exits, or misses probes and then fails a real call (see the module).
+
+        ``later`` join the host meanwhile (:meth:`_join_later`); a restart starts them again."""
+        served = next(hosted for hosted in group if hosted.url is not None)
+        host = served.host
         assert host is not None
         exited = asyncio.create_task(host.wait())
+        joining = [asyncio.create_task(self._join_later(group, hosted, host)) for hosted in later]
         rule = LivenessRule(self.unhealthy_after)
         try:
             while True:
@@ -406,7 +445,7 @@ class DeviceSupervisor:
                     continue
                 if verdict == "ask":
                     last_beat = host.last_tick
-                    failure = await self._real_call(group[0], self.real_call_timeout)
+                    failure = await self._real_call(served, self.real_call_timeout)
                     if failure is not None and host.last_tick == last_beat and not exited.done():
                         log.warning(
                             "%s: no heartbeat for %d checks and get_state failed (%s); restarting the host",
@@ -419,9 +458,11 @@ class DeviceSupervisor:
                         await self._save()
                         return
                     rule.real_call_answered()
-                await self._mark_healthy(group)
+                await self._mark_healthy([hosted for hosted in group if hosted.url is not None])
         finally:
             exited.cancel()
+            for task in joining:
+                task.cancel()
 
     def _beating(self, host: HostProcess) -> bool:
         """The host's one liveness signal: a heartbeat within the last ``health_timeout`` (plus a beat)."""
