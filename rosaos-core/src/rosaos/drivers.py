@@ -19,7 +19,9 @@ import re
 from collections.abc import Awaitable, Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Generic, Literal, TypeVar
+from typing import Any, Generic, Literal
+
+from typing_extensions import Self, TypeVar
 
 from fastmcp import FastMCP
 from mcp.types import ToolAnnotations
@@ -76,14 +78,24 @@ class DeviceError(Exception):
     """
 
 
+SettingsT = TypeVar("SettingsT", bound=BaseModel, default=Any)
+"""A driver's settings class. The hosting layer validates an instance's settings with
+``spec.settings``, so a factory typed ``DeviceContext[TapoSettings]`` reads ``ctx.settings`` as a
+``TapoSettings``, with no check or cast of its own. Unparameterized (the hosting layer, which
+serves any driver): any settings."""
+
+
 @dataclass(frozen=True)
-class DeviceContext:
-    """Everything a backend or server factory gets to know about the instance it builds."""
+class DeviceContext(Generic[SettingsT]):
+    """Everything a backend or server factory gets to know about the instance it builds.
+
+    Generic in the driver's settings class: ``DeviceContext[TapoSettings]``, or
+    ``DeviceContext[DeviceSettings]`` for a driver with none."""
 
     instance: str
     """The instance name the kernel sees, e.g. ``kitchen_light``."""
     description: str
-    settings: BaseModel
+    settings: SettingsT
     """The validated ``spec.settings`` model for this instance."""
     backend: BackendName
     sim: Mapping[str, Any] = field(default_factory=dict)
@@ -118,10 +130,10 @@ class DeviceContext:
         return self.notices.post(name, data, message=message, importance=importance)
 
 
-BackendT = TypeVar("BackendT", bound=DeviceBackend)
+BackendT = TypeVar("BackendT", bound=DeviceBackend, default=Any)
 """A driver's backend class: what its factories build and its server and ``safe_stop`` receive."""
-BackendFactory = Callable[[DeviceContext], DeviceBackend]
-ServerFactory = Callable[[DeviceContext, Any], FastMCP]
+BackendFactory = Callable[[DeviceContext[Any]], DeviceBackend]
+ServerFactory = Callable[[DeviceContext[Any], Any], FastMCP]
 SafeStop = Callable[[Any], Awaitable[None]]
 
 
@@ -141,12 +153,13 @@ class DemoInstance(BaseModel):
     area: str | None = None
 
 
-class DriverSpec(BaseModel, Generic[BackendT]):
+class DriverSpec(BaseModel, Generic[BackendT, SettingsT]):
     """The declaration a driver plugin hands to ``register`` in :func:`register_drivers`.
 
-    Generic in the driver's backend class, so a type checker sees that ``server`` and
-    ``safe_stop`` receive what ``backends`` build (``DriverSpec(server=build_server, ...)``
-    infers it; a plain ``DriverSpec`` annotation means any backend).
+    Generic in the driver's backend and settings classes, so a type checker sees that ``server``
+    and ``safe_stop`` receive what ``backends`` build, and that every factory's context carries
+    ``settings`` of the class the spec declares (``DriverSpec[TapoBackend, TapoSettings]``;
+    ``DriverSpec(...)`` infers both). A plain ``DriverSpec`` annotation means any driver.
     """
 
     model_config = ConfigDict(arbitrary_types_allowed=True, frozen=True)
@@ -168,10 +181,11 @@ class DriverSpec(BaseModel, Generic[BackendT]):
     only because it is always attached (how to speak to the user). Empty: all of them."""
     attached_prompt: str | None = None
     """The device prompt that goes with :attr:`attached_tools` (short: those tools only)."""
-    settings: type[BaseModel] = DeviceSettings
-    server: Callable[[DeviceContext, BackendT], FastMCP]
+    settings: type[SettingsT] = DeviceSettings  # type: ignore[assignment]  # SettingsT defaults to it
+    """The settings class of one instance; every context the factories get carries one."""
+    server: Callable[[DeviceContext[SettingsT], BackendT], FastMCP]
     """Builds the instance's FastMCP server from its context and its started backend."""
-    backends: Mapping[BackendName, Callable[[DeviceContext], BackendT]]
+    backends: Mapping[BackendName, Callable[[DeviceContext[SettingsT]], BackendT]]
     intents: Path | None = None
     """Optional hassil-format ``intents.yaml`` mapping sentence templates to tool calls."""
     safe_stop: Callable[[BackendT], Awaitable[None]] = no_safe_stop
@@ -199,7 +213,7 @@ class DriverSpec(BaseModel, Generic[BackendT]):
     """``rosaos up`` does not wait for this device: it says "rosaOS is up" while the device is still
     ``starting`` (a physics simulator that boots for seconds), and grants it once it answers. A
     simulated instance joins the running shared host after the others serve."""
-    login: Callable[[DeviceContext], int] | None = None
+    login: Callable[[DeviceContext[SettingsT]], int] | None = None
     """Interactive account login for ``rosaos devices login NAME`` (cloud services such as Spotify):
     called with the instance's context, talks to the user on stdin/stdout, keeps what it obtains
     under ``ctx.data_dir / "drivers" / <driver>``, and returns the exit code. None: no login needed."""
@@ -221,7 +235,7 @@ class DriverSpec(BaseModel, Generic[BackendT]):
         return value
 
     @model_validator(mode="after")
-    def _needs_sim(self) -> DriverSpec:
+    def _needs_sim(self) -> Self:
         if "sim" not in self.backends:
             raise ValueError(f"driver {self.name!r} declares no 'sim' backend; every driver must have one")
         if self.intents is not None and not self.intents.is_file():

@@ -10,31 +10,41 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from rosaos import hookimpl
 from rosaos.card_controls import prompt
 from rosaos.cards import Card, flag, head, image, text
-from rosaos.drivers import DemoInstance, DeviceContext, DeviceError, DriverSpec, read_packaged_text
-from rosaos_reachy.backend import ReachyBackend
-from rosaos_reachy.server import build_server
+from rosaos.drivers import DemoInstance, DeviceContext, DriverSpec, read_packaged_text
 from rosaos_reachy.settings import ReachySettings, SimSettings
 
+if TYPE_CHECKING:  # the backend and server import the SDK, OpenCV and NumPy: only where served
+    from fastmcp import FastMCP
 
-def _settings(ctx: DeviceContext) -> ReachySettings:
-    settings = ctx.settings
-    if not isinstance(settings, ReachySettings):  # the hosting layer validates with spec.settings
-        raise DeviceError(f"{ctx.instance}: expected ReachySettings, got {type(settings).__name__}")
-    return settings
+    from rosaos_reachy.backend import ReachyBackend
+
+Context = DeviceContext[ReachySettings]
 
 
-def real_backend(ctx: DeviceContext) -> ReachyBackend:
+def real_backend(ctx: Context) -> ReachyBackend:
     """The ``real`` backend: the daemon of a Reachy Mini Lite or Wireless at ``host``:``daemon_port``."""
-    return ReachyBackend(ctx, _settings(ctx), sim=None)
+    from rosaos_reachy.backend import ReachyBackend
+
+    return ReachyBackend(ctx, ctx.settings, sim=None)
 
 
-def sim_backend(ctx: DeviceContext) -> ReachyBackend:
+def sim_backend(ctx: Context) -> ReachyBackend:
     """The ``sim`` backend: starts the SDK's daemon in simulation, in the state ``ctx.sim`` gives."""
-    return ReachyBackend(ctx, _settings(ctx), sim=SimSettings.from_sim(ctx.instance, dict(ctx.sim)))
+    from rosaos_reachy.backend import ReachyBackend
+
+    return ReachyBackend(ctx, ctx.settings, sim=SimSettings.from_sim(ctx.instance, dict(ctx.sim)))
+
+
+def build_server(ctx: Context, backend: ReachyBackend) -> FastMCP:
+    """The instance's MCP tools (:mod:`rosaos_reachy.server`), imported where the device is served."""
+    from rosaos_reachy.server import build_server as build
+
+    return build(ctx, backend)
 
 
 async def stop_moving_and_talking(backend: ReachyBackend) -> None:
@@ -43,7 +53,7 @@ async def stop_moving_and_talking(backend: ReachyBackend) -> None:
     await backend.safe_stop()
 
 
-SPEC: DriverSpec[ReachyBackend] = DriverSpec(
+SPEC: DriverSpec[ReachyBackend, ReachySettings] = DriverSpec(
     name="reachy",
     title="Pollen Robotics Reachy Mini",
     description=(

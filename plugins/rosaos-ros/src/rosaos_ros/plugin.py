@@ -7,31 +7,30 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from rosaos import hookimpl
 from rosaos.card_controls import button
 from rosaos.cards import Card, flag, gauge, image, pose
 from rosaos.drivers import DemoInstance, DeviceContext, DeviceError, DriverSpec, read_packaged_text
-from rosaos_ros.backend import RosBackend
 from rosaos_ros.notices import NOTICES
 from rosaos_ros.profiles import Profile, ProfileError, load_profile
-from rosaos_ros.server import build_server
 from rosaos_ros.settings import RosSettings
-from rosaos_ros.sim import Simulator, SimulatorError, SimulatorThread, sim_state
+
+if TYPE_CHECKING:  # the backend, its tools and the simulator load only where the device is served
+    from fastmcp import FastMCP
+
+    from rosaos_ros.backend import RosBackend
+
+Context = DeviceContext[RosSettings]
 
 
-def profiles_dir(ctx: DeviceContext) -> Path:
+def profiles_dir(ctx: DeviceContext[Any]) -> Path:
     """Where a user's own profiles are found by name: ``<data_dir>/drivers/ros/profiles``."""
     return ctx.data_dir / "drivers" / "ros" / "profiles"
 
 
-def _settings(ctx: DeviceContext) -> RosSettings:
-    if not isinstance(ctx.settings, RosSettings):  # the hosting layer validates with spec.settings
-        raise DeviceError(f"{ctx.instance}: expected RosSettings, got {type(ctx.settings).__name__}")
-    return ctx.settings
-
-
-def _profile(ctx: DeviceContext, settings: RosSettings, sim_profile: str | None = None) -> Profile:
+def _profile(ctx: Context, settings: RosSettings, sim_profile: str | None = None) -> Profile:
     where = f"[devices.{ctx.instance}]"
     if settings.profile and sim_profile and settings.profile != sim_profile:
         raise DeviceError(
@@ -48,19 +47,24 @@ def _profile(ctx: DeviceContext, settings: RosSettings, sim_profile: str | None 
     return profile.namespaced(settings.namespace)
 
 
-def real_backend(ctx: DeviceContext) -> RosBackend:
+def real_backend(ctx: Context) -> RosBackend:
     """The ``real`` backend: a robot running rosbridge at ``host:rosbridge_port``."""
-    settings = _settings(ctx)
+    from rosaos_ros.backend import RosBackend
+
+    settings = ctx.settings
     return RosBackend(ctx.instance, settings, _profile(ctx, settings), ctx.images_dir, notify=ctx.notify)
 
 
-def sim_backend(ctx: DeviceContext) -> RosBackend:
+def sim_backend(ctx: Context) -> RosBackend:
     """The ``sim`` backend: the rosbridge simulator in a thread on a free loopback port, reached over its socket.
 
     ``ctx.sim`` is the simulator's initial state (``x``, ``y``, ``yaw``, ``docked``, ``battery``,
     ``dock``) and may name the ``profile``; ``host`` and ``rosbridge_port`` are not used.
     """
-    settings = _settings(ctx)
+    from rosaos_ros.backend import RosBackend
+    from rosaos_ros.sim import Simulator, SimulatorError, SimulatorThread, sim_state
+
+    settings = ctx.settings
     try:
         state = sim_state(ctx.sim)
     except SimulatorError as error:
@@ -78,12 +82,19 @@ def sim_backend(ctx: DeviceContext) -> RosBackend:
     )
 
 
+def build_server(ctx: Context, backend: RosBackend) -> FastMCP:
+    """The robot's MCP tools (:mod:`rosaos_ros.server`), imported where the device is served."""
+    from rosaos_ros.server import build_server as build
+
+    return build(ctx, backend)
+
+
 async def stop_robot(backend: RosBackend) -> None:
     """Emergency stop: zero velocity, end the running motion, cancel every running action goal."""
     await backend.safe_stop()
 
 
-SPEC: DriverSpec[RosBackend] = DriverSpec(
+SPEC: DriverSpec[RosBackend, RosSettings] = DriverSpec(
     name="ros",
     title="ROS 2 robot (via rosbridge)",
     description=(

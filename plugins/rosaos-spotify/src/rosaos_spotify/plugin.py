@@ -14,23 +14,20 @@ from rosaos.cards import Card, flag, gauge, text
 from rosaos.drivers import DemoInstance, DeviceContext, DeviceError, DriverSpec, read_packaged_text
 from rosaos_spotify.backend import SpotifyBackend
 from rosaos_spotify.ending import NOTICES
-from rosaos_spotify.login import DASHBOARD, login_interactive
 from rosaos_spotify.server import build_server
 from rosaos_spotify.settings import SpotifySettings
 from rosaos_spotify.simulator import SimBackend, SimSettings
-from rosaos_spotify.web_api import build_web_backend
+
+Context = DeviceContext[SpotifySettings]
 
 
-def _settings(ctx: DeviceContext) -> SpotifySettings:
-    settings = ctx.settings
-    if not isinstance(settings, SpotifySettings):  # the hosting layer validates with spec.settings
-        raise DeviceError(f"{ctx.instance}: expected SpotifySettings, got {type(settings).__name__}")
-    return settings
-
-
-def real_backend(ctx: DeviceContext) -> SpotifyBackend:
+def real_backend(ctx: Context) -> SpotifyBackend:
     """The ``real`` backend: the owner's Spotify account, logged in with ``rosaos devices login``."""
-    settings = _settings(ctx)
+    # spotipy and requests only where a real instance is served or logged in, not in the kernel.
+    from rosaos_spotify.login import DASHBOARD
+    from rosaos_spotify.web_api import build_web_backend
+
+    settings = ctx.settings
     if not settings.client_id:
         raise DeviceError(
             f"[devices.{ctx.instance}] needs client_id for the real backend: create an app at {DASHBOARD} "
@@ -42,16 +39,18 @@ def real_backend(ctx: DeviceContext) -> SpotifyBackend:
     return backend
 
 
-def sim_backend(ctx: DeviceContext) -> SpotifyBackend:
+def sim_backend(ctx: Context) -> SpotifyBackend:
     """The ``sim`` backend: an in-process player starting in the state ``ctx.sim`` gives."""
     backend = SimBackend(ctx.instance, SimSettings.from_sim(ctx.instance, dict(ctx.sim)))
     backend.ending.notify = ctx.notify
     return backend
 
 
-def login(ctx: DeviceContext) -> int:
+def login(ctx: Context) -> int:
     """``rosaos devices login NAME``: log the instance in to Spotify by copy and paste."""
-    return login_interactive(_settings(ctx), ctx.data_dir, ctx.instance)
+    from rosaos_spotify.login import login_interactive
+
+    return login_interactive(ctx.settings, ctx.data_dir, ctx.instance)
 
 
 async def pause_music(backend: SpotifyBackend) -> None:
@@ -59,7 +58,7 @@ async def pause_music(backend: SpotifyBackend) -> None:
     await backend.pause()
 
 
-SPEC: DriverSpec[SpotifyBackend] = DriverSpec(
+SPEC: DriverSpec[SpotifyBackend, SpotifySettings] = DriverSpec(
     name="spotify",
     title="Spotify playback",
     description=(

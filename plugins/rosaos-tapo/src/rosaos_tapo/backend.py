@@ -19,7 +19,7 @@ from __future__ import annotations
 import asyncio
 import math
 from collections.abc import Awaitable, Callable
-from typing import Annotated, Literal
+from typing import Annotated
 
 from kasa import (
     AuthenticationError,
@@ -41,14 +41,12 @@ from kasa.smart import SmartDevice
 from pydantic import BaseModel, Field
 
 from rosaos.drivers import DeviceBackend, DeviceError
+from rosaos_tapo.settings import Connection
 from rosaos_tapo.simulator import SimState, SimulatedL530, SimulatedL530Transport, simulated_config
 
 NEUTRAL_KELVIN = 4000
 """Where "warmer"/"cooler" start from when the bulb shows a colour (no white temperature)."""
 
-Connection = Literal["klap", "discover"]
-"""How the real backend finds out the bulb's protocol: assume KLAP (current firmware, plain TCP,
-works across subnets) or ask the bulb by UDP discovery (any firmware, same LAN only)."""
 
 
 class BulbState(BaseModel):

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from pydantic import BaseModel, Field
 
@@ -21,19 +22,23 @@ from rosaos.drivers import (
     NoticeSpec,
     read_packaged_text,
 )
-from rosaos_tapo.backend import TapoBackend
-from rosaos_tapo.server import build_server
 from rosaos_tapo.settings import TapoSettings
-from rosaos_tapo.simulator import SimState
+
+if TYPE_CHECKING:  # the backend and the simulator import python-kasa and aiohttp: only where served
+    from fastmcp import FastMCP
+
+    from rosaos_tapo.backend import TapoBackend
 
 __all__ = ["SPEC", "TapoSettings", "real_backend", "sim_backend"]
 
+Context = DeviceContext[TapoSettings]
 
-def real_backend(ctx: DeviceContext) -> TapoBackend:
+
+def real_backend(ctx: Context) -> TapoBackend:
     """The ``real`` backend: a bulb on the LAN, reached with the owner's TP-Link account."""
+    from rosaos_tapo.backend import TapoBackend
+
     settings = ctx.settings
-    if not isinstance(settings, TapoSettings):  # the hosting layer validates with spec.settings
-        raise DeviceError(f"{ctx.instance}: expected TapoSettings, got {type(settings).__name__}")
     where = f"[devices.{ctx.instance}]"
     if not settings.host:
         raise DeviceError(
@@ -57,11 +62,21 @@ def real_backend(ctx: DeviceContext) -> TapoBackend:
     return backend
 
 
-def sim_backend(ctx: DeviceContext) -> TapoBackend:
+def sim_backend(ctx: Context) -> TapoBackend:
     """The ``sim`` backend: an in-process L530E that starts in the state ``ctx.sim`` gives."""
+    from rosaos_tapo.backend import TapoBackend
+    from rosaos_tapo.simulator import SimState
+
     backend = TapoBackend.simulated_bulb(ctx.instance, SimState.from_sim(ctx.instance, dict(ctx.sim)))
     backend.notify = ctx.notify
     return backend
+
+
+def build_server(ctx: Context, backend: TapoBackend) -> FastMCP:
+    """The bulb's MCP tools (:mod:`rosaos_tapo.server`), imported where the device is served."""
+    from rosaos_tapo.server import build_server as build
+
+    return build(ctx, backend)
 
 
 CARD_COLOURS = [
@@ -104,7 +119,7 @@ async def leave_light_as_is(backend: TapoBackend) -> None:
     """
 
 
-SPEC: DriverSpec[TapoBackend] = DriverSpec(
+SPEC: DriverSpec[TapoBackend, TapoSettings] = DriverSpec(
     name="tapo",
     title="TP-Link Tapo smart bulb",
     description=(

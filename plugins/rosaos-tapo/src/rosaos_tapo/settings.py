@@ -2,12 +2,15 @@
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Literal
 
 from pydantic import Field, SecretStr
 
 from rosaos.drivers import DeviceSettings
-from rosaos_tapo.backend import Connection
+
+Connection = Literal["klap", "discover"]
+"""How the real backend finds out the bulb's protocol: assume KLAP (current firmware, plain TCP,
+works across subnets) or ask the bulb by UDP discovery (any firmware, same LAN only)."""
 
 
 class TapoSettings(DeviceSettings):
