@@ -8,9 +8,10 @@ to drive it (the device prompt that the driver ships).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 
 from rosaos.processes.jobs import GrantedDevice
+from rosaos.processes.tool_list import DeviceTools
 
 DEFAULT_PROCESS_PROMPT = """\
 You are a process agent in rosaOS, an operating system for robots and smart devices.
@@ -44,11 +45,18 @@ def tool_prefix(device: str) -> str:
     return device
 
 
-def process_system_prompt(base_prompt: str, task: str, devices: Sequence[GrantedDevice]) -> str:
+def process_system_prompt(
+    base_prompt: str,
+    task: str,
+    devices: Sequence[GrantedDevice],
+    tools: Mapping[str, DeviceTools] | None = None,
+) -> str:
     """Assemble the process agent's system prompt for ``task`` with ``devices`` granted.
 
     Each device section is headed by its instance name and description, followed by the driver's
-    device prompt. With more than one device the tool names are prefixed by the instance name
+    device prompt and the device's tool list, written from its MCP metadata (``tools``, by
+    instance; :mod:`rosaos.processes.tool_list`), limited to the tools the process is offered.
+    With more than one device the tool names are prefixed by the instance name
     (``kitchen_light_set_color``), and the section says so, so the model can tell them apart.
     """
     parts = [base_prompt.strip(), f"# Your task\n{task.strip()}"]
@@ -62,5 +70,8 @@ def process_system_prompt(base_prompt: str, task: str, devices: Sequence[Granted
             heading = f"## {device.name} ({device.driver})\n{device.description.strip()}"
             if prefixed:
                 heading += f"\nIts tools are named `{tool_prefix(device.name)}_<tool>`."
-            parts.append(f"{heading}\n\n{device.prompt.strip()}")
+            listed = tools.get(device.name) if tools is not None else None
+            tool_list = listed.render(device.tools) if listed is not None else ""
+            body = f"{device.prompt.strip()}\n\n{tool_list}" if tool_list else device.prompt.strip()
+            parts.append(f"{heading}\n\n{body}")
     return "\n\n".join(parts) + "\n"

@@ -57,6 +57,7 @@ from rosaos.processes.plan_runner import run_plan
 from rosaos.processes.prompts import process_system_prompt, tool_prefix
 from rosaos.processes.recording import RecordingToolset
 from rosaos.processes.tool_calls import ToolCallLog, observed
+from rosaos.processes.tool_list import DeviceTools
 from rosaos.processes.vision import ImageFallbackModel, image_budget_for, image_headers
 from rosaos.receipts import Receipt
 
@@ -159,6 +160,8 @@ class DeviceSessions:
     def __init__(self) -> None:
         self._open: dict[tuple[str, str], MCPToolset[Any]] = {}
         self._images: dict[tuple[str, str], int | None] = {}
+        self._listed: dict[tuple[str, str], DeviceTools] = {}
+        """Each open session's tools, from its last ``tools/list``: the prompt's tool list."""
 
     async def toolset(self, device: GrantedDevice, images: int | None = None) -> MCPToolset[Any]:
         key = (device.url, device.token)
@@ -169,13 +172,23 @@ class DeviceSessions:
         if kept is not None:
             try:
                 async with asyncio.timeout(CONNECT_TIMEOUT):
-                    await kept.client.list_tools()
+                    self._listed[key] = DeviceTools.from_mcp(await kept.client.list_tools())
                 return kept
             except Exception:
                 await self._close(key)
         toolset = await _connect(device, images)
         self._open[key], self._images[key] = toolset, images
         return toolset
+
+    async def tools(self, device: GrantedDevice) -> DeviceTools:
+        """The tools of ``device``'s open session (:meth:`toolset` first), listed once per job at most."""
+        key = (device.url, device.token)
+        listed = self._listed.get(key)
+        if listed is None:
+            async with asyncio.timeout(CONNECT_TIMEOUT):
+                listed = DeviceTools.from_mcp(await self._open[key].client.list_tools())
+            self._listed[key] = listed
+        return listed
 
     async def forget(self, devices: Sequence[GrantedDevice]) -> None:
         """Close the sessions of a job that failed: the next job starts from fresh ones."""
@@ -188,6 +201,7 @@ class DeviceSessions:
 
     async def _close(self, key: tuple[str, str]) -> None:
         self._images.pop(key, None)
+        self._listed.pop(key, None)
         toolset = self._open.pop(key, None)
         if toolset is not None:
             with contextlib.suppress(Exception):
@@ -268,9 +282,10 @@ async def _run_agent_linked(
                     ImageFallbackModel(model), job.process_id, granted, job.world_devices, recorded
                 )
             )
+        listed = {device.name: await SESSIONS.tools(device) for device in job.devices}
         agent = Agent(
             model,
-            instructions=process_system_prompt(job.base_prompt, job.task, job.devices),
+            instructions=process_system_prompt(job.base_prompt, job.task, job.devices, listed),
             toolsets=toolsets,
             name=f"process-{job.process_id}",
         )

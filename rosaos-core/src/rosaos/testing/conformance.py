@@ -19,6 +19,7 @@ initial sim state, per test) and ``shared_device`` (one server per class; do not
 from __future__ import annotations
 
 import asyncio
+import re
 from collections.abc import Iterator, Mapping
 from pathlib import Path
 from types import ModuleType
@@ -235,6 +236,19 @@ class DriverConformance:
         """The model picks tools by their description."""
         problems = missing_descriptions(shared_tools)
         assert not problems, "\n".join(problems)
+
+    def test_prompt_calls_only_tools_the_server_has(
+        self, rosaos_driver: DriverInfo, shared_tools: list[mcp_types.Tool]
+    ) -> None:
+        """``prompt.md`` names no tool the server lacks: a process agent gets the tool list from the
+        server's own metadata (:mod:`rosaos.processes.tool_list`), and the prose must agree with it."""
+        names = {tool.name for tool in shared_tools}
+        called = set(re.findall(r"`([a-z_][a-z0-9_]*)\(", rosaos_driver.spec.prompt))
+        unknown = sorted(called - names)
+        assert not unknown, (
+            f"prompt.md calls {', '.join(unknown)}, which the server does not have "
+            f"(its tools: {', '.join(sorted(names))}); rename them in prompt.md or add the tools"
+        )
 
     def test_every_tool_argument_is_typed(self, shared_tools: list[mcp_types.Tool]) -> None:
         """Every argument has a JSON-schema type, so the model knows what to send."""
