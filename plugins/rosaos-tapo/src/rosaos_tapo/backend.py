@@ -48,7 +48,6 @@ NEUTRAL_KELVIN = 4000
 """Where "warmer"/"cooler" start from when the bulb shows a colour (no white temperature)."""
 
 
-
 class BulbState(BaseModel):
     """What ``get_state`` returns, and every other tool after acting: the bulb as it is now."""
 
