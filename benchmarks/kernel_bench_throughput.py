@@ -39,16 +39,21 @@ async def throughput(
     async with running_kernel(pool_size=0, kernel_model=bench_models.noop_model()) as (kernel, start_seconds):
         single = {"kernel_start_seconds": start_seconds, **await round_trips(kernel, round_trip_samples)}
         handle_ms: list[float] = []
-        handle = kernel.loop.handle
+        batch_sizes: list[int] = []
+        handle_batch = kernel.loop.handle_batch
 
-        async def timed_handle(event: Any) -> Any:
+        # The loop takes what has queued up in one batch (one transaction, one model turn per
+        # event); a sample is the batch's time divided by its events, once per event.
+        async def timed_handle_batch(events: list[Any]) -> Any:
             started = now()
             try:
-                return await handle(event)
+                return await handle_batch(events)
             finally:
-                handle_ms.append((now() - started) * 1000)
+                per_event = (now() - started) * 1000 / max(len(events), 1)
+                handle_ms.extend([per_event] * len(events))
+                batch_sizes.append(len(events))
 
-        kernel.loop.handle = timed_handle  # type: ignore[method-assign]
+        kernel.loop.handle_batch = timed_handle_batch  # type: ignore[method-assign]
         # Warm up the API, the store and the agent, then start from an empty queue.
         headers = {"Authorization": f"Bearer {kernel.token}"}
         async with httpx.AsyncClient(base_url=kernel.url, headers=headers, timeout=30) as api:
@@ -56,6 +61,7 @@ async def throughput(
                 (await api.post("/chat", json={"text": f"warm-up {index}"})).raise_for_status()
         await drained(kernel)
         handle_ms.clear()
+        batch_sizes.clear()
         process = await asyncio.create_subprocess_exec(
             sys.executable,
             str(ENTRY_POINT),
@@ -98,6 +104,7 @@ async def throughput(
         "backlog_at_last_ack": after_enqueue,
         "post_ms": summary(load["latencies_ms"]),
         "kernel_handle_ms": summary(handle_ms),
+        "kernel_batches": len(batch_sizes),
         "kernel_process_memory": memory_kernel,
     }
 
