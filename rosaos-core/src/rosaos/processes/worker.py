@@ -160,8 +160,9 @@ class DeviceSessions:
     def __init__(self) -> None:
         self._open: dict[tuple[str, str], MCPToolset[Any]] = {}
         self._images: dict[tuple[str, str], int | None] = {}
-        self._listed: dict[tuple[str, str], DeviceTools] = {}
-        """Each open session's tools, from its last ``tools/list``: the prompt's tool list."""
+        self._listed: dict[tuple[str, str], list[Any]] = {}
+        """Each open session's MCP tools, from its last ``tools/list``: the prompt's tool list
+        (summarized only when a model needs a prompt, not on the offline plan's path)."""
 
     async def toolset(self, device: GrantedDevice, images: int | None = None) -> MCPToolset[Any]:
         key = (device.url, device.token)
@@ -172,7 +173,7 @@ class DeviceSessions:
         if kept is not None:
             try:
                 async with asyncio.timeout(CONNECT_TIMEOUT):
-                    self._listed[key] = DeviceTools.from_mcp(await kept.client.list_tools())
+                    self._listed[key] = await kept.client.list_tools()
                 return kept
             except Exception:
                 await self._close(key)
@@ -186,9 +187,9 @@ class DeviceSessions:
         listed = self._listed.get(key)
         if listed is None:
             async with asyncio.timeout(CONNECT_TIMEOUT):
-                listed = DeviceTools.from_mcp(await self._open[key].client.list_tools())
+                listed = await self._open[key].client.list_tools()
             self._listed[key] = listed
-        return listed
+        return DeviceTools.from_mcp(listed)
 
     async def forget(self, devices: Sequence[GrantedDevice]) -> None:
         """Close the sessions of a job that failed: the next job starts from fresh ones."""
