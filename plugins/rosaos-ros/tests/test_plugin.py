@@ -11,6 +11,9 @@ from pydantic import ValidationError
 
 from rosaos.drivers import DeviceContext, DeviceError
 from rosaos.plugins import load_drivers
+from rosaos.processes.jobs import GrantedDevice
+from rosaos.processes.prompts import process_system_prompt
+from rosaos.processes.tool_list import DeviceTools
 from rosaos_ros.plugin import SPEC, real_backend, sim_backend
 from rosaos_ros.settings import RosSettings
 
@@ -83,11 +86,21 @@ def test_a_user_profile_in_the_data_dir_is_found_by_name(tmp_path: Path) -> None
         backend.deadman.close()
 
 
-async def test_prompt_mentions_every_tool(open_robot: Any) -> None:
+async def test_the_process_prompt_lists_every_tool_from_the_server(open_robot: Any) -> None:
+    # prompt.md says how to use the tools; the worker lists them from the MCP metadata.
     async with open_robot() as robot:
-        tools = [tool.name for tool in await robot.client.list_tools()]
-    missing = [name for name in tools if not re.search(rf"`{name}[`(]", SPEC.prompt)]
-    assert not missing, f"prompt.md does not explain {missing}"
+        listed = await robot.client.list_tools()
+    device = GrantedDevice(
+        name="ros_1",
+        driver="ros",
+        url="http://127.0.0.1:1/mcp",
+        token="t",
+        description="d",
+        prompt=SPEC.prompt,
+    )
+    prompt = process_system_prompt("BASE", "task", [device], {"ros_1": DeviceTools.from_mcp(listed)})
+    missing = [tool.name for tool in listed if not re.search(rf"^- `{tool.name}[`(]", prompt, re.MULTILINE)]
+    assert not missing, f"the process prompt does not list {missing}"
 
 
 async def test_every_tool_sets_all_three_hints(open_robot: Any) -> None:
