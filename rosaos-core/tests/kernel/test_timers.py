@@ -8,7 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from rosaos.kernel.events import EventStore, TimerFired
+from rosaos.kernel.events import EventStore, NewEvent, TimerFired
+from rosaos.kernel.intake import Queued
 from rosaos.kernel.loop import render_event
 from rosaos.kernel.timer_text import DueTimeError, resolve_due
 from rosaos.kernel.timers import TimerBook, TimerError
@@ -66,11 +67,13 @@ async def test_the_clock_fires_a_timer_set_while_it_waits(store: EventStore) -> 
     fired: list[int] = []
     rang = asyncio.Event()
 
-    async def on_fired(event_id: int, _event: object) -> None:
-        fired.append(event_id)
+    async def enqueue(event: NewEvent) -> Queued:
+        appended = await store.append(event)
+        fired.append(appended.id)
         rang.set()
+        return Queued(appended.id, event)
 
-    book = await TimerBook.open(store, on_fired)
+    book = await TimerBook.open(store, enqueue)
     clock = asyncio.create_task(book.run())
     try:
         await asyncio.sleep(0.05)  # the clock is asleep with nothing to do
