@@ -79,16 +79,15 @@ Enqueue = Callable[[NewEvent], Awaitable[Queued]]
 class TimerBook:
     """The kernel's timers: set, list, cancel, and fire them when due (:meth:`run`).
 
-    ``enqueue`` queues a firing (the running kernel passes its intake, which also publishes it).
-    A book opened outside a running kernel (the CLI, a test) has none: a firing is then only
-    appended to the store, for the kernel to read. All access goes through one lock, so a cancel
-    and a firing never cross.
+    ``enqueue`` queues a firing: the running kernel passes its intake, the one way into the
+    queue. A book opened without it (``rosaos timers`` on the store of a stopped kernel) sets,
+    lists and cancels, but does not fire. All access goes through one lock, so a cancel and a
+    firing never cross.
     """
 
     def __init__(self, store: EventStore, enqueue: Enqueue | None = None) -> None:
-        self._store = store
         self._database = store.database
-        self._enqueue = enqueue or self._append
+        self._enqueue = enqueue
         self._lock = asyncio.Lock()
         self._changed = asyncio.Event()
 
@@ -97,10 +96,6 @@ class TimerBook:
         """Create the table if needed; the book shares the event store's connection and thread."""
         await store.database.executescript(_SCHEMA)
         return cls(store, enqueue)
-
-    async def _append(self, event: NewEvent) -> Queued:
-        appended = await self._store.append(event)
-        return Queued(appended.id, event, duplicate=appended.duplicate)
 
     async def set(self, action: str, due: datetime) -> Timer:
         """Add a timer that runs ``action`` at ``due`` (aware datetime). Raises :class:`TimerError`."""
@@ -168,6 +163,11 @@ class TimerBook:
 
     async def fire_due(self, now: datetime | None = None) -> list[int]:
         """Queue a ``timer_fired`` event for every pending timer due by ``now``; return the event ids."""
+        if self._enqueue is None:
+            raise TimerError(
+                "this timer book was opened without the kernel's intake: only the kernel fires timers"
+            )
+        enqueue = self._enqueue
         moment = (now or datetime.now(UTC)).timestamp()
         fired: list[int] = []
         async with self._lock:
@@ -180,7 +180,7 @@ class TimerBook:
                 event = fired_event(timer, datetime.fromtimestamp(moment, UTC))
                 # The key makes this safe to repeat: a crash before the UPDATE below re-appends
                 # at the next start and gets the first event's id back.
-                queued = await self._enqueue(event)
+                queued = await enqueue(event)
                 await self._database.execute(
                     "UPDATE timers SET state = 'fired', settled_at = ?, event_id = ? WHERE id = ?",
                     (moment, queued.id, timer.id),
