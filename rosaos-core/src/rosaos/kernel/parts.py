@@ -191,6 +191,11 @@ async def build_parts(
     # Opened before orphan recovery: a process end it queues records its sightings.
     memory = MemoryStore.open(data_dir)
     sightings = SightingLog(memory, config.memory.sightings_days)
+    # Side effects of an event's arrival: registered here, before anything can queue an event
+    # (orphan recovery below is the first). The intake runs them once the event is committed and
+    # published, whether or not a kernel turn is running (kernel/intake.py). A per-event action
+    # that must not wait for the kernel agent, such as obeying a spoken or typed "stop" at once,
+    # is registered here the same way, for "user_said" and "user_typed".
     intake.on("worker_callback", ProcessEnds(manager, activity, sightings, updates, live).arrived)
     pending_stops = PendingStops(
         store, devices.directory, lambda text, data: updates.publish("notice", text, data)
