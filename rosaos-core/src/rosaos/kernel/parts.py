@@ -195,7 +195,8 @@ async def build_parts(
     # (orphan recovery below is the first). The intake runs them once the event is committed and
     # published, whether or not a kernel turn is running (kernel/intake.py). A per-event action
     # that must not wait for the kernel agent, such as obeying a spoken or typed "stop" at once,
-    # is registered here the same way, for "user_said" and "user_typed".
+    # is registered the same way, for "user_said" and "user_typed" (anywhere in this function:
+    # the API, the notices and the timers start queueing only after it returns).
     intake.on("worker_callback", ProcessEnds(manager, activity, sightings, updates, live).arrived)
     pending_stops = PendingStops(
         store, devices.directory, lambda text, data: updates.publish("notice", text, data)
