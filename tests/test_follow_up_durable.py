@@ -2,7 +2,7 @@
 
 The offline engine's plan for "turn on the desk lamp, then turn on the shelf lamp" carries the
 second step in the first process's task. Here a fresh kernel (as after a restart) receives only
-that process's ``worker_callback`` (as the worker, or orphan recovery, would post it) and launches
+that process's ``worker_callback`` (queued as the pool, or orphan recovery, queues it) and launches
 the follow-up on the real Tapo simulator; a failed callback launches nothing.
 """
 
@@ -13,12 +13,14 @@ from typing import Any
 
 import pytest
 import pytest_asyncio
-from e2e_support import device_state, eventually, kernel_api, running_kernel
+from e2e_support import device_state, eventually, running_kernel
 
 from rosaos.intents.grammar.vocabulary import device_vocabularies
 from rosaos.intents.planning.followups import plan_follow_up
+from rosaos.kernel.process_ends import end_event
 from rosaos.kernel.runtime import Kernel
 from rosaos.models.kernel_model import LocalIntentModel
+from rosaos.processes.jobs import WorkerCallback
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 
@@ -49,12 +51,8 @@ def first_task(kernel: Kernel) -> str:
 
 
 async def post_callback(kernel: Kernel, process_id: int, **fields: Any) -> None:
-    payload = {"process_id": process_id, "task": first_task(kernel), **fields}
-    async with kernel_api(kernel) as api:
-        answer = await api.post(
-            "/event", json={"kind": "worker_callback", "source": "worker", "payload": payload}
-        )
-        assert answer.status_code == 202, answer.text
+    callback = WorkerCallback(process_id=process_id, task=first_task(kernel), **fields)
+    assert not (await kernel.intake.submit(end_event(callback))).duplicate
 
 
 async def test_a_failed_callback_from_before_the_restart_launches_nothing(kernel: Kernel) -> None:

@@ -62,8 +62,8 @@ async def run_on_robot(
                 base_prompt="You are a test process.",
                 timeout=30,
                 request_limit=5,
-                callback_url="http://127.0.0.1:9/event",
-                callback_token="unused",
+                kernel_url="http://127.0.0.1:9",
+                kernel_token="unused",
             )
             callback = await run_job(job)
         assert backend.simulator is not None

@@ -17,9 +17,9 @@ from rosaos.kernel.api.login_codes import LoginCodes
 from rosaos.kernel.api.schemas import DeviceView, EmergencyStopReport, EmergencyStopState, Understanding
 from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.events import EventStore
+from rosaos.kernel.intake import Intake
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
-from rosaos.processes.jobs import WorkerCallback
 
 TOKEN = "test-token-0123456789"
 ORIGIN = "http://127.0.0.1:8765"
@@ -53,7 +53,6 @@ class TestRuntime:
     model_notice: str | None = "No model is configured: set [models] kernel in rosaos.toml."
     process_list: list[Process] = field(default_factory=list)
     device_list: list[dict[str, Any]] = field(default_factory=list)
-    callbacks: list[tuple[int, WorkerCallback]] = field(default_factory=list)
     terminated: list[int] = field(default_factory=list)
     estop_reason: str | None = None
     estop_time: datetime | None = None
@@ -62,6 +61,11 @@ class TestRuntime:
     confirmations: ConfirmationDesk = field(default_factory=lambda: ConfirmationDesk(timeout=60))
     timers: TimerBook | None = None
     """Set by the ``runtime`` fixture (opening the table needs the event loop)."""
+    intake: Intake = field(init=False)
+    """The kernel's own intake on this store: the routes queue through it as in ``rosaos up``."""
+
+    def __post_init__(self) -> None:
+        self.intake = Intake(self.events, self.updates)
 
     async def processes(self, include_ended: bool = False) -> Sequence[Any]:
         return [p for p in self.process_list if include_ended or p.state == "running"]
@@ -100,9 +104,6 @@ class TestRuntime:
 
     async def understand(self, text: str) -> Understanding:
         return Understanding(text=text, complete=False, kind="no_engine")  # no engine here
-
-    async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
-        self.callbacks.append((event_id, callback))
 
 
 def kitchen_light(on: bool = False) -> dict[str, Any]:

@@ -16,8 +16,10 @@ from kernel_support import AUTH, TOKEN, TestRuntime, kitchen_light
 from rosaos.cli.log_command import log_command, parse_since
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.app import create_app
-from rosaos.kernel.events import Event, EventStore
+from rosaos.kernel.events import Event, EventStore, WorkerCallbackEvent
+from rosaos.kernel.intake import Queued
 from rosaos.kernel.loop import render_event
+from rosaos.kernel.process_ends import end_event
 from rosaos.kernel.updates import UpdateStream
 from rosaos.models.conversation import parse_callback, parse_event
 from rosaos.processes.jobs import WorkerCallback
@@ -28,48 +30,43 @@ def receipt(tool: str, started: float, device: str = "turtlebot", **fields: Any)
     return Receipt(device=device, tool=tool, ok=True, result="{}", started=started, duration=0.5, **fields)
 
 
-class ActivityRuntime(TestRuntime):
-    """The test runtime, keeping receipts in a real activity log as the kernel does."""
+@pytest.fixture
+async def activity_runtime(store: EventStore, updates: UpdateStream) -> TestRuntime:
+    """The test runtime, keeping receipts in a real activity log as the kernel's process ends do."""
+    runtime = TestRuntime(events=store, updates=updates, device_list=[kitchen_light()])
+    activity = runtime.activity = await ActivityLog.open(store.database)
 
-    activity: ActivityLog
+    async def record(queued: Queued) -> None:
+        assert isinstance(queued.event.payload, WorkerCallback)
+        await activity.record(queued.id, queued.event.payload.process_id, queued.event.payload.receipts)
 
-    async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
-        await self.activity.record(event_id, callback.process_id, callback.receipts)
+    runtime.intake.on("worker_callback", record)
+    return runtime
 
 
 @pytest.fixture
-async def activity_client(store: EventStore, updates: UpdateStream) -> Any:
-    runtime = ActivityRuntime(events=store, updates=updates, device_list=[kitchen_light()])
-    runtime.activity = await ActivityLog.open(store.database)
-    app: FastAPI = create_app(runtime)
+async def activity_client(activity_runtime: TestRuntime) -> Any:
+    app: FastAPI = create_app(activity_runtime)
     async with httpx.AsyncClient(
         transport=httpx.ASGITransport(app=app), base_url="http://127.0.0.1:8765"
     ) as http:
         yield http
 
 
-def callback_body(process_id: int, receipts: list[Receipt]) -> dict[str, Any]:
-    payload = {"process_id": process_id, "status": "ok", "output": "done"}
-    payload["receipts"] = [r.model_dump(mode="json") for r in receipts]  # type: ignore[assignment]
-    return {
-        "kind": "worker_callback",
-        "source": "worker",
-        "payload": payload,
-        "idempotency_key": f"w{process_id}",
-    }
+def process_end(process_id: int, receipts: list[Receipt]) -> WorkerCallbackEvent:
+    """A process's end as the pool reports it, with the tool calls the process made."""
+    return end_event(WorkerCallback(process_id=process_id, status="ok", output="done", receipts=receipts))
 
 
 async def test_receipts_of_a_callback_are_logged_once_and_filtered(
-    activity_client: httpx.AsyncClient,
+    activity_client: httpx.AsyncClient, activity_runtime: TestRuntime
 ) -> None:
     now = time.time()
     drove = receipt("drive", now - 60, arguments={"linear": 0.2}, safety=SafetyDecision(decision="clamped"))
     lamp = receipt("set_brightness", now - 30, device="kitchen_light")
-    for _ in range(2):  # a retried callback is not logged twice
-        assert (
-            await activity_client.post("/event", json=callback_body(5, [drove, lamp]), headers=AUTH)
-        ).status_code == 202
-    await activity_client.post("/event", json=callback_body(6, [receipt("rotate", now)]), headers=AUTH)
+    for _ in range(2):  # an end reported twice (the pool, then orphan recovery) is not logged twice
+        await activity_runtime.intake.submit(process_end(5, [drove, lamp]))
+    await activity_runtime.intake.submit(process_end(6, [receipt("rotate", now)]))
 
     every = (await activity_client.get("/activity", headers=AUTH)).json()["entries"]
     assert [(e["process_id"], e["tool"]) for e in every] == [

@@ -9,7 +9,7 @@ import pytest
 from kernel_support import AUTH, TestRuntime
 
 from rosaos.kernel.events import EventStore, UserText
-from rosaos.processes.jobs import WorkerCallback
+from rosaos.kernel.intake import Queued
 
 
 async def test_chat_commits_a_user_typed_event_and_answers_202(
@@ -82,7 +82,6 @@ async def test_event_accepts_each_kind(client: httpx.AsyncClient, store: EventSt
     bodies: list[dict[str, Any]] = [
         {"kind": "user_said", "payload": {"text": "hi"}},
         {"kind": "user_typed", "payload": {"text": "hi"}},
-        {"kind": "worker_callback", "source": "worker", "payload": {"process_id": 3, "status": "ok"}},
         {"kind": "device_notice", "source": "vacuum", "payload": {"device": "vacuum", "message": "stuck"}},
         {"kind": "error", "source": "kernel", "payload": {"message": "boom", "source_event": 1}},
     ]
@@ -96,30 +95,24 @@ async def test_event_accepts_each_kind(client: httpx.AsyncClient, store: EventSt
     assert kinds == [body["kind"] for body in bodies]
 
 
-async def test_a_worker_callback_is_handed_to_the_runtime_after_the_commit(
-    client: httpx.AsyncClient, runtime: TestRuntime, store: EventStore
+@pytest.mark.parametrize(
+    ("body", "reason"),
+    [
+        ({"kind": "worker_callback", "payload": {"process_id": 7, "status": "ok"}}, "the pool's pipe"),
+        (
+            {"kind": "timer_fired", "payload": {"timer_id": 1, "action": "x", "due": "2026-01-01T00:00:00Z"}},
+            "the kernel's own table",
+        ),
+    ],
+)
+async def test_events_only_the_kernel_queues_are_refused_from_outside(
+    client: httpx.AsyncClient, store: EventStore, body: dict[str, Any], reason: str
 ) -> None:
-    body = {
-        "kind": "worker_callback",
-        "source": "worker",
-        "payload": {"process_id": 7, "status": "ok", "output": "done"},
-        "idempotency_key": "worker-7",
-    }
-    first = await client.post("/event", json=body, headers=AUTH)
-    await client.post("/event", json=body, headers=AUTH)  # a retry: the hook is idempotent, so called again
-    event_id = first.json()["id"]
-    assert runtime.callbacks == [(event_id, WorkerCallback(process_id=7, status="ok", output="done"))] * 2
-    assert await store.get(event_id) is not None
-
-
-async def test_a_worker_callback_with_the_old_worker_id_key_is_still_understood(
-    client: httpx.AsyncClient, runtime: TestRuntime
-) -> None:
-    """``worker_id`` was the field's name before it was renamed ``process_id``; old scripts post it."""
-    body = {"kind": "worker_callback", "payload": {"worker_id": 9, "status": "ok"}}
+    """A process's end has one route (the worker's pipe): a posted one would race it."""
     response = await client.post("/event", json=body, headers=AUTH)
-    assert response.status_code == 202, response.text
-    assert runtime.callbacks == [(response.json()["id"], WorkerCallback(process_id=9, status="ok"))]
+    assert response.status_code == 422
+    assert reason in response.json()["detail"]
+    assert await store.pending_count() == 0
 
 
 async def test_an_accepted_event_is_announced_on_the_updates_stream(client: httpx.AsyncClient) -> None:
@@ -187,15 +180,14 @@ async def test_an_unknown_event_is_404_with_a_message(client: httpx.AsyncClient)
     assert response.json()["detail"].startswith("no event 999")
 
 
-async def test_a_failing_callback_hook_still_answers_202_and_reports_the_error(
+async def test_a_failing_side_effect_still_answers_202_and_reports_the_error(
     client: httpx.AsyncClient, runtime: TestRuntime, store: EventStore
 ) -> None:
-    async def broken(event_id: int, callback: WorkerCallback) -> None:
+    async def broken(queued: Queued) -> None:
         raise RuntimeError("lease table unavailable")
 
-    runtime.worker_callback_recorded = broken  # type: ignore[method-assign]
-    body = {"kind": "worker_callback", "payload": {"process_id": 4, "status": "crashed"}}
-    response = await client.post("/event", json=body, headers=AUTH)
+    runtime.intake.on("user_typed", broken)
+    response = await client.post("/chat", json={"text": "hello"}, headers=AUTH)
     assert response.status_code == 202
     assert await store.get(response.json()["id"]) is not None
     page = (await client.get("/updates", params={"after": 0}, headers=AUTH)).json()

@@ -8,14 +8,30 @@ from pathlib import Path
 
 import pytest
 
-from rosaos.kernel.events import EventStore, TimerFired
+from rosaos.kernel.events import EventStore, NewEvent, TimerFired
+from rosaos.kernel.intake import Intake, Queued
 from rosaos.kernel.loop import render_event
 from rosaos.kernel.timer_text import DueTimeError, resolve_due
 from rosaos.kernel.timers import TimerBook, TimerError
+from rosaos.kernel.updates import UpdateStream
+
+
+async def kernel_book(store: EventStore) -> TimerBook:
+    """The book as the kernel opens it: firings go through the intake, published on the updates stream."""
+    return await TimerBook.open(store, Intake(store, await UpdateStream.open(store.database)).submit)
+
+
+async def test_a_book_opened_without_the_intake_does_not_fire(store: EventStore) -> None:
+    """``rosaos timers`` opens the book of a stopped kernel: it may set and cancel, never fire."""
+    book = await TimerBook.open(store)
+    await book.set("turn off the kitchen light", datetime.now(UTC) - timedelta(seconds=1))
+    with pytest.raises(TimerError, match="only the kernel fires timers"):
+        await book.fire_due()
+    assert await store.pending_count() == 0
 
 
 async def test_a_due_timer_queues_one_event_even_when_fired_again(store: EventStore) -> None:
-    book = await TimerBook.open(store)
+    book = await kernel_book(store)
     timer = await book.set("turn off the kitchen light", datetime.now(UTC) - timedelta(seconds=1))
     [event_id] = await book.fire_due()
     assert await book.fire_due() == []
@@ -28,17 +44,17 @@ async def test_a_due_timer_queues_one_event_even_when_fired_again(store: EventSt
 
 
 async def test_a_crash_between_queueing_and_marking_does_not_queue_twice(store: EventStore) -> None:
-    book = await TimerBook.open(store)
+    book = await kernel_book(store)
     timer = await book.set("turn off the kitchen light", datetime.now(UTC) - timedelta(seconds=1))
     [first] = await book.fire_due()
     # As if the kernel died after the append, before the row was marked fired:
     await store.database.execute("UPDATE timers SET state = 'pending' WHERE id = ?", (timer.id,))
-    assert await TimerBook(store).fire_due() == [first]
+    assert await (await kernel_book(store)).fire_due() == [first]
     assert await store.pending_count() == 1
 
 
 async def test_a_cancelled_timer_never_fires_and_cannot_be_cancelled_twice(store: EventStore) -> None:
-    book = await TimerBook.open(store)
+    book = await kernel_book(store)
     timer = await book.set("stop the music", datetime.now(UTC) + timedelta(seconds=0.2))
     await book.cancel(timer.id)
     await asyncio.sleep(0.3)
@@ -52,7 +68,7 @@ async def test_a_cancelled_timer_never_fires_and_cannot_be_cancelled_twice(store
 
 async def test_timers_survive_reopening_the_store(tmp_path: Path) -> None:
     store = await EventStore.open(tmp_path / "kernel.sqlite3")
-    await (await TimerBook.open(store)).set("stop the music", datetime.now(UTC) + timedelta(hours=1))
+    await (await kernel_book(store)).set("stop the music", datetime.now(UTC) + timedelta(hours=1))
     await store.close()
     reopened = await EventStore.open(tmp_path / "kernel.sqlite3")
     try:
@@ -66,11 +82,13 @@ async def test_the_clock_fires_a_timer_set_while_it_waits(store: EventStore) -> 
     fired: list[int] = []
     rang = asyncio.Event()
 
-    async def on_fired(event_id: int, _event: object) -> None:
-        fired.append(event_id)
+    async def enqueue(event: NewEvent) -> Queued:
+        appended = await store.append(event)
+        fired.append(appended.id)
         rang.set()
+        return Queued(appended.id, event)
 
-    book = await TimerBook.open(store, on_fired)
+    book = await TimerBook.open(store, enqueue)
     clock = asyncio.create_task(book.run())
     try:
         await asyncio.sleep(0.05)  # the clock is asleep with nothing to do
@@ -86,7 +104,7 @@ async def test_the_clock_fires_a_timer_set_while_it_waits(store: EventStore) -> 
 
 
 async def test_a_late_timer_says_how_late(store: EventStore) -> None:
-    book = await TimerBook.open(store)
+    book = await kernel_book(store)
     await book.set("turn on the lamp", datetime.now(UTC) - timedelta(minutes=90))
     [event_id] = await book.fire_due()
     event = await store.get(event_id)

@@ -2,7 +2,7 @@
 
 The devices are small FastMCP servers (``set_level`` 0-100 and ``get_state``) served by the same
 :func:`rosaos.devices.serve.serve_http` that hosts real drivers, behind a bearer token. The kernel
-stand-in records every ``POST /event`` body, so tests see exactly what workers deliver.
+stand-in records every ``POST /event`` body, so tests see that workers post none.
 """
 
 from __future__ import annotations
@@ -69,7 +69,7 @@ async def kernel() -> AsyncIterator[KernelStandIn]:
     task = asyncio.create_task(server.serve(sockets=[sock]))
     await eventually(lambda: server.started, what="the kernel stand-in to start")
     host, port = sock.getsockname()[:2]
-    stand_in.url = f"http://{host}:{port}/event"
+    stand_in.url = f"http://{host}:{port}"
     yield stand_in
     server.should_exit = True
     await task

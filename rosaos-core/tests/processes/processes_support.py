@@ -135,13 +135,13 @@ def build_test_device(name: str, state: dict[str, Any]) -> FastMCP:
 
 @dataclass
 class KernelStandIn:
-    """Records the bodies of ``POST /event``, like the kernel API would accept them."""
+    """The kernel API a worker knows (``kernel_url``); records any body posted to ``POST /event``.
+
+    A worker must post nothing there: a process's end goes to the pool over the worker's pipe.
+    """
 
     url: str
     bodies: list[dict[str, Any]] = field(default_factory=list)
-
-    def callbacks_for(self, process_id: int) -> list[dict[str, Any]]:
-        return [body for body in self.bodies if body["payload"]["process_id"] == process_id]
 
 
 def make_job(
@@ -151,10 +151,9 @@ def make_job(
     *,
     timeout: float = 30.0,
     request_limit: int = 10,
-    callback_url: str | None = None,
     process_id: int | None = None,
 ) -> WorkerJob:
-    """A job for one test model, posting its callback to the kernel stand-in."""
+    """A job for one test model; the worker knows the kernel stand-in's URL."""
     return WorkerJob(
         process_id=process_id or new_process_id(),
         task=f"run the {model} test",
@@ -163,8 +162,8 @@ def make_job(
         base_prompt="You are a test process.",
         timeout=timeout,
         request_limit=request_limit,
-        callback_url=callback_url or kernel.url,
-        callback_token=KERNEL_TOKEN,
+        kernel_url=kernel.url,
+        kernel_token=KERNEL_TOKEN,
     )
 
 
@@ -172,12 +171,12 @@ def make_job(
 class Endings:
     """What the pool reported through ``on_ended``, per process id."""
 
-    reports: dict[int, list[tuple[WorkerCallback, bool]]] = field(default_factory=dict)
+    reports: dict[int, list[WorkerCallback]] = field(default_factory=dict)
 
-    async def record(self, callback: WorkerCallback, delivered: bool) -> None:
-        self.reports.setdefault(callback.process_id, []).append((callback, delivered))
+    async def record(self, callback: WorkerCallback) -> None:
+        self.reports.setdefault(callback.process_id, []).append(callback)
 
-    async def wait(self, process_id: int) -> tuple[WorkerCallback, bool]:
+    async def wait(self, process_id: int) -> WorkerCallback:
         """The one report for ``process_id``, once it arrives."""
         reports = await eventually(lambda: self.reports.get(process_id), what=f"process {process_id} to end")
         assert len(reports) == 1, reports

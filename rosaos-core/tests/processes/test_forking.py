@@ -85,8 +85,8 @@ async def test_one_off_runs_its_job_and_retires(
     job = make_job(kernel, "sets_level", [devices["lamp"]])
     handle = await pool.run(job)
     assert handle.one_off
-    callback, delivered = await endings.wait(job.process_id)
-    assert (callback.status, callback.output, delivered) == ("ok", "lamp level is 42", True)
+    callback = await endings.wait(job.process_id)
+    assert (callback.status, callback.output) == ("ok", "lamp level is 42")
     await eventually(lambda: not pool.stats(), what="the one-off worker to retire")
     assert not pid_alive(handle.worker_pid)
 
@@ -107,12 +107,8 @@ async def test_terminate_kills_a_forked_worker_and_reports_terminated(
     job = make_job(kernel, "sleeps")
     handle = await pool.run(job)
     assert await pool.terminate(job.process_id)
-    callback, delivered = await endings.wait(job.process_id)
-    assert (callback.status, callback.error, delivered) == (
-        "terminated",
-        "the process was terminated on request",
-        False,
-    )
+    callback = await endings.wait(job.process_id)
+    assert (callback.status, callback.error) == ("terminated", "the process was terminated on request")
     assert not pid_alive(handle.worker_pid)
 
 
@@ -122,8 +118,8 @@ async def test_forked_worker_killed_by_a_signal_is_reported_crashed_with_that_si
     job = make_job(kernel, "sleeps")
     handle = await pool.run(job)
     os.kill(handle.worker_pid, signal.SIGTERM)
-    callback, delivered = await endings.wait(job.process_id)
-    assert (callback.status, delivered) == ("crashed", False)
+    callback = await endings.wait(job.process_id)
+    assert callback.status == "crashed"
     assert f"pid {handle.worker_pid}" in (callback.error or "")
     assert "killed by SIGTERM" in (callback.error or "")
 
@@ -133,7 +129,7 @@ async def test_forked_worker_that_exits_mid_task_is_reported_with_its_exit_code(
 ) -> None:
     job = make_job(kernel, "exits")
     await pool.run(job)
-    callback, _ = await endings.wait(job.process_id)
+    callback = await endings.wait(job.process_id)
     assert callback.status == "crashed"
     assert "exit code 3" in (callback.error or "")
 
@@ -143,8 +139,8 @@ async def test_stuck_forked_worker_is_killed_at_the_timeout(
 ) -> None:
     job = make_job(kernel, "blocks", timeout=0.5)
     handle = await pool.run(job)
-    callback, delivered = await endings.wait(job.process_id)
-    assert (callback.status, delivered) == ("timeout", False)
+    callback = await endings.wait(job.process_id)
+    assert callback.status == "timeout"
     assert "worker was killed" in (callback.error or "")
     assert not pid_alive(handle.worker_pid)
 
@@ -156,8 +152,8 @@ async def test_two_one_offs_forked_at_once_both_run(
     handles = await asyncio.gather(*(pool.run(job) for job in jobs))
     assert handles[0].worker_pid != handles[1].worker_pid
     for job in jobs:
-        callback, delivered = await endings.wait(job.process_id)
-        assert (callback.status, delivered) == ("ok", True)
+        callback = await endings.wait(job.process_id)
+        assert callback.status == "ok"
     assert devices["lamp"].state["level"] == devices["fan"].state["level"] == 42
 
 
@@ -171,7 +167,7 @@ async def test_forked_worker_sees_what_a_spawned_worker_sees(
     for one_pool, its_endings in ((pool, endings), spawning_pool):
         job = make_job(kernel, "reports_process")
         await one_pool.run(job)
-        callback, _ = await its_endings.wait(job.process_id)
+        callback = await its_endings.wait(job.process_id)
         assert callback.status == "ok", callback.error
         reports.append(json.loads(callback.output or ""))
     forked, spawned = reports
@@ -193,7 +189,7 @@ async def test_with_the_fork_server_off_a_one_off_is_a_new_python_process(
     assert handle.one_off
     assert parent_pid(handle.worker_pid) == os.getpid()
     await pool.terminate(job.process_id)
-    assert (await endings.wait(job.process_id))[0].status == "terminated"
+    assert (await endings.wait(job.process_id)).status == "terminated"
 
 
 async def test_job_runs_on_a_spawned_worker_while_the_fork_server_is_down(
@@ -206,7 +202,7 @@ async def test_job_runs_on_a_spawned_worker_while_the_fork_server_is_down(
     handle = await pool.run(job)
     assert parent_pid(handle.worker_pid) == os.getpid()
     await pool.terminate(job.process_id)
-    assert (await endings.wait(job.process_id))[0].status == "terminated"
+    assert (await endings.wait(job.process_id)).status == "terminated"
     # The pool starts a new fork server.
     await eventually(lambda: fork_server(pool).ready, within=60, what="a new fork server")
     assert fork_server_pid(pool) != dead
@@ -222,7 +218,7 @@ async def test_job_still_runs_when_the_fork_server_died_unnoticed(
     handle = await pool.run(job)
     assert parent_pid(handle.worker_pid) == os.getpid()
     await pool.terminate(job.process_id)
-    assert (await endings.wait(job.process_id))[0].status == "terminated"
+    assert (await endings.wait(job.process_id)).status == "terminated"
 
 
 async def test_worker_whose_fork_server_dies_is_killed_and_reported_crashed(
@@ -231,7 +227,7 @@ async def test_worker_whose_fork_server_dies_is_killed_and_reported_crashed(
     job = make_job(kernel, "sleeps")
     handle = await pool.run(job)
     os.kill(fork_server_pid(pool), signal.SIGKILL)
-    callback, _ = await endings.wait(job.process_id)
+    callback = await endings.wait(job.process_id)
     assert callback.status == "crashed"
     assert "killed by SIGKILL" in (callback.error or "")
     # No longer the fork server's child, it is reaped by init, maybe a moment later.
@@ -247,7 +243,7 @@ async def test_stop_leaves_no_fork_server_and_no_forked_worker_alive(kernel: Ker
     server = fork_server_pid(pool)
     assert parent_pid(handle.worker_pid) == server
     await pool.stop()
-    assert (await endings.wait(job.process_id))[0].status == "terminated"
+    assert (await endings.wait(job.process_id)).status == "terminated"
     assert not pid_alive(handle.worker_pid)
     assert not pid_alive(server)
     assert fork_server(pool).pid is None
@@ -275,8 +271,8 @@ async def test_process_manager_has_the_fork_server_import_its_model_ahead(kernel
         base_prompt="",
         job_timeout=1,
         request_limit=1,
-        callback_url=kernel.url,
-        callback_token="",
+        kernel_url=kernel.url,
+        kernel_token="",
         pool=pool,
         on_ended=Endings().record,
     )

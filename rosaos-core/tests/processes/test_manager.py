@@ -56,8 +56,8 @@ def new_manager(
         base_prompt="You are a test process.",
         job_timeout=60,
         request_limit=10,
-        callback_url=kernel.url,
-        callback_token=KERNEL_TOKEN,
+        kernel_url=kernel.url,
+        kernel_token=KERNEL_TOKEN,
         pool=WorkerPool(size=pool_size, env=worker_env()),
         on_ended=endings.record,
         first_process_id=FIRST_ID,
@@ -101,14 +101,13 @@ async def test_launch_returns_at_once_and_the_ended_process_releases_its_leases(
     assert info.worker_pid is not None
     assert pid_alive(info.worker_pid)
     assert manager.leases.held_by(info.id) == ["lamp", "fan"]
-    callback, delivered = await endings.wait(info.id)
-    assert (callback.status, delivered) == ("ok", True)
+    callback = await endings.wait(info.id)
+    assert callback.status == "ok"
     ended = manager.get(info.id)
     assert ended.state == "ok"
     assert ended.ended_at is not None
     assert manager.leases.held_by(info.id) == []
     assert devices["lamp"].state["level"] == devices["fan"].state["level"] == 42
-    assert kernel.callbacks_for(info.id)[0]["idempotency_key"] == f"process-{info.id}"
 
 
 async def test_held_lamp_is_refused_until_its_holders_worker_is_killed(
@@ -123,8 +122,8 @@ async def test_held_lamp_is_refused_until_its_holders_worker_is_killed(
     )
     assert holder.worker_pid is not None
     os.kill(holder.worker_pid, signal.SIGKILL)
-    callback, delivered = await endings.wait(holder.id)
-    assert (callback.status, delivered) == ("crashed", False)
+    callback = await endings.wait(holder.id)
+    assert callback.status == "crashed"
     assert "killed by SIGKILL" in (callback.error or "")
     assert manager.get(holder.id).state == "crashed"
     assert "lamp" not in manager.leases.holders()
@@ -139,7 +138,7 @@ async def test_terminate_kills_the_worker_and_releases_the_leases(
     assert info.worker_pid is not None
     assert not pid_alive(info.worker_pid)
     assert manager.leases.held_by(info.id) == []
-    assert (await endings.wait(info.id))[0].status == "terminated"
+    assert (await endings.wait(info.id)).status == "terminated"
     assert await manager.terminate(info.id) == ended
 
 
@@ -223,7 +222,7 @@ async def test_stop_terminates_running_processes_and_kills_every_worker(
     assert manager.get(info.id).state == "terminated"
     assert not pid_alive(info.worker_pid)
     assert manager.leases.holders() == {}
-    assert (await endings.wait(info.id))[0].status == "terminated"
+    assert (await endings.wait(info.id)).status == "terminated"
 
 
 async def test_terminate_while_the_worker_is_being_spawned_kills_it_once_it_exists(
@@ -240,5 +239,5 @@ async def test_terminate_while_the_worker_is_being_spawned_kills_it_once_it_exis
     assert info.state == "terminated"
     assert info.worker_pid is not None
     assert not pid_alive(info.worker_pid)
-    assert (await endings.wait(process_id))[0].status == "terminated"
+    assert (await endings.wait(process_id)).status == "terminated"
     await manager.stop()

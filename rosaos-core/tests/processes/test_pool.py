@@ -57,7 +57,7 @@ def warm_pids(pool: WorkerPool) -> set[int]:
     return {row.pid for row in pool.stats() if not row.one_off}
 
 
-async def test_job_runs_on_a_warm_worker_and_the_worker_delivers_its_callback(
+async def test_job_runs_on_a_warm_worker_and_its_end_comes_over_the_pipe_only(
     pool: WorkerPool, endings: Endings, kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
 ) -> None:
     before = warm_pids(pool)
@@ -65,20 +65,11 @@ async def test_job_runs_on_a_warm_worker_and_the_worker_delivers_its_callback(
     handle = await pool.run(job)
     assert not handle.one_off
     assert handle.worker_pid in before
-    callback, delivered = await endings.wait(job.process_id)
-    assert (callback.status, callback.output, delivered) == ("ok", "lamp level is 42", True)
-    assert kernel.callbacks_for(job.process_id)[0]["payload"] == callback.model_dump(mode="json")
+    callback = await endings.wait(job.process_id)
+    assert (callback.status, callback.output) == ("ok", "lamp level is 42")
+    assert kernel.bodies == []  # nothing over HTTP: the pipe is the one route of a process's end
     await eventually(lambda: all(row.state == "idle" for row in pool.stats()), what="the worker to be idle")
     assert warm_pids(pool) == before
-
-
-async def test_callback_the_worker_could_not_deliver_is_reported_undelivered(
-    pool: WorkerPool, endings: Endings, kernel: KernelStandIn, unreachable_url: str
-) -> None:
-    job = make_job(kernel, "sets_level", callback_url=unreachable_url)
-    await pool.run(job)
-    callback, delivered = await endings.wait(job.process_id)
-    assert (callback.status, delivered) == ("ok", False)
 
 
 async def test_worker_that_exits_mid_task_is_reported_crashed_and_replaced(
@@ -86,8 +77,8 @@ async def test_worker_that_exits_mid_task_is_reported_crashed_and_replaced(
 ) -> None:
     job = make_job(kernel, "exits")
     handle = await pool.run(job)
-    callback, delivered = await endings.wait(job.process_id)
-    assert (callback.status, delivered) == ("crashed", False)
+    callback = await endings.wait(job.process_id)
+    assert callback.status == "crashed"
     assert f"pid {handle.worker_pid}" in (callback.error or "")
     assert "exit code 3" in (callback.error or "")
     await pool.wait_until_warm()
@@ -100,8 +91,8 @@ async def test_job_past_its_timeout_is_stopped_by_its_worker_which_stays_warm(
 ) -> None:
     job = make_job(kernel, "sleeps", timeout=0.5)
     handle = await pool.run(job)
-    callback, delivered = await endings.wait(job.process_id)
-    assert (callback.status, delivered) == ("timeout", True)
+    callback = await endings.wait(job.process_id)
+    assert callback.status == "timeout"
     assert pid_alive(handle.worker_pid)
 
 
@@ -110,8 +101,8 @@ async def test_stuck_worker_is_killed_at_the_timeout_and_replaced(
 ) -> None:
     job = make_job(kernel, "blocks", timeout=0.5)
     handle = await pool.run(job)
-    callback, delivered = await endings.wait(job.process_id)
-    assert (callback.status, delivered) == ("timeout", False)
+    callback = await endings.wait(job.process_id)
+    assert callback.status == "timeout"
     assert "worker was killed" in (callback.error or "")
     assert not pid_alive(handle.worker_pid)
     await pool.wait_until_warm()
@@ -124,8 +115,8 @@ async def test_terminate_kills_the_worker_and_reports_terminated(
     job = make_job(kernel, "sleeps")
     handle = await pool.run(job)
     assert await pool.terminate(job.process_id)
-    callback, delivered = await endings.wait(job.process_id)
-    assert (callback.status, delivered) == ("terminated", False)
+    callback = await endings.wait(job.process_id)
+    assert callback.status == "terminated"
     assert not pid_alive(handle.worker_pid)
     assert not await pool.terminate(job.process_id)
     await pool.wait_until_warm()
@@ -143,11 +134,11 @@ async def test_one_off_worker_runs_the_job_when_all_warm_workers_are_busy(
     handle = await pool.run(job)
     assert handle.one_off
     assert handle.worker_pid not in warm_pids(pool)
-    callback, _ = await endings.wait(job.process_id)
+    callback = await endings.wait(job.process_id)
     assert callback.status == "ok"
     await eventually(lambda: not pid_alive(handle.worker_pid), what="the one-off worker to retire")
     for sleeper in sleepers:
-        assert (await endings.wait(sleeper.process_id))[0].status == "timeout"
+        assert (await endings.wait(sleeper.process_id)).status == "timeout"
     assert len(warm_pids(pool)) == POOL_SIZE
 
 
@@ -190,7 +181,7 @@ async def test_a_module_in_the_working_directory_does_not_shadow_the_workers_imp
         await shadowed.start()
         job = make_job(kernel, "sets_level", [devices["lamp"]])
         await shadowed.run(job)
-        callback, _ = await endings.wait(job.process_id)
+        callback = await endings.wait(job.process_id)
         assert (callback.status, callback.output) == ("ok", "lamp level is 42")
     finally:
         await shadowed.stop()

@@ -48,8 +48,8 @@ async def test_progress_of_a_long_tool_shows_on_the_running_process(kernel: Kern
             base_prompt="You are a test process.",
             job_timeout=60,
             request_limit=10,
-            callback_url=kernel.url,
-            callback_token=KERNEL_TOKEN,
+            kernel_url=kernel.url,
+            kernel_token=KERNEL_TOKEN,
             pool=WorkerPool(size=1, env=worker_env()),
             on_ended=endings.record,
             first_process_id=900_000,
@@ -62,7 +62,7 @@ async def test_progress_of_a_long_tool_shows_on_the_running_process(kernel: Kern
             )
             assert progress.device == "winch" and progress.total == 10
             assert progress.message.startswith("wound ") and progress.message.endswith(" of 10 turns")
-            callback, _ = await endings.wait(info.id)
+            callback = await endings.wait(info.id)
             assert callback.status == "ok" and "wound 10 turns" in (callback.output or "")
             assert manager.get(info.id).progress is not None  # the last one stays on the record
         finally:

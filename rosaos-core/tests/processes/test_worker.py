@@ -1,7 +1,7 @@
 """The worker's job runner, in-process: process agents against real device servers on loopback.
 
 The worker subprocess and its pipe protocol are exercised by the pool tests; here the same
-``run_job`` and ``deliver_callback`` run in the test's event loop so each behaviour is quick to see.
+``run_job`` runs in the test's event loop so each behaviour is quick to see.
 """
 
 from __future__ import annotations
@@ -15,8 +15,7 @@ from processes_support import TOKEN, KernelStandIn, LoopbackDevice, build_test_d
 from rosaos.devices.serve import serve_http
 from rosaos.intents.planning.plan import Plan, PlanStep, encode_task
 from rosaos.models.select import ModelSpec
-from rosaos.processes.jobs import WorkerCallback
-from rosaos.processes.worker import SESSIONS, deliver_callback, run_job
+from rosaos.processes.worker import SESSIONS, run_job
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 
@@ -190,33 +189,6 @@ async def test_model_that_cannot_be_imported_is_an_error(kernel: KernelStandIn) 
     callback = await run_job(job)
     assert callback.status == "error"
     assert (callback.error or "").startswith("cannot import model 'process_test_models:no_such_factory'")
-
-
-async def test_callback_is_posted_as_a_worker_callback_event(kernel: KernelStandIn) -> None:
-    job = make_job(kernel, "unused")
-    callback = WorkerCallback(process_id=job.process_id, status="ok", output="done", task=job.task)
-    assert await deliver_callback(job, callback)
-    assert kernel.callbacks_for(job.process_id) == [
-        {
-            "kind": "worker_callback",
-            "source": "worker",
-            "payload": callback.model_dump(mode="json"),
-            "idempotency_key": f"process-{job.process_id}",
-        }
-    ]
-
-
-async def test_callback_to_an_unreachable_kernel_is_not_delivered(
-    kernel: KernelStandIn, unreachable_url: str
-) -> None:
-    job = make_job(kernel, "unused", callback_url=unreachable_url)
-    assert not await deliver_callback(job, WorkerCallback(process_id=job.process_id, status="ok"))
-
-
-async def test_callback_with_a_wrong_token_is_not_delivered(kernel: KernelStandIn) -> None:
-    job = make_job(kernel, "unused").model_copy(update={"callback_token": "wrong"})
-    assert not await deliver_callback(job, WorkerCallback(process_id=job.process_id, status="ok"))
-    assert kernel.callbacks_for(job.process_id) == []
 
 
 async def test_a_warm_worker_keeps_its_device_session_for_the_next_job(

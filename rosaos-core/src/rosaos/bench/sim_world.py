@@ -2,7 +2,7 @@
 
 :func:`bench_world` resolves the file's devices against the installed drivers, the way
 ``rosaos.toml`` devices are resolved, always on the ``sim`` backend. :class:`SimDevices` is the
-:class:`~rosaos.kernel.runtime.DeviceHosting` the benchmark gives the kernel: instead of one host
+:class:`~rosaos.devices.hosting.DeviceHosting` the benchmark gives the kernel: instead of one host
 subprocess per device (``rosaos up``), each simulator is served over streamable HTTP by a task in
 this process, so restarting all of them between tasks takes milliseconds and no state leaks
 from one task to the next. Workers still reach them over MCP HTTP with a bearer token, exactly
@@ -16,7 +16,7 @@ import contextlib
 import dataclasses
 import logging
 import secrets
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -27,7 +27,7 @@ from rosaos.config import ConfigError, DeviceConfig, RosaosConfig
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.run_files import DeviceStatus
 from rosaos.devices.serve import open_device, serve_http
-from rosaos.devices.supervisor import DirectoryEntry, SafeStopOutcome
+from rosaos.devices.supervisor import DirectoryEntry, SafeStopOutcome, StatusListener
 from rosaos.devices.world import DeviceInstance, World, build_world
 from rosaos.drivers import DeviceError
 from rosaos.plugins import DriverRegistry
@@ -121,6 +121,10 @@ class SimDevices:
         self.data_dir = data_dir
         self.token = secrets.token_urlsafe(32)
         self._served: dict[str, _Served] = {}
+        self.version = 0
+        """Bumped whenever a simulator stops or starts (the kernel caches its device list until then)."""
+        self.on_status_change: StatusListener | None = None
+        """Never called: a simulator in this process does not go down on its own."""
 
     async def start(self) -> None:
         """Serve every implemented instance from the state its ``sim`` table gives."""
@@ -129,6 +133,7 @@ class SimDevices:
             if not instance.spec.implemented:
                 served.status = "not implemented"
             self._served[instance.name] = served
+        self.version += 1
         await self.restart({})
 
     async def stop(self) -> None:
@@ -168,6 +173,16 @@ class SimDevices:
             if s.url is None
         ]
 
+    def release_background(self) -> None:
+        """Nothing to release: every simulator starts in :meth:`start`."""
+
+    async def settle(self, names: Iterable[str]) -> None:
+        """Nothing to wait for: :meth:`start` returns once every simulator had its start."""
+
+    def host_of(self, name: str) -> str:
+        """Each simulator is its own host."""
+        return name
+
     def failures(self) -> dict[str, str]:
         """Implemented instances that did not start, with the driver's reason."""
         return {name: s.error or s.status for name, s in self._served.items() if s.status == "failed"}
@@ -206,10 +221,12 @@ class SimDevices:
             served.url = await ready
         except DeviceError as error:
             served.status, served.url, served.error = "failed", None, str(error)
+            self.version += 1
             log.warning("%s: cannot start its simulator: %s", served.instance.name, error)
             return
         served.status, served.error = "healthy", None
         served.port = urlsplit(served.url).port or 0
+        self.version += 1
 
     async def _serve(self, served: _Served, ready: asyncio.Future[str]) -> None:
         try:
@@ -239,6 +256,7 @@ class SimDevices:
         served.url = None
         if served.status != "failed":
             served.status = "stopped"
+        self.version += 1
         with contextlib.suppress(Exception):
             await task
 

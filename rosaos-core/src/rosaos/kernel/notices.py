@@ -117,7 +117,7 @@ class NoticeWatcher:
     def __init__(
         self,
         endpoints: Callable[[], Mapping[str, DeviceEndpoint]],
-        enqueue: Callable[[DeviceNoticeEvent], Awaitable[None]],
+        enqueue: Callable[[DeviceNoticeEvent], Awaitable[object]],
         notice_filter: NoticeFilter | None = None,
         wait: float = POLL_WAIT,
     ) -> None:

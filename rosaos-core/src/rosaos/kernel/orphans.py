@@ -23,7 +23,8 @@ from typing import Any
 from pydantic import BaseModel, ValidationError
 
 from rosaos.devices.supervisor import DirectoryEntry, SafeStopOutcome, safe_stop_entry
-from rosaos.kernel.events import EventStore, WorkerCallbackEvent
+from rosaos.kernel.events import EventStore, NewEvent, WorkerCallbackEvent
+from rosaos.kernel.intake import Queued
 from rosaos.kernel.launch_cause import LaunchCause
 from rosaos.processes.jobs import WorkerCallback, callback_idempotency_key
 from rosaos.processes.manager import ProcessInfo
@@ -116,16 +117,16 @@ class LiveProcesses:
 
 async def recover_orphans(
     live: LiveProcesses,
-    store: EventStore,
     directory: Mapping[str, DirectoryEntry],
-    recorded: Callable[[int, WorkerCallbackEvent], Awaitable[None]],
+    enqueue: Callable[[NewEvent], Awaitable[Queued]],
     remember: Callable[[ProcessInfo], None] | None = None,
 ) -> list[SafeStopOutcome]:
     """``safe_stop`` every device a left-behind process held, then report each process as crashed.
 
     Call it after the devices started and before the kernel loop runs, so nothing is granted
-    before its device is safe. ``recorded(event_id, callback)`` is the kernel's usual handling of
-    a callback it committed (updates stream, lease release).
+    before its device is safe. ``enqueue`` is the kernel's intake: the crash is queued as any
+    process's end is, with the same idempotency key, so an end the process itself got committed
+    before the kernel died is kept instead (the intake answers with the first event).
     """
     orphans = await live.left()
     if not orphans:
@@ -163,14 +164,7 @@ async def recover_orphans(
             payload=callback,
             idempotency_key=callback_idempotency_key(process.id),
         )
-        appended = await store.append(event)
-        if appended.duplicate:
-            # Its own callback was committed before the kernel died, but perhaps not published:
-            # publish that one (the process really ended as it says), not the crash.
-            committed = await store.get(appended.id)
-            if committed is not None and isinstance(committed.payload, WorkerCallback):
-                event = event.model_copy(update={"payload": committed.payload})
-        await recorded(appended.id, event)
+        await enqueue(event)
         await live.ended(process.id)
         log.warning("process %d (%s): %s", process.id, process.task, callback.error)
     return outcomes

@@ -1,4 +1,4 @@
-"""The running kernel: devices, event store, worker pool, kernel agent and HTTP API, wired together.
+"""The running kernel: its parts (built once, :mod:`rosaos.kernel.parts`) and its HTTP API.
 
 :class:`Kernel` is what ``rosaos up`` runs and what integration tests start on loopback. It
 implements the HTTP API's :class:`~rosaos.kernel.api.schemas.KernelRuntime`.
@@ -12,86 +12,45 @@ import json
 import logging
 import os
 import socket
-import sqlite3
 from collections.abc import Mapping, Sequence
-from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Any
 
 import httpx
 import uvicorn
-from pydantic import ValidationError
 from pydantic_ai.models import Model
 
 from rosaos.auth import bound_hosts, load_or_create_token
 from rosaos.config import MapOrigin, RosaosConfig
 from rosaos.devices.endpoints import DeviceEndpoint
+from rosaos.devices.hosting import DeviceHosting
 from rosaos.devices.run_files import write_atomic
 from rosaos.devices.serve import bind_socket
-from rosaos.devices.state_cache import DeviceStateCache
-from rosaos.devices.supervisor import DeviceSupervisor, DirectoryEntry, SafeStopOutcome
 from rosaos.devices.world import World
 from rosaos.drivers import DeviceError
 from rosaos.kernel.activity import ActivityLog
-from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
 from rosaos.kernel.api.app import create_app
 from rosaos.kernel.api.kernel_client import kernel_file, running_kernel_url
 from rosaos.kernel.api.login_codes import LoginCodes, login_url
-from rosaos.kernel.api.schemas import (
-    DeviceSafeStop,
-    DeviceView,
-    EmergencyStopReport,
-    EmergencyStopState,
-    Understanding,
-)
-from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people, record_confirmation
-from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
-from rosaos.kernel.device_status import DeviceStatusUpdates
-from rosaos.kernel.events import DeviceNoticeEvent, Event, EventStore, StoreClosedError, WorkerCallbackEvent
-from rosaos.kernel.host_latch import HostLatches
-from rosaos.kernel.launch_cause import CurrentEvent, LaunchCause
+from rosaos.kernel.api.schemas import DeviceView, EmergencyStopReport, EmergencyStopState, Understanding
+from rosaos.kernel.confirmations import ConfirmationDesk
+from rosaos.kernel.emergency_stop import EMERGENCY_STOP_KEY as EMERGENCY_STOP_KEY
+from rosaos.kernel.events import EventStore
+from rosaos.kernel.intake import Intake
 from rosaos.kernel.loop import KernelLoop
 from rosaos.kernel.notices import NoticeWatcher
-from rosaos.kernel.orphans import LiveProcesses, recover_orphans
-from rosaos.kernel.pending_stops import PendingStops, StopUndelivered
-from rosaos.kernel.stop_tools import add_stop_tools
-from rosaos.kernel.stopping import Stopper
-from rosaos.kernel.timer_tools import add_timer_tools
+from rosaos.kernel.parts import EVENTS_FILE, KernelParts, build_parts
 from rosaos.kernel.timers import TimerBook
-from rosaos.kernel.tools import build_kernel_tools
 from rosaos.kernel.updates import UpdateStream
-from rosaos.memory.memory_tools import add_memory_tools, memory_summary
-from rosaos.memory.sightings import SightingLog
-from rosaos.memory.store import MemoryStore
 from rosaos.models.defaults import KernelModels, kernel_models
 from rosaos.models.select import ModelSpec
-from rosaos.processes.jobs import WorkerCallback, callback_idempotency_key
-from rosaos.processes.manager import EmergencyStop, LaunchRefused, ProcessInfo, ProcessManager
-from rosaos.processes.pool import WorkerPool
-from rosaos.processes.prompts import base_process_prompt
+from rosaos.processes.manager import ProcessInfo, ProcessManager
 
 log = logging.getLogger(__name__)
-
-EVENTS_FILE = "kernel.sqlite3"
-EMERGENCY_STOP_KEY = "emergency_stop"
-"""The event store's key for the latched emergency stop (``EmergencyStop`` as JSON, or null)."""
 
 
 class KernelError(Exception):
     """The kernel cannot start; the message says why and what to do."""
-
-
-class DeviceHosting(Protocol):
-    """Where the kernel's devices come from. :class:`DeviceSupervisor` (host processes) in
-    ``rosaos up``; the task benchmark serves its simulators in-process instead."""
-
-    async def start(self) -> None: ...
-
-    async def stop(self) -> None: ...
-
-    def directory(self) -> dict[str, DirectoryEntry]: ...
-
-    async def safe_stop_all(self) -> list[SafeStopOutcome]: ...
 
 
 class Kernel:
@@ -114,30 +73,65 @@ class Kernel:
         self._process_model = process_model or self._models.process
         self._worker_env = dict(worker_env) if worker_env else None
         self._hosting = devices
-        self._ended_published: set[int] = set()
+        self._parts: KernelParts | None = None
+        self._shutdown = contextlib.AsyncExitStack()
+        """Stops what :func:`build_parts` started, in reverse order (also after a failed start)."""
         self._tasks: list[asyncio.Task[Any]] = []
         self._server: uvicorn.Server | None = None
         self._started = False
+        self._token = ""
         self.login_codes = LoginCodes()
         self.url = ""
-        self.status_updates: DeviceStatusUpdates | None = None
-        self._endpoints: tuple[int, dict[str, DeviceEndpoint]] | None = None
-        """``endpoints()`` as of the supervisor's ``version``."""
-        """Publishes devices going down and back (None when the devices are hosted elsewhere)."""
+
+    @property
+    def parts(self) -> KernelParts:
+        """The running kernel's parts; only after :meth:`start`."""
+        if self._parts is None:
+            raise KernelError("the kernel is not running: await kernel.start() first")
+        return self._parts
 
     # --- KernelRuntime ---------------------------------------------------------------------------
 
     @property
     def events(self) -> EventStore:
-        return self._store
+        return self.parts.store
+
+    @property
+    def intake(self) -> Intake:
+        return self.parts.intake
 
     @property
     def updates(self) -> UpdateStream:
-        return self._updates
+        return self.parts.updates
 
     @property
     def activity(self) -> ActivityLog:
-        return self._activity
+        return self.parts.activity
+
+    @property
+    def confirmations(self) -> ConfirmationDesk:
+        return self.parts.confirmations
+
+    @property
+    def timers(self) -> TimerBook:
+        return self.parts.timers
+
+    @property
+    def manager(self) -> ProcessManager:
+        return self.parts.manager
+
+    @property
+    def loop(self) -> KernelLoop:
+        return self.parts.loop
+
+    @property
+    def notices(self) -> NoticeWatcher:
+        return self.parts.notices
+
+    @property
+    def supervisor(self) -> DeviceHosting:
+        """Whatever serves the devices (a ``DeviceSupervisor`` in ``rosaos up``)."""
+        return self.parts.hosting
 
     @property
     def token(self) -> str:
@@ -147,6 +141,10 @@ class Kernel:
     def model_description(self) -> str:
         return self._models.description
 
+    @property
+    def model_notice(self) -> str | None:
+        return self._models.notice
+
     async def understand(self, text: str) -> Understanding:
         local = self._models.local
         if local is None:
@@ -154,10 +152,6 @@ class Kernel:
         # Matching a sentence that does not fit takes up to a few hundred ms: not on the loop.
         result = await asyncio.to_thread(local.match, text)
         return Understanding(text=text, complete=result.is_exact, kind=result.kind)
-
-    @property
-    def model_notice(self) -> str | None:
-        return self._models.notice
 
     async def processes(self, include_ended: bool = False) -> Sequence[ProcessInfo]:
         return self.manager.list(include_ended=include_ended)
@@ -167,15 +161,16 @@ class Kernel:
 
     async def launch(self, task: str, devices: list[str]) -> ProcessInfo:
         """A process the page launched (a card control), recorded and announced as the kernel's own are."""
-        info = await self.manager.launch(task, devices, before_start=self._launching_uncaused)
+        info = await self.manager.launch(task, devices, before_start=self.parts.launches.before_uncaused)
         data = {"process_id": info.id, "devices": info.devices, "state": info.state}
-        await self._updates.publish(
+        await self.updates.publish(
             "process_launched", f"process {info.id} launched with {', '.join(info.devices)}", data
         )
         return info
 
     async def devices(self) -> Sequence[DeviceView]:
-        await self.states.wanted()
+        states = self.parts.states
+        await states.wanted()
         running = self.manager.list()
         return [
             DeviceView(
@@ -185,7 +180,7 @@ class Kernel:
                 backend=self.world.instances[endpoint.name].backend,
                 status=endpoint.status,
                 url=endpoint.url,
-                state=self.states.get(endpoint.name),
+                state=states.get(endpoint.name),
                 description=endpoint.description,
                 held_by=[p.id for p in running if endpoint.name in p.devices],
                 card=self._card(endpoint.name),
@@ -203,77 +198,16 @@ class Kernel:
         card = self.world.instances[name].spec.card
         return card.view() if card else None
 
-    async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
-        self.manager.record_callback(callback)
-        await self._activity.record(event_id, callback.process_id, callback.receipts)
-        self.sightings.record_receipts(callback.receipts)  # the people its robots saw
-        if callback.process_id not in self._ended_published:
-            self._ended_published.add(callback.process_id)
-            text = f"process {callback.process_id} ended: {callback.status}"
-            if callback.error:
-                text += f" ({callback.error})"
-            await self._updates.publish(
-                "process_ended", text, callback.model_dump(mode="json"), event_id=event_id
-            )
-        # Forgotten only once its end is on the updates stream: a kill before this line leaves the
-        # record, and the restart publishes the committed callback (kernel/orphans.py).
-        await self._live.ended(callback.process_id)
-
     async def emergency_stop(self, reason: str) -> EmergencyStopReport:
-        """Terminate every process, call every device's safe_stop, and latch until reset.
-
-        The latch is in memory at once, and saved in the event store while the devices stop: the
-        stop never waits on the disk, and the answer comes once the latch survives a restart.
-        """
-        stopped = await self.manager.latch_emergency_stop(reason)
-        latch = self.manager.emergency_stop
-        assert latch is not None
-        outcomes, saved, untold = await asyncio.gather(
-            self.supervisor.safe_stop_all(), self._save_latch(latch), self._host_latches.push(True, reason)
-        )
-        await self._pending_stops.note(outcomes)  # an unreachable device is stopped when it is back
-        report = EmergencyStopReport(
-            latched=True,
-            reason=latch.reason,
-            time=latch.time,
-            terminated=[info.id for info in stopped],
-            devices=[DeviceSafeStop(name=o.instance, ok=o.ok, detail=o.detail) for o in outcomes],
-            saved=saved,
-            untold_hosts=untold,
-        )
-        await self._updates.publish("error", f"EMERGENCY STOP: {reason}", report.model_dump(mode="json"))
-        return report
+        """Terminate every process, call every device's safe_stop, and latch until reset."""
+        return await self.parts.estop.stop(reason)
 
     async def reset_emergency_stop(self) -> EmergencyStopState:
-        """Unlatch the emergency stop (a person decided it is safe).
-
-        The latch is cleared on disk first: if that fails, the stop stays latched and this raises.
-        """
-        latch = self.manager.emergency_stop
-        if latch is None:  # nothing to reset: say nothing on the updates stream
-            return self.emergency_stop_state()
-        await self._store.set_value(EMERGENCY_STOP_KEY, None)
-        if self.manager.emergency_stop is latch:  # not if a new stop came while the disk was busy
-            self.manager.reset_emergency_stop()
-            await self._host_latches.push(False)
-            await self._updates.publish("notice", "emergency stop reset: processes may run again", {})
-        return self.emergency_stop_state()
+        """Unlatch the emergency stop (a person decided it is safe)."""
+        return await self.parts.estop.reset()
 
     def emergency_stop_state(self) -> EmergencyStopState:
-        latch = self.manager.emergency_stop
-        untold = list(self._host_latches.untold)
-        if latch is None:
-            return EmergencyStopState(latched=False, untold_hosts=untold)
-        return EmergencyStopState(latched=True, reason=latch.reason, time=latch.time, untold_hosts=untold)
-
-    async def _save_latch(self, latch: EmergencyStop) -> bool:
-        """Save the latch for the next start; False (and a log entry) if the store failed."""
-        try:
-            await self._store.set_value(EMERGENCY_STOP_KEY, latch.model_dump(mode="json"))
-        except (sqlite3.Error, StoreClosedError):
-            log.exception("the emergency stop is latched, but could not be saved: a restart would forget it")
-            return False
-        return True
+        return self.parts.estop.state()
 
     # --- devices -----------------------------------------------------------------------------------
 
@@ -282,43 +216,11 @@ class Kernel:
 
         ``start`` returns without waiting for those (the Reachy simulator boots for seconds).
         """
-        if isinstance(self.supervisor, DeviceSupervisor):
-            await self.supervisor.settle(self.world.instances)
+        await self.parts.hosting.settle(self.world.instances)
 
     def endpoints(self) -> dict[str, DeviceEndpoint]:
-        """The world's devices as the process manager grants them.
-
-        Built again only when the supervisor's ``version`` says a device changed: a burst of
-        events then costs no walk over a hundred devices each (callers must not mutate it)."""
-        version = getattr(self.supervisor, "version", None)
-        if version is not None and self._endpoints is not None and self._endpoints[0] == version:
-            return self._endpoints[1]
-        endpoints = {}
-        for name, entry in self.supervisor.directory().items():
-            instance = self.world.instances[name]
-            spec = instance.spec
-            endpoints[name] = DeviceEndpoint(
-                name=name,
-                driver=spec.name,
-                concurrency=spec.concurrency,
-                always_attached=spec.always_attached,
-                description=instance.description,
-                prompt=spec.prompt,
-                url=entry.url,
-                token=entry.token or self._token,
-                status=entry.status,
-                confirm=self._confirm_rule(name),
-                attached_tools=tuple(spec.attached_tools),
-                attached_prompt=spec.attached_prompt,
-            )
-        if version is not None:
-            self._endpoints = (version, endpoints)
-        return endpoints
-
-    def _confirm_rule(self, name: str) -> ConfirmRule:
-        instance, configured = self.world.instances[name], self.config.devices.get(name)
-        own = configured.confirm if configured is not None else None
-        return confirm_rule(own, self.config.confirm, instance.backend, instance.spec.confirm_on_real)
+        """The world's devices as the process manager grants them (callers must not mutate it)."""
+        return self.parts.endpoints()
 
     # --- lifecycle ---------------------------------------------------------------------------------
 
@@ -330,154 +232,41 @@ class Kernel:
         sock = await _bind_or_explain(host, port, self._token)
         self.url = _base_url(sock)
         try:
-            await self._start_parts(sock)
+            self._parts = await build_parts(
+                self._shutdown,
+                config=self.config,
+                world=self.world,
+                models=self._models,
+                process_model=self._process_model,
+                worker_env=self._worker_env,
+                hosting=self._hosting,
+                token=self._token,
+                url=self.url,
+            )
+            await self._serve(sock)
         except BaseException:
             await self.stop()
             sock.close()
             raise
+        for name, work in self._parts.background().items():
+            self._tasks.append(asyncio.create_task(work, name=name))
         self._started = True
         write_atomic(kernel_file(self.data_dir), json.dumps({"url": self.url, "pid": os.getpid()}))
         return self.url
 
-    async def _start_parts(self, sock: socket.socket) -> None:
-        self._store = await EventStore.open(self.data_dir / EVENTS_FILE)
-        self._updates = await UpdateStream.open(self._store.database)
-        self._activity = await ActivityLog.open(self._store.database)
-        self.confirmations = ConfirmationDesk(
-            self.config.kernel.confirm_timeout,
-            lambda item: ask_people(self._updates, self.endpoints(), item),
-            record=lambda item: record_confirmation(self._activity, self._updates, item),
-        )
-        self._live = LiveProcesses(self._store)
-        self.timers = await TimerBook.open(self._store, self._updates.publish_event)
-        # A device that boots in the background (the Reachy simulator: seconds of CPU) waits until
-        # the other devices and the workers are up: on two cores it would otherwise delay them.
-        self.supervisor = self._hosting or DeviceSupervisor(
-            self.world, self.data_dir, self._token, defer_background=True
-        )
-        if isinstance(self.supervisor, DeviceSupervisor):
-            self.status_updates = DeviceStatusUpdates(self._updates, self.supervisor.host_of)
-            self.supervisor.on_status_change = self.status_updates.changed
-        kernel = self.config.kernel
-        pool = WorkerPool(
-            size=kernel.pool_size,
-            env=self._worker_env,
-            fork_server=kernel.fork_server,
-            max_workers=kernel.max_workers,
-        )
-        self.manager = ProcessManager(
-            devices=self.endpoints,
-            model=self._process_model,
-            base_prompt=base_process_prompt(self.config.kernel.process_prompt),
-            job_timeout=self.config.kernel.job_timeout,
-            request_limit=self.config.kernel.request_limit,
-            callback_url=f"{self.url}/event",
-            callback_token=self._token,
-            pool=pool,
-            on_ended=self._process_ended,
-            first_process_id=await self._store.next_process_id(),
-            emergency_stop=await _stored_emergency_stop(self._store),
-        )
-        # Devices (a robot simulator takes seconds to boot) and the warm workers (seconds of
-        # imports each) start side by side; neither needs the other until the first event.
-        try:
-            async with asyncio.TaskGroup() as group:
-                group.create_task(self.supervisor.start(), name="start devices")
-                group.create_task(self.manager.start(), name="start worker pool")
-        except BaseExceptionGroup as failed:
-            raise failed.exceptions[0] from None
-        # Before the loop can grant anything: devices a dead kernel's processes held get safe_stop,
-        # so one still starting in the background (the Reachy simulator) is waited for first.
-        if isinstance(self.supervisor, DeviceSupervisor):
-            self.supervisor.release_background()
-            await self.supervisor.settle({name for p in await self._live.left() for name in p.devices})
-        # Opened before orphan recovery: a callback it republishes records its sightings.
-        self.memory = MemoryStore.open(self.data_dir)
-        self.sightings = SightingLog(self.memory, self.config.memory.sightings_days)
-        self._pending_stops = PendingStops(
-            self._store,
-            self.supervisor.directory,
-            lambda text, data: self._updates.publish("notice", text, data),
-        )
-        await self._pending_stops.deliver()  # owed by the last run: a device that is back is stopped now
-        self._host_latches = HostLatches(self.supervisor.directory)
-        if self.manager.emergency_stop is not None:  # latched before the restart: so are the hosts
-            await self._host_latches.push(True, self.manager.emergency_stop.reason)
-        stops = await recover_orphans(
-            self._live,
-            self._store,
-            self.supervisor.directory(),
-            self._callback_committed,
-            remember=self.manager.remember,
-        )
-        await self._pending_stops.note(stops)
-        self.states = DeviceStateCache(self.endpoints)
-        current = CurrentEvent()
-        tools = build_kernel_tools(
-            self.manager,
-            self.endpoints,
-            current=current,
-            before_start=self._launching,
-            launched_before=self._live.launched_for,
-        )
-        add_timer_tools(tools, self.timers)
-        add_memory_tools(tools, self.memory, self.endpoints, self._launch, self.sightings)
-        if self._models.local is not None:
-            self._models.local.memory = self.memory
-        self.stopper = Stopper(
-            self.manager, self.endpoints, lambda name: self.world.instances[name].spec.halts
-        )
-        add_stop_tools(tools, self.stopper, self.manager, self.endpoints)
-        agent = build_kernel_agent(self._models.kernel, tools)
-        self.loop = KernelLoop(
-            self._store,
-            self._updates,
-            agent,
-            instructions=lambda: (
-                kernel_prompt(self.endpoints().values(), self.config.kernel.kernel_prompt)
-                + memory_summary(self.memory)
-            ),
-            model=self._model_for_event,
-            history_budget=self.config.kernel.history_messages,
-            current=current,
-            history_chars=self.config.kernel.history_chars,
-            relay_reports=self.config.kernel.relay_reports,
-        )
-        self.loop.before = lambda event: answer_from_chat(self.confirmations, event)
-        app = create_app(
-            self,
-            allowed_hosts=[*kernel.allow_hosts, *bound_hosts(sock.getsockname()[0])],
-            images_dir=self.data_dir / "images",
-        )
+    async def _serve(self, sock: socket.socket) -> None:
+        """Start the HTTP API on ``sock``; return once it accepts connections."""
+        allowed = [*self.config.kernel.allow_hosts, *bound_hosts(sock.getsockname()[0])]
+        app = create_app(self, allowed_hosts=allowed, images_dir=self.data_dir / "images")
         config = uvicorn.Config(app, log_level="warning", lifespan="on", timeout_graceful_shutdown=3)
         self._server = uvicorn.Server(config)
-        self._tasks.append(asyncio.create_task(self._server.serve(sockets=[sock]), name="kernel api"))
+        serving = asyncio.create_task(self._server.serve(sockets=[sock]), name="kernel api")
+        self._tasks.append(serving)
         while not self._server.started:
-            if self._tasks[-1].done():
-                self._tasks[-1].result()
+            if serving.done():
+                serving.result()
                 raise KernelError("the kernel API stopped during start-up")
             await asyncio.sleep(0.01)
-        self._tasks.append(asyncio.create_task(self.states.run(), name="device states"))
-        self.notices = NoticeWatcher(self.endpoints, self._enqueue_notice)
-        self._tasks.append(asyncio.create_task(self.notices.run(), name="device notices"))
-        self._tasks.append(asyncio.create_task(self._pending_stops.run(), name="pending safe stops"))
-        self._tasks.append(asyncio.create_task(self._host_latches.run(), name="host latches"))
-        self._tasks.append(asyncio.create_task(self._run_loop(), name="kernel loop"))
-        # Timers that fell due while the kernel was down fire now, once, and say they are late.
-        self._tasks.append(asyncio.create_task(self.timers.run(), name="timers"))
-
-    def _model_for_event(self, event: Event) -> Model | None:
-        return self._models.for_event(event)
-
-    async def _run_loop(self) -> None:
-        try:
-            await self.loop.run_forever()
-        except asyncio.CancelledError:
-            raise
-        except Exception:  # the loop must not die silently: say so where the user looks
-            log.exception("the kernel loop stopped")
-            await self._updates.publish("error", "the kernel loop stopped; see the console log")
-            raise
 
     async def stop(self) -> None:
         """Shut everything down: no orphan processes; unhandled events stay queued for next time."""
@@ -488,12 +277,7 @@ class Kernel:
                 task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)
         self._tasks.clear()
-        if hasattr(self, "manager"):
-            await self.manager.stop()
-        if hasattr(self, "supervisor"):
-            await self.supervisor.stop()
-        if hasattr(self, "_store"):
-            await self._store.close()
+        await self._shutdown.aclose()  # the pool, then the devices, then the event store
         if self._started and running_kernel_url(self.data_dir) == self.url:
             kernel_file(self.data_dir).unlink(missing_ok=True)
         self._started = False
@@ -501,51 +285,6 @@ class Kernel:
     def login_link(self) -> str:
         """A fresh one-time link that logs the web page in."""
         return login_url(self.url + "/", self.login_codes.mint())
-
-    async def _process_ended(self, callback: WorkerCallback, delivered: bool) -> None:
-        """The pool saw a process end. If its worker could not post the callback, enqueue it here."""
-        if delivered:
-            return
-        event = WorkerCallbackEvent(
-            kind="worker_callback",
-            source="kernel",
-            payload=callback,
-            idempotency_key=callback_idempotency_key(callback.process_id),
-        )
-        appended = await self._store.append(event)
-        if not appended.duplicate:
-            await self._updates.publish_event(appended.id, event)
-        await self.worker_callback_recorded(appended.id, callback)
-
-    async def _callback_committed(self, event_id: int, event: WorkerCallbackEvent) -> None:
-        """A callback the kernel wrote itself (for an orphan): on the updates stream, then recorded."""
-        await self._updates.publish_event(event_id, event)
-        await self.worker_callback_recorded(event_id, event.payload)
-
-    async def _enqueue_notice(self, event: DeviceNoticeEvent) -> None:
-        """A device notice the filter let through: into the queue, and onto the updates stream."""
-        appended = await self._store.append(event)
-        if not appended.duplicate:
-            await self._updates.publish_event(appended.id, event)
-
-    async def _launch(self, task: str, devices: list[str]) -> ProcessInfo:
-        """Launch a process as ``launch_process`` does (a memory tool's: drive to a place)."""
-        return await self.manager.launch(task, devices, before_start=self._launching_uncaused)
-
-    async def _launching_uncaused(self, info: ProcessInfo) -> None:
-        """Before a worker has the job of a launch no event step caused (a card control, a memory
-        tool): recorded for orphan recovery all the same."""
-        await self._launching(info, None)
-
-    async def _launching(self, info: ProcessInfo, cause: LaunchCause | None) -> None:
-        """Before a worker has the job: keep ids unique across restarts, and remember the process
-        and its cause until its end is recorded. A crash after this line leaves an orphan record."""
-        try:
-            await self._pending_stops.before_grant(info.devices)
-        except StopUndelivered as owed:
-            raise LaunchRefused(str(owed)) from None
-        await self._store.note_process_id(info.id)
-        await self._live.launched(info, cause)
 
 
 def _base_url(sock: socket.socket) -> str:
@@ -572,24 +311,6 @@ async def _bind_or_explain(host: str, port: int, token: str) -> socket.socket:
                 "use `rosaos chat` to talk to it, or stop it first, or start this one with --port"
             )
     raise KernelError(f"port {port} on {host} is in use by another program; start rosaOS with --port N")
-
-
-async def _stored_emergency_stop(store: EventStore) -> EmergencyStop | None:
-    """The emergency stop latched before this start, if any.
-
-    A stored latch this version cannot read stays latched (with a reason saying so): only a
-    person may unlatch it.
-    """
-    stored = await store.get_value(EMERGENCY_STOP_KEY)
-    if stored is None:
-        return None
-    try:
-        return EmergencyStop.model_validate(stored)
-    except ValidationError:
-        return EmergencyStop(
-            reason=f"a stored emergency stop could not be read ({json.dumps(stored)[:200]})",
-            time=datetime.now(UTC),
-        )
 
 
 def events_path(data_dir: Path) -> Path:

@@ -1,9 +1,9 @@
 """Durable timers: "turn off the light in ten minutes", kept in the kernel's event store.
 
 A timer is a row in the ``timers`` table of the same SQLite file as the events, so it survives
-a restart (and a ``kill -9``). :class:`TimerBook` fires a due timer by appending a
-``timer_fired`` event with the idempotency key ``timer-<id>`` and only then marking the row
-fired. A crash between the two leaves the row pending; the next start appends again, the key
+a restart (and a ``kill -9``). :class:`TimerBook` fires a due timer by queueing a
+``timer_fired`` event with the idempotency key ``timer-<id>`` (through the kernel's intake,
+:mod:`rosaos.kernel.intake`) and only then marking the row fired. A crash between the two leaves the row pending; the next start appends again, the key
 answers the first event's id, and nothing is queued twice: a timer fires exactly once. The
 kernel handles that event like a command (its action becomes a process). A timer that fell due
 while the kernel was down fires once at start-up, and its event says how late it is.
@@ -22,7 +22,8 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field
 
-from rosaos.kernel.events import EventStore, TimerFired, TimerFiredEvent
+from rosaos.kernel.events import EventStore, NewEvent, TimerFired, TimerFiredEvent
+from rosaos.kernel.intake import Queued
 
 log = logging.getLogger(__name__)
 
@@ -71,33 +72,30 @@ class TimerError(ValueError):
     """A timer that cannot be set or cancelled; the message says why and what to do."""
 
 
+Enqueue = Callable[[NewEvent], Awaitable[Queued]]
+"""How a firing is queued: the kernel's :meth:`~rosaos.kernel.intake.Intake.submit`."""
+
+
 class TimerBook:
     """The kernel's timers: set, list, cancel, and fire them when due (:meth:`run`).
 
-    ``on_fired(event_id, event)`` runs after a firing is queued (the kernel publishes the event on
-    the updates stream). All access goes through one lock, so a cancel and a firing never cross.
+    ``enqueue`` queues a firing: the running kernel passes its intake, the one way into the
+    queue. A book opened without it (``rosaos timers`` on the store of a stopped kernel) sets,
+    lists and cancels, but does not fire. All access goes through one lock, so a cancel and a
+    firing never cross.
     """
 
-    def __init__(
-        self,
-        store: EventStore,
-        on_fired: Callable[[int, TimerFiredEvent], Awaitable[object]] | None = None,
-    ) -> None:
-        self._store = store
+    def __init__(self, store: EventStore, enqueue: Enqueue | None = None) -> None:
         self._database = store.database
-        self._on_fired = on_fired
+        self._enqueue = enqueue
         self._lock = asyncio.Lock()
         self._changed = asyncio.Event()
 
     @classmethod
-    async def open(
-        cls,
-        store: EventStore,
-        on_fired: Callable[[int, TimerFiredEvent], Awaitable[object]] | None = None,
-    ) -> TimerBook:
+    async def open(cls, store: EventStore, enqueue: Enqueue | None = None) -> TimerBook:
         """Create the table if needed; the book shares the event store's connection and thread."""
         await store.database.executescript(_SCHEMA)
-        return cls(store, on_fired)
+        return cls(store, enqueue)
 
     async def set(self, action: str, due: datetime) -> Timer:
         """Add a timer that runs ``action`` at ``due`` (aware datetime). Raises :class:`TimerError`."""
@@ -165,6 +163,11 @@ class TimerBook:
 
     async def fire_due(self, now: datetime | None = None) -> list[int]:
         """Queue a ``timer_fired`` event for every pending timer due by ``now``; return the event ids."""
+        if self._enqueue is None:
+            raise TimerError(
+                "this timer book was opened without the kernel's intake: only the kernel fires timers"
+            )
+        enqueue = self._enqueue
         moment = (now or datetime.now(UTC)).timestamp()
         fired: list[int] = []
         async with self._lock:
@@ -177,14 +180,12 @@ class TimerBook:
                 event = fired_event(timer, datetime.fromtimestamp(moment, UTC))
                 # The key makes this safe to repeat: a crash before the UPDATE below re-appends
                 # at the next start and gets the first event's id back.
-                appended = await self._store.append(event)
+                queued = await enqueue(event)
                 await self._database.execute(
                     "UPDATE timers SET state = 'fired', settled_at = ?, event_id = ? WHERE id = ?",
-                    (moment, appended.id, timer.id),
+                    (moment, queued.id, timer.id),
                 )
-                if not appended.duplicate and self._on_fired is not None:
-                    await self._on_fired(appended.id, event)
-                fired.append(appended.id)
+                fired.append(queued.id)
         return fired
 
     async def seconds_to_next(self) -> float | None:

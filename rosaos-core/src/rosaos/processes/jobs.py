@@ -1,7 +1,7 @@
-"""The messages that cross process boundaries: a job sent to a worker, and the callback it posts.
+"""The messages that cross process boundaries: a job sent to a worker, and the callback it ends with.
 
-Both are pydantic models because they travel as JSON: a job over the worker's stdin pipe, a
-callback over HTTP to the kernel's ``POST /event``.
+Both are pydantic models because they travel as JSON over the worker's pipes: a job on its stdin,
+the callback inside the ``done`` message on its stdout (:mod:`rosaos.processes.protocol`).
 """
 
 from __future__ import annotations
@@ -50,9 +50,9 @@ class WorkerJob(BaseModel):
     base_prompt: str
     timeout: float = Field(gt=0)
     request_limit: int = Field(ge=1)
-    callback_url: str
-    """The kernel's ``POST /event`` URL."""
-    callback_token: str
+    kernel_url: str
+    """The kernel API's base URL, where the worker asks a person to confirm a tool call."""
+    kernel_token: str
     world_devices: list[str] = Field(default_factory=list)
     """Every device of the world, so a call to one the process was not granted can be named."""
 
@@ -65,9 +65,8 @@ class WorkerCallback(BaseModel):
     process_id: int = Field(
         ge=1,
         description="The process id that launch_process returned.",
-        # ``worker_id`` was this field's old name (it always held a process id): a worker or
-        # script that still posts it to ``POST /event`` is understood. Deprecated: send
-        # ``process_id``; events are stored and shown with ``process_id``.
+        # ``worker_id`` was this field's old name (it always held a process id): a stored event
+        # that still has it is understood. Events are stored and shown with ``process_id``.
         validation_alias=AliasChoices("process_id", "worker_id"),
     )
     status: ProcessStatus
@@ -84,7 +83,7 @@ class WorkerCallback(BaseModel):
 def callback_idempotency_key(process_id: int) -> str:
     """The idempotency key of a process's ``worker_callback`` event.
 
-    The worker posts its callback with this key; when it could not, the process manager enqueues
-    the callback itself with the same key, so a callback that did arrive is not handled twice.
+    The kernel enqueues a process's end with this key, both from the pool and from orphan recovery
+    after a restart, so an end is queued once even when both report it.
     """
     return f"process-{process_id}"

@@ -1,15 +1,10 @@
 """The process manager: what the kernel agent's tools call to launch, list and terminate processes.
 
 ``launch`` takes the leases first (a refusal never reaches the pool), then hands the job to the
-worker pool and returns at once with the process id. A process ends in one of two ways, and the
-first one to arrive wins (the other is a no-op):
-
-- the kernel commits the process's ``worker_callback`` event and calls :meth:`record_callback`;
-- the pool reports the end (``done`` line, crash, timeout, terminate) through its ``on_ended``.
-
-Either way the process is marked ended and its leases are released. The pool's report is then
-passed on to the kernel's ``on_ended``, which enqueues the callback when the worker could not
-deliver it itself, so no ending is lost.
+worker pool and returns at once with the process id. A process's end has one route: the pool
+reports it (``done`` message, crash, timeout, terminate) through its ``on_ended``, exactly once.
+The manager marks the process ended, releases its leases, and passes the callback on to the
+kernel's ``on_ended``, which enqueues it as a ``worker_callback`` event.
 """
 
 from __future__ import annotations
@@ -18,7 +13,7 @@ import builtins
 import logging
 from collections.abc import Awaitable, Callable, Mapping
 from datetime import UTC, datetime
-from typing import Any, Literal
+from typing import Literal
 
 from pydantic import BaseModel
 
@@ -28,6 +23,7 @@ from rosaos.processes.forking import preload_modules
 from rosaos.processes.jobs import GrantedDevice, WorkerCallback, WorkerJob
 from rosaos.processes.leases import LeaseRefused, LeaseTable
 from rosaos.processes.pool import PoolError, WorkerPool
+from rosaos.processes.protocol import Progress
 
 log = logging.getLogger("rosaos.processes.manager")
 
@@ -87,10 +83,10 @@ class ProcessManager:
         base_prompt: str,
         job_timeout: float,
         request_limit: int,
-        callback_url: str,
-        callback_token: str,
+        kernel_url: str,
+        kernel_token: str,
         pool: WorkerPool,
-        on_ended: Callable[[WorkerCallback, bool], Awaitable[None]],
+        on_ended: Callable[[WorkerCallback], Awaitable[None]],
         first_process_id: int = 1,
         emergency_stop: EmergencyStop | None = None,
     ) -> None:
@@ -101,8 +97,8 @@ class ProcessManager:
         self._base_prompt = base_prompt
         self._job_timeout = job_timeout
         self._request_limit = request_limit
-        self._callback_url = callback_url
-        self._callback_token = callback_token
+        self._kernel_url = kernel_url
+        self._kernel_token = kernel_token
         self._pool = pool
         self._on_ended = on_ended
         self._next_id = first_process_id
@@ -191,8 +187,8 @@ class ProcessManager:
             base_prompt=self._base_prompt,
             timeout=self._job_timeout,
             request_limit=self._request_limit,
-            callback_url=self._callback_url,
-            callback_token=self._callback_token,
+            kernel_url=self._kernel_url,
+            kernel_token=self._kernel_token,
             world_devices=sorted(endpoints),
         )
         info = ProcessInfo(id=process_id, task=task, devices=granted, state="running", started_at=_now())
@@ -242,21 +238,18 @@ class ProcessManager:
         """One process by id; ``KeyError`` with a readable message for an unknown id."""
         return self._get(process_id).model_copy()
 
-    def record_progress(self, process_id: int, line: dict[str, Any]) -> None:
-        """Keep a running process's latest progress line (from its worker); others are ignored."""
-        info = self._processes.get(process_id)
+    def record_progress(self, progress: Progress) -> None:
+        """Keep a running process's latest progress (from its worker); others are ignored."""
+        info = self._processes.get(progress.process_id)
         if info is None or info.state != "running":
             return
-        try:
-            info.progress = ProcessProgress(
-                device=str(line.get("device", "")),
-                progress=float(line.get("progress", 0.0)),
-                total=float(line["total"]) if line.get("total") is not None else None,
-                message=str(line.get("message") or "")[:500],
-                at=datetime.now(UTC),
-            )
-        except (TypeError, ValueError):
-            log.warning("process %d: a progress line that does not read: %s", process_id, line)
+        info.progress = ProcessProgress(
+            device=progress.device,
+            progress=progress.progress,
+            total=progress.total,
+            message=progress.message,
+            at=datetime.now(UTC),
+        )
 
     def _worker_started(self, process_id: int, worker_pid: int) -> None:
         """A queued process got its worker (the pool had ``max_workers`` running when it launched)."""
@@ -267,8 +260,8 @@ class ProcessManager:
     def record_callback(self, callback: WorkerCallback) -> None:
         """Mark the process ended as ``callback`` says and release its leases. Idempotent.
 
-        The kernel calls this when it commits a ``worker_callback`` event. A callback for a process
-        this manager does not know (from before a restart) is ignored.
+        Called for every end the pool reports, and by the kernel for an orphan's end after a
+        restart. A callback for a process this manager does not know is ignored.
         """
         self._end(callback.process_id, callback.status)
 
@@ -278,9 +271,9 @@ class ProcessManager:
         Its end comes next, through :meth:`record_callback`, from the kernel's orphan recovery."""
         self._processes.setdefault(info.id, info.model_copy())
 
-    async def _worker_ended(self, callback: WorkerCallback, delivered: bool) -> None:
+    async def _worker_ended(self, callback: WorkerCallback) -> None:
         self.record_callback(callback)
-        await self._on_ended(callback, delivered)
+        await self._on_ended(callback)
 
     def _end(self, process_id: int, state: ProcessState) -> None:
         info = self._processes.get(process_id)

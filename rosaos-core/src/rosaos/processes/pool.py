@@ -38,6 +38,7 @@ from typing import Any, Literal
 from rosaos.processes.capacity import default_max_workers
 from rosaos.processes.forking import ForkServer, ForkServerError
 from rosaos.processes.jobs import WorkerCallback, WorkerJob
+from rosaos.processes.protocol import Progress
 from rosaos.processes.watcher import OnEnded, Watcher, Worker, WorkerProcess, describe_exit, ended
 
 log = logging.getLogger(__name__)
@@ -105,10 +106,10 @@ class WorkerPool:
         self.python = python
         self.on_ended = on_ended
         """Where job ends are reported; the process manager sets it."""
-        self.on_progress: Callable[[int, dict[str, Any]], None] | None = None
+        self.on_progress: Callable[[Progress], None] | None = None
+        """Where a running job's progress messages go; the manager sets it."""
         self.on_started: Callable[[int, int], None] | None = None
         """Called as (process id, worker pid) when a queued job gets its worker."""
-        """Where a running job's progress lines go (``process_id``, the line); the manager sets it."""
         self.kill_grace = kill_grace
         self.start_timeout = start_timeout
         self._env = {**os.environ, **(env or {})}
@@ -216,16 +217,14 @@ class WorkerPool:
             handle = await self._start_job(job)
         except PoolError as failure:
             self._running.discard(job.process_id)
-            await self._report(
-                ended(job, "error", f"could not start a worker for the process: {failure}"), False
-            )
+            await self._report(ended(job, "error", f"could not start a worker for the process: {failure}"))
             return
         if self.on_started is not None and handle.worker_pid is not None:
             self.on_started(job.process_id, handle.worker_pid)
 
-    def _progress(self, process_id: int, line: dict[str, Any]) -> None:
+    def _progress(self, progress: Progress) -> None:
         if self.on_progress is not None:
-            self.on_progress(process_id, line)
+            self.on_progress(progress)
 
     async def terminate(self, process_id: int) -> bool:
         """Kill the worker running ``process_id`` and wait until its end is reported.
@@ -235,7 +234,7 @@ class WorkerPool:
         for job in self._queue:
             if job.process_id == process_id:
                 self._queue.remove(job)
-                await self._report(ended(job, "terminated", "the process was terminated on request"), False)
+                await self._report(ended(job, "terminated", "the process was terminated on request"))
                 return True
         worker = self._worker_for(process_id)
         if worker is None:
@@ -251,7 +250,7 @@ class WorkerPool:
         self._stopping = True
         while self._queue:
             job = self._queue.popleft()
-            await self._report(ended(job, "terminated", "rosaOS stopped before the process started"), False)
+            await self._report(ended(job, "terminated", "rosaOS stopped before the process started"))
         for task in list(self._spawning):
             task.cancel()
         await asyncio.gather(*self._spawning, return_exceptions=True)
@@ -403,7 +402,7 @@ class WorkerPool:
         )
         return delay
 
-    async def _report(self, callback: WorkerCallback, delivered: bool) -> None:
+    async def _report(self, callback: WorkerCallback) -> None:
         """Pass a job's end on to ``on_ended`` (the watcher calls this once per job); start the next."""
         self._running.discard(callback.process_id)
         self._cancelled.discard(callback.process_id)
@@ -412,7 +411,7 @@ class WorkerPool:
             log.info("process %d ended: %s", callback.process_id, callback.status)
             return
         try:
-            await self.on_ended(callback, delivered)
+            await self.on_ended(callback)
         except Exception:
             log.exception("on_ended failed for process %d", callback.process_id)
 

@@ -1,10 +1,10 @@
 """The worker watcher: what the pool knows about each worker process, and the task that watches it.
 
-Each worker runs in its own process group and is watched by one task that reads its protocol
-lines (see :mod:`rosaos.processes.worker`) and notices when it exits. That watcher is the only
+Each worker runs in its own process group and is watched by one task that reads its typed
+messages (:mod:`rosaos.processes.protocol`) and notices when it exits. That watcher is the only
 place a job's end is reported, so each job is reported exactly once, to the pool's ``on_ended``:
 
-- ``done`` line: the worker's own callback, and whether the worker delivered it to the kernel.
+- ``done`` message: the worker's own callback.
 - the process exits mid-job: ``crashed`` (with its exit code or signal), unless the pool killed
   it on purpose: ``timeout`` (the job overran ``timeout + kill_grace``) or ``terminated``.
 
@@ -17,7 +17,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import logging
 import os
 import signal
@@ -27,11 +26,12 @@ from typing import Any, Protocol
 from pydantic import ValidationError
 
 from rosaos.processes.jobs import ProcessStatus, WorkerCallback, WorkerJob
+from rosaos.processes.protocol import WORKER_MESSAGE, Done, Progress, Ready, Rejected
 
 log = logging.getLogger(__name__)
 
-OnEnded = Callable[[WorkerCallback, bool], Awaitable[None]]
-"""Called once per job with its callback and whether the worker already delivered it by HTTP."""
+OnEnded = Callable[[WorkerCallback], Awaitable[None]]
+"""Called once per job with the callback that says how it ended."""
 
 RETIRE_GRACE = 5.0
 """Seconds a worker that closed its stdout (retired, or broken) gets to exit before it is killed."""
@@ -111,7 +111,7 @@ class Watcher:
         ready: Callable[[Worker], None],
         gone: Callable[[Worker], None],
         exited: Callable[[Worker, int], None],
-        progress: Callable[[int, dict[str, Any]], None] | None = None,
+        progress: Callable[[Progress], None] | None = None,
     ) -> None:
         self._report = report
         self._progress = progress
@@ -161,42 +161,47 @@ class Watcher:
 
     async def _on_line(self, worker: Worker, line: bytes) -> None:
         try:
-            event = json.loads(line)
-        except json.JSONDecodeError:
-            log.warning("worker %d wrote a non-protocol line: %r", worker.pid, line[:200])
+            message = WORKER_MESSAGE.validate_json(line)
+        except ValidationError as invalid:  # a stray line, or a worker from another rosaOS version
+            await self._on_invalid(worker, line, invalid)
             return
-        kind = event.get("event")
-        if kind == "ready":
+        if isinstance(message, Ready):
             worker.ready_seen = True
             worker.ready.set()
             self._ready(worker)
-        elif kind == "done":
-            await self._on_done(worker, event)
-        elif kind == "progress" and self._progress is not None:
+        elif isinstance(message, Done):
+            await self._on_done(worker, message)
+        elif isinstance(message, Progress):
             job = worker.job
-            if job is not None and event.get("process_id") == job.process_id:
-                self._progress(job.process_id, event)
-        elif kind == "rejected" and worker.job is not None:
+            if self._progress is not None and job is not None and message.process_id == job.process_id:
+                self._progress(message)
+        elif isinstance(message, Rejected) and worker.job is not None:
             job, worker.job = worker.job, None
             worker.cancel_deadline()
-            await self._report(
-                ended(job, "error", f"the worker rejected the job: {event.get('error')}"), False
-            )
+            await self._report(ended(job, "error", f"the worker rejected the job: {message.error}"))
 
-    async def _on_done(self, worker: Worker, event: dict[str, Any]) -> None:
+    async def _on_done(self, worker: Worker, done: Done) -> None:
         job = worker.job
-        if job is None or event.get("process_id") != job.process_id:
-            log.warning("worker %d reported an unexpected job end: %s", worker.pid, event)
+        if job is None or done.process_id != job.process_id or done.callback.process_id != job.process_id:
+            log.warning("worker %d reported an unexpected job end: %s", worker.pid, done)
             return
         worker.job = None
         worker.cancel_deadline()
-        try:
-            callback = WorkerCallback.model_validate(event.get("callback"))
-        except ValidationError as invalid:  # a worker from another rosaOS version, say
-            callback = ended(job, "error", f"the worker sent an invalid callback: {invalid}")
         if worker.one_off:
             worker.retire()
-        await self._report(callback, bool(event.get("delivered")))
+        await self._report(done.callback)
+
+    async def _on_invalid(self, worker: Worker, line: bytes, invalid: ValidationError) -> None:
+        """A line that is no protocol message is logged; one that meant to end the job ends it as an error."""
+        log.warning("worker %d wrote a line that is not a protocol message: %r", worker.pid, line[:200])
+        job = worker.job
+        if job is None or not line.lstrip().startswith(b'{"event":"done"'):
+            return
+        worker.job = None
+        worker.cancel_deadline()
+        if worker.one_off:
+            worker.retire()
+        await self._report(ended(job, "error", f"the worker sent an invalid end of the process: {invalid}"))
 
     async def _report_killed(self, worker: Worker, job: WorkerJob, returncode: int) -> None:
         if worker.kill_reason == "timeout":
@@ -211,7 +216,7 @@ class Watcher:
                 f"({describe_exit(returncode)}); the task may be half done, so check the "
                 "devices' state before retrying"
             )
-        await self._report(ended(job, status, error), False)
+        await self._report(ended(job, status, error))
 
 
 def describe_exit(returncode: int) -> str:

@@ -4,12 +4,11 @@ A worker is long-lived so the pool can keep it warm: the heavy imports (pydantic
 happen once, at start-up. The protocol with the pool is one JSON object per line:
 
 - stdin, pool to worker: a :class:`~rosaos.processes.jobs.WorkerJob`.
-- stdout, worker to pool: ``{"event": "ready"}`` once the imports are done, then for each job
-  ``{"event": "done", "process_id": N, "delivered": bool, "callback": {...}}`` after the
-  callback was posted to the kernel (``delivered`` false means the pool must enqueue it), or
-  ``{"event": "rejected", "error": ...}`` for a line that is not a valid job; while a job runs,
-  ``{"event": "progress", "process_id": N, "device", "progress", "total", "message"}`` for each
-  MCP progress notification a device tool sends (a long task such as a robot's search).
+- stdout, worker to pool: the typed messages of :mod:`rosaos.processes.protocol`: ``ready`` once
+  the imports are done, ``progress`` for each MCP progress notification a device tool sends while
+  a job runs, ``done`` with the :class:`~rosaos.processes.jobs.WorkerCallback` when it ends, or
+  ``rejected`` for a line that is not a valid job. ``done`` is the only way a process's end
+  reaches the kernel.
 
 stdout carries protocol lines only: the real stdout is kept for them and fd 1 is pointed at
 stderr, so a stray ``print`` in a library cannot corrupt the protocol. Logs go to stderr.
@@ -21,7 +20,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import json
 import logging
 import os
 import sys
@@ -44,17 +42,12 @@ from rosaos.models.process_model import LocalPlanModel
 from rosaos.models.select import ModelError, build_model
 from rosaos.processes.confirming import ConfirmationDeclined, ConfirmingToolset, KernelAsker
 from rosaos.processes.final_call import FINAL_CALL_MODEL, FinalCallModel
-from rosaos.processes.jobs import (
-    GrantedDevice,
-    ProcessStatus,
-    WorkerCallback,
-    WorkerJob,
-    callback_idempotency_key,
-)
+from rosaos.processes.jobs import GrantedDevice, ProcessStatus, WorkerCallback, WorkerJob
 from rosaos.processes.keepalive import DeadlineToolset, DeviceLink, keepalives, owner_headers
 from rosaos.processes.lease_guard import LeaseGuardModel
 from rosaos.processes.plan_runner import run_plan
 from rosaos.processes.prompts import process_system_prompt, tool_prefix
+from rosaos.processes.protocol import Done, Progress, Ready, Rejected, encode
 from rosaos.processes.recording import RecordingToolset
 from rosaos.processes.tool_calls import ToolCallLog, observed
 from rosaos.processes.tool_list import DeviceTools
@@ -65,9 +58,6 @@ log = logging.getLogger("rosaos.processes.worker")
 
 CONNECT_TIMEOUT = 10.0
 """Seconds to open an MCP session with one granted device."""
-CALLBACK_RETRY_DELAYS = (0.0, 0.25, 1.0)
-"""Delays before each attempt to post the callback; after the last, the pool enqueues it."""
-CALLBACK_TIMEOUT = 5.0
 ORPHAN_STOP_TIMEOUT = 3.0
 """Seconds each device's ``safe_stop`` may take when the kernel died under a running job."""
 LINE_LIMIT = 16 * 1024 * 1024
@@ -213,13 +203,13 @@ SESSIONS = DeviceSessions()
 
 
 class ProgressRelay:
-    """Passes a device tool's MCP progress notifications to the pool as ``progress`` lines.
+    """Passes a device tool's MCP progress notifications to the pool as :class:`Progress` lines.
 
     Device sessions outlive jobs, so the relay, not the session, knows which process runs now.
     """
 
     def __init__(self) -> None:
-        self.send: Callable[[dict[str, Any]], None] | None = None
+        self.send: Callable[[Progress], None] | None = None
         self.process_id: int | None = None
 
     def handler(self, device: str) -> Callable[[float, float | None, str | None], Awaitable[None]]:
@@ -228,14 +218,13 @@ class ProgressRelay:
         async def relay(progress: float, total: float | None, message: str | None) -> None:
             if self.send is not None and self.process_id is not None:
                 self.send(
-                    {
-                        "event": "progress",
-                        "process_id": self.process_id,
-                        "device": device,
-                        "progress": progress,
-                        "total": total,
-                        "message": (message or "")[:500],
-                    }
+                    Progress(
+                        process_id=self.process_id,
+                        device=device,
+                        progress=progress,
+                        total=total,
+                        message=(message or "")[:500],
+                    )
                 )
 
         return relay
@@ -263,7 +252,7 @@ async def _run_agent_linked(
     recorded = receipts if receipts is not None else []
     try:
         toolsets: list[AbstractToolset[Any]] = []
-        asker = KernelAsker(job.callback_url.removesuffix("/event"), job.callback_token, job.process_id)
+        asker = KernelAsker(job.kernel_url, job.kernel_token, job.process_id)
         for device in job.devices:
             session = await SESSIONS.toolset(device, image_budget_for(job.model, model))
             bounded = DeadlineToolset(wrapped=session, link=links.get(device.name))
@@ -371,44 +360,6 @@ def count_usage(messages: Sequence[ModelMessage]) -> tuple[int, int]:
     return len(asked), sum(len(response.tool_calls) for response in responses)
 
 
-def callback_event(callback: WorkerCallback) -> dict[str, Any]:
-    """The ``POST /event`` body that carries ``callback`` to the kernel."""
-    return {
-        "kind": "worker_callback",
-        "source": "worker",
-        "payload": callback.model_dump(mode="json"),
-        "idempotency_key": callback_idempotency_key(callback.process_id),
-    }
-
-
-async def deliver_callback(job: WorkerJob, callback: WorkerCallback) -> bool:
-    """Post ``callback`` to the kernel, retrying briefly. False if it did not get through."""
-    headers = {"Authorization": f"Bearer {job.callback_token}"}
-    body = callback_event(callback)
-    async with httpx.AsyncClient(timeout=CALLBACK_TIMEOUT) as http:
-        for delay in CALLBACK_RETRY_DELAYS:
-            await asyncio.sleep(delay)
-            try:
-                response = await http.post(job.callback_url, json=body, headers=headers)
-            except httpx.HTTPError as failure:
-                log.warning(
-                    "process %d: callback to %s failed: %s", job.process_id, job.callback_url, failure
-                )
-                continue
-            if response.is_success:
-                return True
-            log.warning(
-                "process %d: kernel answered %d to the callback: %s",
-                job.process_id,
-                response.status_code,
-                response.text[:200],
-            )
-            # Only a server-side or throttling failure may go away on retry.
-            if response.status_code < 500 and response.status_code not in (408, 429):
-                return False
-    return False
-
-
 class ProtocolWriter:
     """Writes protocol lines to the worker's real stdout; everything else printed goes to stderr."""
 
@@ -418,9 +369,9 @@ class ProtocolWriter:
         os.dup2(2, 1)
         sys.stdout = sys.stderr
 
-    def send(self, event: dict[str, Any]) -> None:
-        """Write one event line. A small write to a pipe the pool always drains; it does not block."""
-        self._stream.write(json.dumps(event) + "\n")
+    def send(self, message: Ready | Progress | Done | Rejected) -> None:
+        """Write one message line. A small write to a pipe the pool always drains; it does not block."""
+        self._stream.write(encode(message))
         self._stream.flush()
 
 
@@ -443,6 +394,9 @@ async def _run_while_owned(job: WorkerJob, reader: asyncio.StreamReader) -> Work
     await asyncio.wait({running, ended}, return_when=asyncio.FIRST_COMPLETED)
     if running.done():
         ended.cancel()
+        # Wait until the read is really off the stream, or the next readline() finds it still there.
+        with contextlib.suppress(asyncio.CancelledError):
+            await ended
         return running.result()
     log.warning("process %d: the kernel is gone; stopping the job and its devices", job.process_id)
     running.cancel()
@@ -471,7 +425,7 @@ async def safe_stop_devices(devices: Sequence[GrantedDevice], timeout: float = O
 async def serve(protocol: ProtocolWriter) -> None:
     """Announce readiness, then run each job read from stdin until stdin closes."""
     reader = await _stdin_reader()
-    protocol.send({"event": "ready", "pid": os.getpid()})
+    protocol.send(Ready(pid=os.getpid()))
     PROGRESS.send = protocol.send
     while line := await reader.readline():
         if not line.strip():
@@ -480,7 +434,7 @@ async def serve(protocol: ProtocolWriter) -> None:
             job = WorkerJob.model_validate_json(line)
         except ValidationError as invalid:
             log.error("rejected a job that is not a valid WorkerJob: %s", invalid)
-            protocol.send({"event": "rejected", "error": f"not a valid WorkerJob: {invalid}"})
+            protocol.send(Rejected(error=f"not a valid WorkerJob: {invalid}"))
             continue
         log.info("process %d: starting %r with %d device(s)", job.process_id, job.task, len(job.devices))
         PROGRESS.process_id = job.process_id
@@ -490,16 +444,8 @@ async def serve(protocol: ProtocolWriter) -> None:
             PROGRESS.process_id = None
         if callback is None:
             return  # the kernel is gone: nobody owns this process any more
-        delivered = await deliver_callback(job, callback)
-        log.info("process %d: %s (callback delivered: %s)", job.process_id, callback.status, delivered)
-        protocol.send(
-            {
-                "event": "done",
-                "process_id": job.process_id,
-                "delivered": delivered,
-                "callback": callback.model_dump(mode="json"),
-            }
-        )
+        log.info("process %d: %s", job.process_id, callback.status)
+        protocol.send(Done(process_id=job.process_id, callback=callback))
 
 
 def main() -> None:

@@ -3,13 +3,12 @@
 Two routers, included by :func:`rosaos.kernel.api.app.create_app` in this order: ``public`` (open to
 anyone who can reach the port: ``/health``, ``/login`` and the web page) and ``protected`` (the
 rest; ``BearerAuthMiddleware`` enforces the token, the router only documents it in OpenAPI).
-Events (``POST /chat``, ``POST /stt``, ``POST /event``) are answered ``202 {"id", "duplicate"}``
-only after the commit.
+Events (``POST /chat``, ``POST /stt``, ``POST /event``) go through the kernel's intake
+(:mod:`rosaos.kernel.intake`) and are answered ``202 {"id", "duplicate"}`` only after the commit.
 """
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import time
 from collections.abc import AsyncIterator
@@ -46,14 +45,7 @@ from rosaos.kernel.api.schemas import (
     UnderstandRequest,
     UpdatesPage,
 )
-from rosaos.kernel.events import (
-    Event,
-    NewEvent,
-    UserSaidEvent,
-    UserText,
-    UserTypedEvent,
-    WorkerCallbackEvent,
-)
+from rosaos.kernel.events import Event, NewEvent, UserSaidEvent, UserText, UserTypedEvent
 from rosaos.kernel.updates import UpdateStream
 
 log = logging.getLogger(__name__)
@@ -156,11 +148,21 @@ def _user_text(body: SayRequest, default_source: str, header_key: str | None) ->
     }
 
 
+KERNEL_ONLY = {
+    "worker_callback": "a process's end comes from its worker over the pool's pipe",
+    "timer_fired": 'timers fire from the kernel\'s own table; ask for one in words (POST /chat "in 10 minutes, …")',
+}
+"""Kinds only the kernel itself queues: one posted from outside would be a second, racing source."""
+
+
 @protected.post("/event", status_code=202)
 async def post_event(
     event: NewEvent, runtime: Runtime, idempotency_key: IdempotencyHeader = None
 ) -> Accepted:
-    """Enqueue any event, told apart by ``kind``; workers post their ``worker_callback`` here."""
+    """Enqueue an event from outside the kernel (a script, a home-automation hook), told apart by
+    ``kind``: ``user_said``, ``user_typed``, ``device_notice`` or ``error``."""
+    if event.kind in KERNEL_ONLY:
+        raise HTTPException(422, f"{event.kind} events are not accepted here: {KERNEL_ONLY[event.kind]}")
     key = _key(event.idempotency_key, idempotency_key)
     return await _accept(runtime, event.model_copy(update={"idempotency_key": key}))
 
@@ -308,27 +310,11 @@ def _key(in_body: str | None, in_header: str | None) -> str | None:
 
 
 async def _accept(runtime: KernelRuntime, event: NewEvent) -> Accepted:
-    appended = await runtime.events.append(event)
-    if appended.conflict:
+    queued = await runtime.intake.submit(event)
+    if queued.conflict:
         raise HTTPException(
             409,
-            f"idempotency key {event.idempotency_key!r} was already used for event {appended.id} with a "
+            f"idempotency key {event.idempotency_key!r} was already used for event {queued.id} with a "
             "different body; use a new key for a new request",
         )
-    # The event is committed: whatever fails below must not turn the answer into an error, or the
-    # client would retry something that is already queued.
-    if not appended.duplicate:
-        try:
-            await runtime.updates.publish_event(appended.id, event)
-        except Exception:
-            log.exception("could not publish the update for event %s", appended.id)
-    if isinstance(event, WorkerCallbackEvent):
-        try:
-            await runtime.worker_callback_recorded(appended.id, event.payload)
-        except Exception as error:
-            log.exception("worker_callback_recorded failed for event %s", appended.id)
-            with contextlib.suppress(Exception):
-                await runtime.updates.publish(
-                    "error", f"could not release the leases of process {event.payload.process_id}: {error}"
-                )
-    return Accepted(id=appended.id, duplicate=appended.duplicate)
+    return Accepted(id=queued.id, duplicate=queued.duplicate)

@@ -19,9 +19,9 @@ from rosaos.kernel.api.login_codes import LoginCodes
 from rosaos.kernel.api.task_words import task_words
 from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.events import EventStore, IdempotencyKey, Source
+from rosaos.kernel.intake import Intake
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import Update, UpdateStream
-from rosaos.processes.jobs import WorkerCallback
 from rosaos.processes.manager import ProcessInfo
 
 
@@ -31,6 +31,10 @@ class KernelRuntime(Protocol):
     @property
     def events(self) -> EventStore:
         """The durable event queue."""
+
+    @property
+    def intake(self) -> Intake:
+        """The one way into the event queue: append, publish, side effects."""
 
     @property
     def updates(self) -> UpdateStream:
@@ -87,10 +91,6 @@ class KernelRuntime(Protocol):
 
     async def understand(self, text: str) -> Understanding:
         """Whether the offline engine can act on ``text`` as it stands; launches nothing."""
-
-    async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
-        """Called once a ``worker_callback`` is committed (also for a duplicate), so leases are
-        released at once. Must be idempotent, e.g. ``ProcessManager.record_callback``."""
 
 
 # --- bodies and answers ----------------------------------------------------------------------------
