@@ -55,6 +55,8 @@ class TestRuntime:
     device_list: list[dict[str, Any]] = field(default_factory=list)
     callbacks: list[tuple[int, WorkerCallback]] = field(default_factory=list)
     terminated: list[int] = field(default_factory=list)
+    heard_events: list[int] = field(default_factory=list)
+    """Ids of the new events the intake handed to ``heard`` (the stop-at-intake hook)."""
     estop_reason: str | None = None
     estop_time: datetime | None = None
     activity: ActivityLog | None = None
@@ -100,6 +102,9 @@ class TestRuntime:
 
     async def understand(self, text: str) -> Understanding:
         return Understanding(text=text, complete=False, kind="no_engine")  # no engine here
+
+    def heard(self, event_id: int, event: object) -> None:
+        self.heard_events.append(event_id)
 
     async def worker_callback_recorded(self, event_id: int, callback: WorkerCallback) -> None:
         self.callbacks.append((event_id, callback))

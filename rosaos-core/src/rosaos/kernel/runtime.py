@@ -54,6 +54,7 @@ from rosaos.kernel.loop import KernelLoop
 from rosaos.kernel.notices import NoticeWatcher
 from rosaos.kernel.orphans import LiveProcesses, recover_orphans
 from rosaos.kernel.pending_stops import PendingStops, StopUndelivered
+from rosaos.kernel.stop_at_intake import StopAtIntake
 from rosaos.kernel.stop_tools import add_stop_tools
 from rosaos.kernel.stopping import Stopper
 from rosaos.kernel.timer_tools import add_timer_tools
@@ -146,6 +147,9 @@ class Kernel:
     @property
     def model_description(self) -> str:
         return self._models.description
+
+    def heard(self, event_id: int, event: object) -> None:
+        self.stop_at_intake.heard(event_id, event)
 
     async def understand(self, text: str) -> Understanding:
         local = self._models.local
@@ -427,7 +431,16 @@ class Kernel:
         self.stopper = Stopper(
             self.manager, self.endpoints, lambda name: self.world.instances[name].spec.halts
         )
-        add_stop_tools(tools, self.stopper, self.manager, self.endpoints)
+        self.stop_at_intake = StopAtIntake.for_world(
+            self.stopper, self.world, self.config.models.language, self._updates.publish
+        )
+        add_stop_tools(
+            tools,
+            self.stopper,
+            self.manager,
+            self.endpoints,
+            lambda r: self.stop_at_intake.merged(current.event_id, r),
+        )
         agent = build_kernel_agent(self._models.kernel, tools)
         self.loop = KernelLoop(
             self._store,

@@ -318,6 +318,7 @@ async def _accept(runtime: KernelRuntime, event: NewEvent) -> Accepted:
     # The event is committed: whatever fails below must not turn the answer into an error, or the
     # client would retry something that is already queued.
     if not appended.duplicate:
+        runtime.heard(appended.id, event)  # a "stop" acts now, not after the kernel's current turn
         try:
             await runtime.updates.publish_event(appended.id, event)
         except Exception:

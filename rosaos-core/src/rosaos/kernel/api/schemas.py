@@ -85,6 +85,10 @@ class KernelRuntime(Protocol):
     def emergency_stop_state(self) -> EmergencyStopState:
         """Whether the emergency stop is latched, why and since when; survives a restart."""
 
+    def heard(self, event_id: int, event: object) -> None:
+        """A new event was committed to the queue: a user's "stop" is acted on now
+        (:mod:`rosaos.kernel.stop_at_intake`), not when the kernel's turn reaches it. Returns at once."""
+
     async def understand(self, text: str) -> Understanding:
         """Whether the offline engine can act on ``text`` as it stands; launches nothing."""
 
