@@ -48,7 +48,7 @@ from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people, record
 from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
 from rosaos.kernel.device_status import DeviceStatusUpdates
 from rosaos.kernel.events import DeviceNoticeEvent, Event, EventStore, StoreClosedError, WorkerCallbackEvent
-from rosaos.kernel.host_latch import HostLatches
+from rosaos.kernel.host_latch import HostLatches, keep_latch
 from rosaos.kernel.launch_cause import CurrentEvent, LaunchCause
 from rosaos.kernel.loop import KernelLoop
 from rosaos.kernel.notices import NoticeWatcher
@@ -382,6 +382,7 @@ class Kernel:
             first_process_id=await self._store.next_process_id(),
             emergency_stop=await _stored_emergency_stop(self._store),
         )
+        keep_latch(self.data_dir, self.manager.emergency_stop)  # a host starts latched from its first moment
         # Devices (a robot simulator takes seconds to boot) and the warm workers (seconds of
         # imports each) start side by side; neither needs the other until the first event.
         try:
@@ -404,7 +405,7 @@ class Kernel:
             lambda text, data: self._updates.publish("notice", text, data),
         )
         await self._pending_stops.deliver()  # owed by the last run: a device that is back is stopped now
-        self._host_latches = HostLatches(self.supervisor.directory)
+        self._host_latches = HostLatches(self.supervisor.directory, self.data_dir)
         if self.manager.emergency_stop is not None:  # latched before the restart: so are the hosts
             await self._host_latches.push(True, self.manager.emergency_stop.reason)
         stops = await recover_orphans(
