@@ -80,7 +80,9 @@ def kernel_model() -> FunctionModel:
         if body.strip() in ("list timers", "cancel timer"):
             return ModelResponse(parts=[ToolCallPart(body.strip().replace(" ", "_"), {})])
         if body.startswith("stop"):  # "stop" or "stop: dog, spotify": the lease-free stop tool
-            names = [name.strip() for name in body.partition(":")[2].split(",") if name.strip()]
+            # The first line only: a callback of the process a stop at intake ended may share the turn.
+            line = body.splitlines()[0]
+            names = [name.strip() for name in line.partition(":")[2].split(",") if name.strip()]
             return ModelResponse(parts=[ToolCallPart("stop", {"devices": names})])
         if body.startswith("state "):  # "state turtlebot": the read-only device_state tool
             return ModelResponse(parts=[ToolCallPart("device_state", {"device": body.split()[1]})])

@@ -11,8 +11,10 @@ every ``toggle`` they receive. At the end:
   stream (ok, or crashed with the kernel), and a lamp that was not has a crashed process or a
   refusal saying why.
 
-``ROSAOS_RANDOM_KILLS`` sets the number of kills (default 4, about a minute each on a busy two-core
-machine; the issue asks for 20: run it so before a release). ``ROSAOS_RANDOM_SEED`` replays a run.
+``ROSAOS_RANDOM_KILLS`` sets the number of kills (default 4; the issue asks for 20: run it so
+before a release). Each kill costs a kernel start: 16-20 s on a two-core machine at load 15
+(only the tapo driver is loaded, ``ROSAOS_DRIVERS=tapo``; all drivers: 23 s), so 20 kills take
+6-7 minutes there, more than a CI job should spend on one test. ``ROSAOS_RANDOM_SEED`` replays a run.
 """
 
 from __future__ import annotations
@@ -24,6 +26,7 @@ import time
 from pathlib import Path
 
 import httpx
+import pytest
 from lamp_rack import LampRack
 from test_orphans_after_kernel_kill import start_kernel
 
@@ -49,7 +52,10 @@ def settled(api: httpx.Client, event_ids: list[int]) -> bool:
     return handled and not api.get("/processes").json()
 
 
-def test_random_kernel_kills_run_no_command_twice_and_lose_no_run(tmp_path: Path) -> None:
+def test_random_kernel_kills_run_no_command_twice_and_lose_no_run(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("ROSAOS_DRIVERS", "tapo")  # only the lamps' driver: each restart imports less
     rack = LampRack(tmp_path, [f"{room}_light" for room in ROOMS], TOKEN).start()
     try:
         config = tmp_path / "rosaos.toml"

@@ -1,5 +1,6 @@
 """The deadman: a drive that is not renewed ends in a zero twist within its duration + 200 ms,
-even when the MCP client dies mid-call or the device server's event loop stalls."""
+even when the MCP client dies mid-call or the device server's event loop stalls; and a velocity
+stream that pauses mid-drive is followed by a zero twist within the heartbeat, as twist_mux does."""
 
 from __future__ import annotations
 
@@ -11,6 +12,8 @@ from typing import Any
 
 from rosaos.devices.serve import serve_http
 from rosaos.drivers import DeviceContext
+from rosaos_ros.deadman import MARGIN
+from rosaos_ros.motion import HEARTBEAT
 from rosaos_ros.plugin import sim_backend
 from rosaos_ros.server import build_server
 from rosaos_ros.settings import RosSettings
@@ -96,3 +99,23 @@ async def test_the_watchdog_stops_the_robot_when_the_event_loop_stalls(
         fired = robot.backend.deadman.fired
     assert fired == 1
     assert stop - first_move <= duration + BOUND
+
+
+async def test_a_stalled_velocity_stream_stops_the_robot_long_before_the_drive_ends(
+    open_robot: Any, eventually: Any
+) -> None:
+    # As twist_mux treats a silent input: the stream pausing is enough, the drive's deadline is not awaited.
+    duration, stall = 5.0, 1.5
+    async with open_robot() as robot:
+        await robot.call("get_state")
+        await robot.call("drive", linear=0.2, duration=duration, wait=False)
+        await eventually(lambda: robot.world.linear > 0, what="the drive starting")
+        stalled_at = time.monotonic()
+        time.sleep(stall)  # noqa: ASYNC251 - the point: the server's loop is stuck mid-drive
+        commands = list(robot.world.commands)
+        await robot.call("stop")
+    sent_before = [t for t, linear, _ in commands if t <= stalled_at and linear]
+    zero_after = [t for t, linear, angular in commands if t > stalled_at and not linear and not angular]
+    assert sent_before and zero_after, commands
+    gap = zero_after[0] - sent_before[-1]
+    assert gap <= HEARTBEAT + MARGIN + BOUND, f"the robot kept its velocity {gap:.2f} s into the stall"

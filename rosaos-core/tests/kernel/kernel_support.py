@@ -56,6 +56,7 @@ class TestRuntime:
     terminated: list[int] = field(default_factory=list)
     estop_reason: str | None = None
     estop_time: datetime | None = None
+    untold_hosts: list[str] = field(default_factory=list)
     activity: ActivityLog | None = None
     """Set by fixtures that need ``GET /activity`` (it shares the event store's database)."""
     confirmations: ConfirmationDesk = field(default_factory=lambda: ConfirmationDesk(timeout=60))
@@ -99,7 +100,10 @@ class TestRuntime:
 
     def emergency_stop_state(self) -> EmergencyStopState:
         return EmergencyStopState(
-            latched=self.estop_reason is not None, reason=self.estop_reason, time=self.estop_time
+            latched=self.estop_reason is not None,
+            reason=self.estop_reason,
+            time=self.estop_time,
+            untold_hosts=self.untold_hosts,
         )
 
     async def understand(self, text: str) -> Understanding:

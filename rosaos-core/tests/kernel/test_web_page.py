@@ -164,3 +164,23 @@ async def test_a_stop_latched_before_the_page_loads_shows_at_once_with_reason_an
     await p.wait_for_selector("#estop-banner", state="hidden")
     assert await p.is_visible("#estop")
     assert p.errors == []  # type: ignore[attr-defined]
+
+
+async def test_hosts_the_stop_could_not_reach_are_named_on_the_page(
+    browser_page: Page, runtime: TestRuntime
+) -> None:
+    p = browser_page
+    runtime.estop_reason, runtime.estop_time = "pressed", datetime(2025, 3, 4, 5, 6, 7, tzinfo=UTC)
+    runtime.untold_hosts = ["dog", "ghost"]
+    await p.goto(f"/#login={runtime.login_codes.mint()}")
+    await p.wait_for_selector("#estop-untold", state="visible")
+    said = await p.inner_text("#estop-untold")
+    assert "Not told of the emergency stop: dog, ghost" in said
+
+    runtime.estop_reason = runtime.estop_time = None  # reset, but the dog's host has not heard it yet
+    runtime.untold_hosts = ["dog"]
+    await p.wait_for_selector("#estop-untold:has-text('Not told of the reset: dog.')")
+
+    runtime.untold_hosts = []  # told at last
+    await p.wait_for_selector("#estop-untold", state="hidden")
+    assert p.errors == []  # type: ignore[attr-defined]

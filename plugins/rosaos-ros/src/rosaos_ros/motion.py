@@ -6,9 +6,15 @@ not of the tool call that started it, so a client that disconnects cannot leave 
 - ``drive`` streams a twist at 20 Hz until its deadline, then sends a zero twist. Another
   ``drive`` before the deadline *renews* it (new velocities, new deadline, no stop in between):
   a drive that is not renewed ends in a zero twist at its deadline. The deadman watchdog thread
-  (:mod:`rosaos_ros.deadman`) stops the robot if this loop ever misses that moment by 0.1 s.
+  (:mod:`rosaos_ros.deadman`) stops the robot if this loop ever misses that moment, or pauses
+  for more than :data:`HEARTBEAT` s, by 0.1 s.
 - ``move_distance`` and ``rotate`` run a proportional controller on odometry, slowing down near
   the target; they keep the watchdog armed 0.3 s ahead while they run.
+
+The velocity stream is itself a deadman, as ``twist_mux`` treats its inputs: every loop arms the
+watchdog at most :data:`HEARTBEAT` s ahead, a long ``drive`` or raw stream included, so a loop
+that stalls (a blocked event loop, a starved process) is followed by a zero twist within 0.4 s,
+not only at the end of the drive. As with ``twist_mux``, the stream goes on if its loop does.
 
 Every motion ends with a zero twist, whatever ends it: done, stopped, superseded, error.
 A cancelled tool call stops its motion (a robot never moves longer than it was asked to).
@@ -33,6 +39,7 @@ log = logging.getLogger("rosaos_ros.motion")
 
 RATE_HZ = 20
 HEARTBEAT = 0.3
+"""Seconds a motion loop arms the watchdog ahead: the longest the stream may pause before a zero twist."""
 """Closed-loop motions: the watchdog stops the robot if the controller skips this long."""
 ODOMETRY_MAX_AGE = 0.5
 DISTANCE_TOLERANCE = 0.005  # m
@@ -223,7 +230,7 @@ class MotionController:
                 detail = f"drove at {command.linear:g} m/s, {command.angular:g} rad/s, then stopped"
                 command.end("done", detail)
                 return MotionResult("drive", "done", detail, now - command.started)
-            self.deadman.arm(command.deadline)
+            self.deadman.arm(min(command.deadline, now + HEARTBEAT))
             self._send_twist(command.linear, command.angular)
             await asyncio.sleep(min(self.period, command.deadline - now))
 
@@ -238,7 +245,7 @@ class MotionController:
         async def body() -> MotionResult:
             deadline, sent = time.monotonic() + duration, 0
             while (now := time.monotonic()) < deadline:
-                self.deadman.arm(deadline)
+                self.deadman.arm(min(deadline, now + HEARTBEAT))
                 send()
                 sent += 1
                 await asyncio.sleep(min(1 / rate, deadline - now))

@@ -5,9 +5,12 @@ Registered under the ``rosaos.drivers`` entry point as ``ros`` (see ``pyproject.
 
 from __future__ import annotations
 
+import secrets
 from collections.abc import Callable
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+
+from pydantic import SecretStr
 
 from rosaos import hookimpl
 from rosaos.card_controls import button
@@ -70,7 +73,12 @@ def sim_backend(ctx: Context) -> RosBackend:
     except SimulatorError as error:
         raise DeviceError(f"[devices.{ctx.instance}] {error}") from None
     profile = _profile(ctx, settings, state.profile)
-    token = settings.rosbridge_token.get_secret_value() if settings.rosbridge_token else None
+    # The simulator's port is on loopback, where any local process could publish /cmd_vel past the
+    # leases and the latch: it always wants a token, a fresh one unless one is configured.
+    if settings.rosbridge_token is None:
+        settings = settings.model_copy(update={"rosbridge_token": SecretStr(secrets.token_urlsafe(24))})
+    assert settings.rosbridge_token is not None
+    token = settings.rosbridge_token.get_secret_value()
     simulator = Simulator(profile, state, host="127.0.0.1", port=0, token=token)
     return RosBackend(
         ctx.instance,

@@ -5,6 +5,14 @@ worker that outlived its kill, a person with the token) would still run. So the 
 latch to every device host (``POST /latch``, behind the token), and a latched host refuses every
 tool that is not read-only — except the stops — until the kernel tells it the latch was reset.
 ``GET /latch`` says whether the host is latched.
+
+A host starts latched from its first moment when the latch is set: the latch is kept in
+:data:`LATCH_FILE` in the data directory. The kernel writes it before it tells any host
+(:mod:`rosaos.kernel.host_latch`), so a host the kernel starts (sharing its data directory) reads
+it at start; every host writes its own copy when told, so a remote ``serve-device`` host that
+restarts while latched starts latched too. Without the file it starts unlatched and is told within
+seconds by the kernel's periodic push. A file that cannot be read starts the host latched: only
+the kernel's reset, a person's decision, unlatches it.
 """
 
 from __future__ import annotations
@@ -12,6 +20,7 @@ from __future__ import annotations
 import logging
 from collections.abc import Awaitable, Callable
 from datetime import UTC, datetime
+from pathlib import Path
 from typing import Any
 
 from fastmcp import FastMCP
@@ -22,10 +31,13 @@ from starlette.requests import Request
 from starlette.responses import JSONResponse
 
 from rosaos.devices.deadman import NOT_ARMING, ReadOnlyTools
+from rosaos.devices.run_files import write_atomic
 
 log = logging.getLogger("rosaos.devices.latch")
 
 LATCH_PATH = "/latch"
+LATCH_FILE = "host-latch.json"
+"""The latch as last set, in the data directory (:class:`LatchState` as JSON)."""
 
 
 class LatchState(BaseModel):
@@ -37,19 +49,47 @@ class LatchState(BaseModel):
 
 
 class HostLatch:
-    """One host's copy of the kernel's emergency-stop latch."""
+    """One host's copy of the kernel's emergency-stop latch, kept in ``data_dir`` when given."""
 
-    def __init__(self, instance: str) -> None:
+    def __init__(self, instance: str, data_dir: Path | None = None) -> None:
         self.instance = instance
-        self.state = LatchState(latched=False)
+        self.file = data_dir / LATCH_FILE if data_dir is not None else None
+        self.state = read_latch(self.file) if self.file is not None else LatchState(latched=False)
+        if self.state.latched:
+            log.warning("%s: starting latched: %s", instance, self.state.reason)
 
     def set(self, latched: bool, reason: str) -> LatchState:
         if latched and not self.state.latched:
             log.warning("%s: emergency stop latched at this host: %s", self.instance, reason)
         if not latched and self.state.latched:
             log.warning("%s: emergency stop reset at this host", self.instance)
-        self.state = LatchState(latched=latched, reason=reason, since=datetime.now(UTC) if latched else None)
+        since = (self.state.since if self.state.latched else None) or datetime.now(UTC)
+        self.state = LatchState(latched=latched, reason=reason, since=since if latched else None)
+        if self.file is not None:
+            write_latch(self.file, self.state)
         return self.state
+
+
+def read_latch(path: Path) -> LatchState:
+    """The latch kept in ``path``: unlatched when there is none, latched when it cannot be read."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except FileNotFoundError:
+        return LatchState(latched=False)
+    except OSError as error:
+        return LatchState(latched=True, reason=f"the kept latch {path} could not be read ({error})")
+    try:
+        return LatchState.model_validate_json(text)
+    except ValidationError:
+        return LatchState(latched=True, reason=f"the kept latch {path} could not be read ({text[:100]!r})")
+
+
+def write_latch(path: Path, state: LatchState) -> None:
+    """Keep ``state`` in ``path`` for the next start; a failure is logged (the latch in memory holds)."""
+    try:
+        write_atomic(path, state.model_dump_json())
+    except OSError:
+        log.exception("could not keep the latch in %s: a restart would start unlatched", path)
 
 
 class LatchMiddleware(Middleware):
@@ -88,9 +128,9 @@ def latch_endpoint(latch: HostLatch) -> Callable[[Request], Awaitable[JSONRespon
     return endpoint
 
 
-def add_latch(server: FastMCP, instance: str) -> HostLatch:
-    """Give ``server`` the latch: the middleware and ``/latch``."""
-    latch = HostLatch(instance)
+def add_latch(server: FastMCP, instance: str, data_dir: Path | None = None) -> HostLatch:
+    """Give ``server`` the latch: the middleware and ``/latch`` (kept in ``data_dir`` when given)."""
+    latch = HostLatch(instance, data_dir)
     server.add_middleware(LatchMiddleware(latch, ReadOnlyTools(server)))
     server.custom_route(LATCH_PATH, methods=["GET", "POST"])(latch_endpoint(latch))
     return latch

@@ -63,7 +63,7 @@ async def open_device(instance: DeviceInstance, data_dir: Path) -> AsyncIterator
         server.strict_input_validation = True
         _add_safe_stop(server, instance, backend)
         add_notice_route(server, ctx.notices)
-        add_latch(server, instance.name)  # the emergency stop holds here too (devices/latch.py)
+        add_latch(server, instance.name, data_dir)  # the emergency stop holds here too (devices/latch.py)
         async with contextlib.AsyncExitStack() as stack:
             if spec.safe_stop is not no_safe_stop:  # a device with nothing to stop needs no deadman
 

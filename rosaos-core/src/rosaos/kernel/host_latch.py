@@ -4,7 +4,9 @@ An emergency stop latches the kernel and, through ``POST /latch``, every device 
 (:mod:`rosaos.devices.latch`), local or remote. A host that does not answer is listed as *untold*
 in the emergency stop's answer and on the page. While the kernel is latched it pushes the latch
 again every :data:`PUSH_PERIOD` s, so a host that comes back or starts later is latched within
-seconds; after a reset it pushes the reset until every host has it.
+seconds; after a reset it pushes the reset until every host has it. Before telling any host it
+writes the latch to the data directory's :data:`~rosaos.devices.latch.LATCH_FILE`, which a host
+it starts there reads at its first moment.
 """
 
 from __future__ import annotations
@@ -12,11 +14,13 @@ from __future__ import annotations
 import asyncio
 import logging
 from collections.abc import Callable, Mapping
+from pathlib import Path
 
 import httpx
 
 from rosaos.devices.directory import DirectoryEntry
-from rosaos.devices.latch import LATCH_PATH
+from rosaos.devices.latch import LATCH_FILE, LATCH_PATH, LatchState, write_latch
+from rosaos.processes.manager import EmergencyStop
 
 log = logging.getLogger("rosaos.kernel.host_latch")
 
@@ -28,11 +32,20 @@ def latch_url(mcp_url: str) -> str:
     return mcp_url.rstrip("/").removesuffix("/mcp") + LATCH_PATH
 
 
+def keep_latch(data_dir: Path, latch: EmergencyStop | None) -> None:
+    """Write the kernel's latch for the hosts it is about to start (before any starts)."""
+    state = LatchState(latched=latch is not None, reason=latch.reason[:500] if latch else "")
+    write_latch(data_dir / LATCH_FILE, state)
+
+
 class HostLatches:
     """Keeps every device host's latch in step with the kernel's."""
 
-    def __init__(self, directory: Callable[[], Mapping[str, DirectoryEntry]]) -> None:
+    def __init__(
+        self, directory: Callable[[], Mapping[str, DirectoryEntry]], data_dir: Path | None = None
+    ) -> None:
         self._directory = directory
+        self._file = data_dir / LATCH_FILE if data_dir is not None else None
         self.latched = False
         self.reason = ""
         self.untold: list[str] = []
@@ -40,6 +53,8 @@ class HostLatches:
 
     async def push(self, latched: bool, reason: str = "") -> list[str]:
         """Tell every host; return (and keep) the instances whose host could not be told."""
+        if self._file is not None and (latched, reason) != (self.latched, self.reason):
+            write_latch(self._file, LatchState(latched=latched, reason=reason))
         self.latched, self.reason = latched, reason
         entries = list(self._directory().values())
         served = [entry for entry in entries if entry.url]

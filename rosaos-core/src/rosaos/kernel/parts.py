@@ -34,14 +34,15 @@ from rosaos.kernel.device_directory import DeviceDirectory
 from rosaos.kernel.device_status import DeviceStatusUpdates
 from rosaos.kernel.emergency_stop import EmergencyStopControl, stored_emergency_stop
 from rosaos.kernel.events import EventStore
-from rosaos.kernel.host_latch import HostLatches
-from rosaos.kernel.intake import Intake
+from rosaos.kernel.host_latch import HostLatches, keep_latch
+from rosaos.kernel.intake import Intake, Queued
 from rosaos.kernel.launch_cause import CurrentEvent, LaunchCause
 from rosaos.kernel.loop import KernelLoop
 from rosaos.kernel.notices import NoticeWatcher
 from rosaos.kernel.orphans import LiveProcesses, recover_orphans
 from rosaos.kernel.pending_stops import PendingStops, StopUndelivered
 from rosaos.kernel.process_ends import ProcessEnds, end_event
+from rosaos.kernel.stop_at_intake import StopAtIntake
 from rosaos.kernel.stop_tools import add_stop_tools
 from rosaos.kernel.stopping import Stopper
 from rosaos.kernel.timer_tools import add_timer_tools
@@ -176,6 +177,7 @@ async def build_parts(
         emergency_stop=await stored_emergency_stop(store),
     )
     stack.push_async_callback(manager.stop)
+    keep_latch(data_dir, manager.emergency_stop)  # a host starts latched from its first moment
     # Devices (a robot simulator takes seconds to boot) and the warm workers (seconds of
     # imports each) start side by side; neither needs the other until the first event.
     try:
@@ -202,7 +204,7 @@ async def build_parts(
         store, devices.directory, lambda text, data: updates.publish("notice", text, data)
     )
     await pending_stops.deliver()  # owed by the last run: a device that is back is stopped now
-    host_latches = HostLatches(devices.directory)
+    host_latches = HostLatches(devices.directory, data_dir)
     if manager.emergency_stop is not None:  # latched before the restart: so are the hosts
         await host_latches.push(True, manager.emergency_stop.reason)
     stops = await recover_orphans(live, devices.directory(), intake.submit, remember=manager.remember)
@@ -222,7 +224,17 @@ async def build_parts(
     if models.local is not None:
         models.local.memory = memory
     stopper = Stopper(manager, endpoints, lambda name: world.instances[name].spec.halts)
-    add_stop_tools(tools, stopper, manager, endpoints)
+    stop_at_intake = StopAtIntake.for_world(stopper, world, config.models.language, updates.publish)
+
+    async def stop_now(queued: Queued) -> None:
+        """A typed or spoken "stop" acts at once, beside whatever turn the kernel is in."""
+        stop_at_intake.heard(queued.id, queued.event)
+
+    intake.on("user_typed", stop_now)
+    intake.on("user_said", stop_now)
+    add_stop_tools(
+        tools, stopper, manager, endpoints, lambda report: stop_at_intake.merged(current.event_id, report)
+    )
     loop = KernelLoop(
         store,
         updates,

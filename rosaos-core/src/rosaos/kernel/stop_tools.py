@@ -9,7 +9,7 @@ calls to them, and an LLM kernel is told when to call them (:mod:`rosaos.kernel.
 from __future__ import annotations
 
 import asyncio
-from collections.abc import Callable, Mapping
+from collections.abc import Awaitable, Callable, Mapping
 from typing import Annotated, Any
 
 from fastmcp import FastMCP
@@ -21,7 +21,7 @@ from rosaos.devices.client import DeviceClient
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.drivers import READ_ONLY, DeviceError
 from rosaos.kernel.state_words import describe
-from rosaos.kernel.stopping import StopError, Stopper, describe_task
+from rosaos.kernel.stopping import StopError, Stopper, StopReport, describe_task
 from rosaos.processes.manager import ProcessManager
 
 STOP_TOOL_NAMES = ("stop", "device_state")
@@ -35,8 +35,13 @@ def add_stop_tools(
     stopper: Stopper,
     manager: ProcessManager,
     endpoints: Callable[[], Mapping[str, DeviceEndpoint]],
+    merge: Callable[[StopReport], Awaitable[StopReport]] | None = None,
 ) -> None:
-    """Register ``stop`` and ``device_state`` on the kernel's tool server."""
+    """Register ``stop`` and ``device_state`` on the kernel's tool server.
+
+    ``merge`` adds what a stop at intake already did for the event being handled
+    (:mod:`rosaos.kernel.stop_at_intake`) to the report the model reads.
+    """
 
     @server.tool(annotations=STOPS)
     async def stop(
@@ -60,6 +65,8 @@ def add_stop_tools(
             report = await stopper.stop(devices or [])
         except StopError as error:
             raise ToolError(str(error)) from None
+        if merge is not None:
+            report = await merge(report)
         return report.model_dump(mode="json")
 
     @server.tool(annotations=READ_ONLY)

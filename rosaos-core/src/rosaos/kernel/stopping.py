@@ -113,7 +113,7 @@ class Stopper:
         if not explicit:
             rest = [info for info in self._manager.list() if info.id not in terminated]
             await asyncio.gather(*(self._terminate(info, terminated) for info in rest))
-        summary = self._summary(stopped, list(terminated.values()), explicit, names)
+        summary = self.summary(stopped, list(terminated.values()), explicit, names)
         return StopReport(devices=stopped, terminated=list(terminated.values()), summary=summary)
 
     def _rank(self, name: str) -> int:
@@ -167,13 +167,14 @@ class Stopper:
             return False, str(error) or f"safe_stop did not answer within {SAFE_STOP_TIMEOUT:g} s"
         return True, str(detail)
 
-    def _summary(
+    def summary(
         self,
         stopped: list[StoppedDevice],
         terminated: list[StoppedProcess],
         explicit: bool,
         names: list[str],
     ) -> str:
+        """One sentence per device stopped, then the other tasks ended (the stop's reply)."""
         sentences = []
         for device in stopped:
             name = self._display(device.device)

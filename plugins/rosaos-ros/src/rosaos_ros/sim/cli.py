@@ -6,6 +6,7 @@ import argparse
 import asyncio
 import json
 import logging
+import secrets
 import sys
 from pathlib import Path
 
@@ -30,7 +31,19 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--namespace", default="", help="put every name under this namespace, e.g. /robot1")
     parser.add_argument(
-        "--token", help="require 'Authorization: Bearer TOKEN' (or ?token=TOKEN) from clients"
+        "--token",
+        help="require 'Authorization: Bearer TOKEN' (or ?token=TOKEN) from clients (default: a random "
+        "one, printed at start)",
+    )
+    parser.add_argument(
+        "--no-token", action="store_true", help="accept clients without a token (anything local can drive)"
+    )
+    parser.add_argument(
+        "--allow-origin",
+        action="append",
+        default=[],
+        metavar="ORIGIN",
+        help="a web page origin allowed to connect, e.g. http://localhost:8080 (default: none; repeatable)",
     )
     parser.add_argument(
         "--state", default="{}", help='initial state as JSON, e.g. \'{"x": 1, "docked": false}\''
@@ -41,7 +54,10 @@ def main(argv: list[str] | None = None) -> int:
     try:
         state = json.loads(options.state)
         profile = load_profile(options.profile, path=options.profile_file).namespaced(options.namespace)
-        simulator = Simulator(profile, state, host=options.host, port=options.port, token=options.token)
+        token = None if options.no_token else (options.token or secrets.token_urlsafe(24))
+        simulator = Simulator(
+            profile, state, host=options.host, port=options.port, token=token, origins=options.allow_origin
+        )
     except (ProfileError, SimulatorError, ValueError) as error:
         print(f"rosaos-ros-sim: {error}", file=sys.stderr)
         return 2
@@ -49,6 +65,8 @@ def main(argv: list[str] | None = None) -> int:
     async def serve() -> None:
         await simulator.start()
         print(f"rosbridge simulator ({profile.name}) listening on {simulator.url}", flush=True)
+        if token is not None and not options.token:
+            print(f"token (send 'Authorization: Bearer TOKEN' or ?token=TOKEN): {token}", flush=True)
         try:
             await asyncio.Event().wait()
         finally:

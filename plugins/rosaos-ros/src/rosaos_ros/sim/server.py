@@ -12,10 +12,16 @@ Operations (JSON objects with an ``op``), as rosbridge_suite speaks them for ROS
 - ``set_level``, and ``status`` messages (level, msg, id) when an operation fails.
 
 A client's subscriptions, advertisements, services and goals end when it disconnects.
+
+Who may connect: anything on the machine can reach a loopback port, and a web page in a browser
+can open a WebSocket to one. A handshake that carries an ``Origin`` (every browser sends one) is
+refused unless that origin was allowed, and with a ``token`` the client must send it
+(``Authorization: Bearer`` or ``?token=``). The rosaOS ``sim`` backend always sets a fresh token.
 """
 
 from __future__ import annotations
 
+from collections.abc import Collection
 from http import HTTPStatus
 from urllib.parse import parse_qs, urlsplit
 
@@ -29,9 +35,11 @@ from rosaos_ros.sim.session import ClientSession
 class RosbridgeServer:
     """Serves one :class:`RosGraph` to any number of rosbridge clients."""
 
-    def __init__(self, graph: RosGraph, token: str | None = None) -> None:
+    def __init__(self, graph: RosGraph, token: str | None = None, origins: Collection[str] = ()) -> None:
         self.graph = graph
         self.token = token
+        self.origins = frozenset(origin.rstrip("/") for origin in origins)
+        """Browser origins allowed to connect (``http://localhost:8080``); none by default."""
         self.sessions: set[ClientSession] = set()
         self._server: Server | None = None
         graph.bridge_fanout = self._fanout
@@ -49,6 +57,13 @@ class RosbridgeServer:
             self._server = None
 
     def _authorize(self, connection: ServerConnection, request: Request) -> Response | None:
+        origin = request.headers.get("Origin")
+        if origin is not None and origin.rstrip("/") not in self.origins:
+            return connection.respond(
+                HTTPStatus.FORBIDDEN,
+                f"rosbridge simulator: connections from the web page origin {origin!r} are refused "
+                "(a page must not move the robot); allow it with --allow-origin if you mean it\n",
+            )
         if self.token is None:
             return None
         header = request.headers.get("Authorization", "")

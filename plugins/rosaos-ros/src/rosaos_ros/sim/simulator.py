@@ -10,7 +10,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import threading
-from collections.abc import Callable, Coroutine, Mapping
+from collections.abc import Callable, Collection, Coroutine, Mapping
 from typing import Any, TypeVar
 
 from pydantic import ValidationError
@@ -52,6 +52,7 @@ class Simulator:
         host: str = "127.0.0.1",
         port: int = 0,
         token: str | None = None,
+        origins: Collection[str] = (),
     ) -> None:
         self.profile = profile
         self.host = host
@@ -59,7 +60,7 @@ class Simulator:
         self.graph = RosGraph()
         initial = state if isinstance(state, SimState) else sim_state(state or {})
         self.robot = SimulatedRobot(profile, initial, self.graph)
-        self.server = RosbridgeServer(self.graph, token)
+        self.server = RosbridgeServer(self.graph, token, origins)
         self._ticker: asyncio.Task[None] | None = None
 
     @property

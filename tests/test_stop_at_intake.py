@@ -1,0 +1,138 @@
+"""A person's "stop" stops the robot at intake, while the kernel's model is still busy with a turn.
+
+The kernel and the process agent are the scripted ``FunctionModel``s of ``kernel_scripts.py``:
+the process walks the dog (2 m at 0.12 m/s, about 17 s); the kernel is then kept busy by a turn
+that takes 8 s ("slow 8"). "stop the dog" arrives during that turn. Before the fast path the
+stop waited its turn and the dog walked on for those seconds; now the stop at intake (holder
+terminated, ``safe_stop`` answered) takes under the issue's 0.5 s, asserted with a 2x margin for a
+loaded CI machine on the kernel's own clock, and the test's polling over MCP sees the dog still
+long before the turn ends, while the stop's event is still queued, and the kernel answers it afterwards with what the intake stop did. Real kernel,
+worker subprocess, ROS simulator over MCP HTTP.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections.abc import AsyncIterator
+from typing import Any
+
+import httpx
+import pytest
+import pytest_asyncio
+from e2e_support import device_state, eventually, kernel_api, scripted_kernel
+
+from rosaos.kernel.runtime import Kernel
+
+pytestmark = pytest.mark.asyncio(loop_scope="module")
+
+WORLD = """
+[devices.dog]
+driver = "ros"
+description = "Hiwonder PuppyPi quadruped robot dog"
+profile = "puppypi"
+"""
+
+SLOW_TURN = 8.0
+"""Seconds the kernel's model spends on the turn the stop arrives during."""
+STOP_BOUND = 0.5
+"""The issue's bound: the robot stops within 0.5 s of the stop being received."""
+MARGIN = 2.0
+"""Two cores shared with other jobs: the bound is asserted doubled, still far below ``SLOW_TURN``."""
+STILL = 0.02
+"""Metres the pose may drift in 0.5 s and still count as stopped (odometry noise, one last tick)."""
+
+
+@pytest_asyncio.fixture(scope="module", loop_scope="module")
+async def kernel(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Kernel]:
+    async with scripted_kernel(tmp_path_factory.mktemp("stop-at-intake"), WORLD) as kernel:
+        yield kernel
+
+
+@pytest_asyncio.fixture(loop_scope="module")
+async def api(kernel: Kernel) -> AsyncIterator[httpx.AsyncClient]:
+    async with kernel_api(kernel) as client:
+        await eventually(lambda: _healthy(client), timeout=120)
+        yield client
+
+
+async def chat(api: httpx.AsyncClient, text: str) -> int:
+    response = await api.post("/chat", json={"text": text})
+    assert response.status_code == 202, response.text
+    return int(response.json()["id"])
+
+
+async def handled(api: httpx.AsyncClient, event_id: int) -> bool:
+    return bool((await api.get(f"/events/{event_id}")).json().get("handled"))
+
+
+async def updates_of(api: httpx.AsyncClient, event_id: int) -> list[dict[str, Any]]:
+    updates = (await api.get("/updates", params={"after": 0, "limit": 1000})).json()["updates"]
+    return [u for u in updates if u.get("event_id") == event_id]
+
+
+async def walking(api: httpx.AsyncClient, kernel: Kernel) -> dict[str, Any] | None:
+    running = [p for p in (await api.get("/processes")).json() if "dog" in p["devices"]]
+    if running and abs((await device_state(kernel, "dog"))["linear"]) > 0.01:
+        return running[0]
+    return None
+
+
+async def test_stop_the_dog_stops_it_at_intake_while_the_kernel_is_mid_turn(
+    api: httpx.AsyncClient, kernel: Kernel
+) -> None:
+    await chat(api, 'dog: call move_distance {"meters": 2}')
+    walk = await eventually(lambda: walking(api, kernel), timeout=120)
+    busy = await chat(api, f"slow {SLOW_TURN:g}")
+    await asyncio.sleep(0.5)  # the kernel's model is now inside its 8 s turn
+    assert not await handled(api, busy)
+
+    sent = time.monotonic()
+    stop = await chat(api, "stop the dog")
+    while abs((await device_state(kernel, "dog"))["linear"]) > 0.0:
+        assert time.monotonic() - sent < SLOW_TURN, "the stop waited for the kernel's turn"
+        await asyncio.sleep(0.02)
+    stopped_after = time.monotonic() - sent
+    first = await device_state(kernel, "dog")
+    await asyncio.sleep(0.5)
+    later = await device_state(kernel, "dog")
+
+    assert stopped_after < SLOW_TURN / 2, f"the dog stopped only {stopped_after:.2f} s after the stop"
+    said = await updates_of(api, stop)
+    intake = [u["data"] for u in said if u["kind"] == "tool_call" and u["data"].get("at_intake")]
+    assert intake, f"no stop at intake among {said}"
+    took = intake[0]["seconds"]
+    print(f"stop at intake took {took:.3f} s; the test saw the dog still {stopped_after:.3f} s after sending")
+    assert took < STOP_BOUND * MARGIN, f"the stop at intake took {took:.2f} s"
+    assert abs(later["x"] - first["x"]) < STILL, "the dog walked on after its stop"
+    assert not await handled(api, stop), "the kernel was still busy: this stop came from intake"
+    listed = (await api.get("/processes", params={"all": "true"})).json()
+    assert next(p for p in listed if p["id"] == walk["id"])["state"] == "terminated"
+    await eventually(lambda: handled(api, stop), timeout=60)  # the kernel still handles it, after its turn
+
+
+async def test_the_kernel_still_answers_the_stop_with_what_was_stopped(api: httpx.AsyncClient) -> None:
+    await chat(api, 'dog: call move_distance {"meters": 2}')
+    await eventually(lambda: _dog_held(api), timeout=120)
+    stop = await chat(api, "stop: dog")
+    await eventually(lambda: handled(api, stop), timeout=30)
+    said = await updates_of(api, stop)
+    intake = [u for u in said if u["kind"] == "tool_call" and u["data"].get("at_intake")]
+    reply = next(u["text"] for u in said if u["kind"] == "kernel_reply")
+    assert intake, said
+    assert "Stopped the dog: it was doing" in reply, reply  # the kernel's stop tool told what intake did
+
+
+async def test_a_sentence_that_is_not_a_stop_is_left_to_the_kernel(api: httpx.AsyncClient) -> None:
+    event = await chat(api, "don't stop the dog")
+    await eventually(lambda: handled(api, event), timeout=30)
+    said = await updates_of(api, event)
+    assert not any(u["data"].get("at_intake") for u in said if u["kind"] == "tool_call"), said
+
+
+async def _dog_held(api: httpx.AsyncClient) -> bool:
+    return any("dog" in p["devices"] for p in (await api.get("/processes")).json())
+
+
+async def _healthy(api: httpx.AsyncClient) -> bool:
+    return all(device["status"] == "healthy" for device in (await api.get("/devices")).json())
