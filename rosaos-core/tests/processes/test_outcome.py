@@ -11,7 +11,13 @@ from rosaos.processes.tool_calls import ToolCall, ToolCallLog
 
 def device(name: str, tools: list[str] | None = None) -> GrantedDevice:
     return GrantedDevice(
-        name=name, driver="test", url="http://127.0.0.1:1/mcp", token="t", description="", prompt="", tools=tools
+        name=name,
+        driver="test",
+        url="http://127.0.0.1:1/mcp",
+        token="t",
+        description="",
+        prompt="",
+        tools=tools,
     )
 
 
@@ -55,37 +61,49 @@ def test_questions_looks_and_conditional_changes_do_not(task: str) -> None:
 
 
 def test_the_follow_up_note_after_the_task_is_not_read_as_the_task() -> None:
-    task = "Search the flat for a person.\n\nKernel follow-up (launch when this succeeds): Turn the lamp green."
+    task = (
+        "Search the flat for a person.\n\nKernel follow-up (launch when this succeeds): Turn the lamp green."
+    )
     assert not asks_for_change(task)
 
 
 def test_a_successful_change_call_ends_ok() -> None:
     calls = log(("kitchen_light", "get_state", True, False), ("kitchen_light", "turn_on", True, True))
-    outcome = judge("ok", None, task="Turn on the kitchen light.", devices=[LIGHT], calls=calls, model_ran=True)
+    outcome = judge(
+        "ok", None, task="Turn on the kitchen light.", devices=[LIGHT], calls=calls, model_ran=True
+    )
     assert outcome == ("ok", None)
 
 
 def test_no_call_at_all_is_unverified() -> None:
-    outcome = judge("ok", None, task="Turn on the kitchen light.", devices=[LIGHT], calls=log(), model_ran=True)
+    outcome = judge(
+        "ok", None, task="Turn on the kitchen light.", devices=[LIGHT], calls=log(), model_ran=True
+    )
     assert outcome.status == "unverified"
     assert "made no successful device call" in (outcome.error or "")
 
 
 def test_an_only_call_that_failed_is_an_error_with_the_devices_words() -> None:
     calls = log(("kitchen_light", "turn_on", False, True))
-    outcome = judge("ok", None, task="Turn on the kitchen light.", devices=[LIGHT], calls=calls, model_ran=True)
+    outcome = judge(
+        "ok", None, task="Turn on the kitchen light.", devices=[LIGHT], calls=calls, model_ran=True
+    )
     assert outcome == ("error", "kitchen_light: turn_on failed: refused")
 
 
 def test_a_failure_made_good_by_a_retry_of_the_same_tool_ends_ok() -> None:
     calls = log(("kitchen_light", "turn_on", False, True), ("kitchen_light", "turn_on", True, True))
-    outcome = judge("ok", None, task="Turn on the kitchen light.", devices=[LIGHT], calls=calls, model_ran=True)
+    outcome = judge(
+        "ok", None, task="Turn on the kitchen light.", devices=[LIGHT], calls=calls, model_ran=True
+    )
     assert outcome == ("ok", None)
 
 
 def test_a_change_task_whose_calls_only_read_is_unverified() -> None:
     calls = log(("kitchen_light", "get_state", True, False))
-    outcome = judge("ok", None, task="Turn on the kitchen light.", devices=[LIGHT], calls=calls, model_ran=True)
+    outcome = judge(
+        "ok", None, task="Turn on the kitchen light.", devices=[LIGHT], calls=calls, model_ran=True
+    )
     assert outcome.status == "unverified"
     assert "only read state (kitchen_light.get_state)" in (outcome.error or "")
 
@@ -106,12 +124,19 @@ def test_a_question_answered_by_reading_ends_ok() -> None:
 
 
 def test_an_offline_plan_run_is_judged_on_failures_only() -> None:
-    outcome = judge("ok", None, task="Turn on the kitchen light.", devices=[LIGHT], calls=log(), model_ran=False)
+    outcome = judge(
+        "ok", None, task="Turn on the kitchen light.", devices=[LIGHT], calls=log(), model_ran=False
+    )
     assert outcome == ("ok", None)
 
 
 def test_an_end_that_is_already_not_ok_is_kept() -> None:
     outcome = judge(
-        "timeout", "ran past 30 s", task="Turn on the kitchen light.", devices=[LIGHT], calls=log(), model_ran=True
+        "timeout",
+        "ran past 30 s",
+        task="Turn on the kitchen light.",
+        devices=[LIGHT],
+        calls=log(),
+        model_ran=True,
     )
     assert outcome == ("timeout", "ran past 30 s")
