@@ -84,14 +84,14 @@ async def test_take_a_picture_and_tell_me_completes_with_a_model_that_refuses_im
     home: Path, declared_vision: bool | None
 ) -> None:
     with scripted_llm(answer, reject_images=True) as llm:
-        async with running_kernel(home, WORLD + models_table(llm.url, vision=declared_vision)) as kernel:
-            async with kernel_api(kernel) as api:
-                code, summary = await run_chat(home, kernel.url)
-                assert code == 0, summary
-                [process] = summary["processes"]
-                assert process["status"] == "ok", process
-                tools = [(r["tool"], r["ok"]) for r in await _receipts(api, process["id"])]
-                assert tools == [("take_picture", True), ("describe_image", True)]
+        world = WORLD + models_table(llm.url, vision=declared_vision)
+        async with running_kernel(home, world) as kernel, kernel_api(kernel) as api:
+            code, summary = await run_chat(home, kernel.url)
+            assert code == 0, summary
+            [process] = summary["processes"]
+            assert process["status"] == "ok", process
+            tools = [(r["tool"], r["ok"]) for r in await _receipts(api, process["id"])]
+            assert tools == [("take_picture", True), ("describe_image", True)]
     asked = [r for r in llm.requests if r.role == "process"]
     refused = [r for r in asked if r.status == 400]
     if declared_vision:
