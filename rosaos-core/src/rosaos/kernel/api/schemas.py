@@ -21,6 +21,8 @@ from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.events import EventStore, IdempotencyKey, Source
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import Update, UpdateStream
+from rosaos.memory.sightings import SightingLog
+from rosaos.memory.store import MemoryStore
 from rosaos.processes.jobs import WorkerCallback
 from rosaos.processes.manager import ProcessInfo
 
@@ -47,6 +49,14 @@ class KernelRuntime(Protocol):
     @property
     def timers(self) -> TimerBook:
         """The durable timers (same SQLite file)."""
+
+    @property
+    def memory(self) -> MemoryStore:
+        """Named places and what people said (``memory.db``)."""
+
+    @property
+    def sightings(self) -> SightingLog:
+        """What the robots saw (``memory.db``)."""
 
     @property
     def login_codes(self) -> LoginCodes:
