@@ -264,13 +264,16 @@ class _Handler(BaseHTTPRequestHandler):
             },
         }
         data = json.dumps(reply).encode()
-        tool_bytes = len(json.dumps(body.get("tools", [])))
+        compact = {"separators": (",", ":"), "ensure_ascii": False}  # as the client sends them
+        tool_bytes = len(json.dumps(body.get("tools", []), **compact).encode())
         with self.script.lock:
             if self.script.dump:
                 path = f"{self.script.dump}/{len(self.script.log):03d}-{role}.json"
                 with open(path, "wb") as file:
                     file.write(raw)
-            system = sum(len(json.dumps(m)) for m in messages if m.get("role") == "system")
+            system = sum(
+                len(json.dumps(m, **compact).encode()) for m in messages if m.get("role") == "system"
+            )
             self.script.log.append(
                 Logged(
                     role,

@@ -1,4 +1,4 @@
-"""The process agent's system prompt: base prompt, then the kernel's task, then one section per device.
+"""The process agent's system prompt: base prompt, one section per device, then the kernel's task.
 
 The kernel agent decides *what* to do and which devices to grant; the process agent does it with
 exactly the tools of those devices. Its prompt therefore says how to behave (the base prompt),
@@ -45,13 +45,13 @@ def tool_prefix(device: str) -> str:
 
 
 def process_system_prompt(base_prompt: str, task: str, devices: Sequence[GrantedDevice]) -> str:
-    """Assemble the process agent's system prompt for ``task`` with ``devices`` granted.
+    """Assemble the process agent's system prompt for ``task`` with ``devices`` granted, task last.
 
     Each device section is headed by its instance name and description, followed by the driver's
     device prompt. With more than one device the tool names are prefixed by the instance name
     (``kitchen_light_set_color``), and the section says so, so the model can tell them apart.
     """
-    parts = [base_prompt.strip(), f"# Your task\n{task.strip()}"]
+    parts = [base_prompt.strip()]
     if not devices:
         parts.append("# Your devices\nYou hold no devices for this task, so you have no tools.")
     else:
@@ -63,4 +63,8 @@ def process_system_prompt(base_prompt: str, task: str, devices: Sequence[Granted
             if prefixed:
                 heading += f"\nIts tools are named `{tool_prefix(device.name)}_<tool>`."
             parts.append(f"{heading}\n\n{device.prompt.strip()}")
+    # The task comes last: what stays the same for every task on these devices (the base prompt,
+    # the device sections, and the tool schemas before them) is then a prefix that a local model
+    # server caches (llama.cpp, vLLM, Ollama), so only the task is prefilled anew.
+    parts.append(f"# Your task\n{task.strip()}")
     return "\n\n".join(parts) + "\n"
