@@ -19,6 +19,8 @@ from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.events import EventStore
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
+from rosaos.memory.sightings import SightingLog
+from rosaos.memory.store import MemoryStore
 from rosaos.processes.jobs import WorkerCallback
 
 TOKEN = "test-token-0123456789"
@@ -62,6 +64,9 @@ class TestRuntime:
     confirmations: ConfirmationDesk = field(default_factory=lambda: ConfirmationDesk(timeout=60))
     timers: TimerBook | None = None
     """Set by the ``runtime`` fixture (opening the table needs the event loop)."""
+    memory: MemoryStore | None = None
+    sightings: SightingLog | None = None
+    """Both set by the ``runtime`` fixture, on a memory.db of the test's own."""
 
     async def processes(self, include_ended: bool = False) -> Sequence[Any]:
         return [p for p in self.process_list if include_ended or p.state == "running"]
