@@ -126,7 +126,21 @@ def summarize(log: list[Logged]) -> dict[str, Any]:
         "tokens": sum(r.prompt_tokens for r in log),
         "largest_request_bytes": max((r.bytes for r in log), default=0),
         "process_tools_offered": max((r.tools for r in log if r.role == "process"), default=0),
-        "per_request": [(r.role, r.bytes, r.tools, r.tool_bytes) for r in log],
+        "model_seconds": round(sum(r.seconds for r in log), 3),
+        "per_request": [
+            {
+                "role": r.role,
+                "bytes": r.bytes,
+                "system_bytes": r.system_bytes,
+                "tools": r.tools,
+                "tool_bytes": r.tool_bytes,
+                "prompt_tokens": r.prompt_tokens,
+                "prefilled_tokens": r.prefilled_tokens,
+                "output_tokens": r.output_tokens,
+                "seconds": r.seconds,
+            }
+            for r in log
+        ],
     }
 
 
@@ -203,6 +217,16 @@ def main() -> None:
                 f"| {profile} | {command} | {r['requests']} ({r['kernel_requests']} + {r['process_requests']}) "
                 f"| {r['bytes']:,} | {r['tokens']:,} | {r['process_tools_offered']} | {r['seconds_to_device']} |"
             )
+    print("\nWhere the model's seconds go (per request: prompt bytes = system + tools + the rest):")
+    for profile, commands in results.items():
+        for command, r in commands.items():
+            for q in r["per_request"]:
+                rest = q["bytes"] - q["system_bytes"] - q["tool_bytes"]
+                print(
+                    f"  {profile:>15} {command:<12} {q['role']:<7} {q['bytes']:>6} B = {q['system_bytes']:>5} + "
+                    f"{q['tool_bytes']:>5} ({q['tools']} tools) + {rest:>5}; prefilled {q['prefilled_tokens']:>5} tok, "
+                    f"out {q['output_tokens']:>3} tok: {q['seconds']:.2f} s"
+                )
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps({"load": load, "results": results}, indent=2))

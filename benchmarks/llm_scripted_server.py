@@ -67,12 +67,18 @@ PLANS: list[tuple[str, list[tuple[str, dict[str, Any]]]]] = [
 
 @dataclass(frozen=True)
 class Latency:
-    """Seconds a request costs: ``base`` + per prompt token + per output token."""
+    """Seconds a request costs: ``base`` + per prompt token + per output token.
+
+    With ``prefix_cache`` (llama.cpp's ``cache_prompt``, vLLM's and Ollama's prefix caching) only
+    the prompt tokens after the longest prefix shared with the last request of the same agent
+    (kernel or process) are prefilled; the issue's profiles charge every prompt token.
+    """
 
     name: str
     base: float
     per_prompt_token: float
     per_output_token: float
+    prefix_cache: bool = False
 
     def seconds(self, prompt_tokens: int, output_tokens: int) -> float:
         return self.base + self.per_prompt_token * prompt_tokens + self.per_output_token * output_tokens
@@ -82,7 +88,31 @@ PROFILES = {
     "none": Latency("none", 0.0, 0.0, 0.0),
     "cloud": Latency("cloud", 0.4, 0.0002, 0.010),
     "local-8b": Latency("local-8b", 0.0, 0.0005, 0.025),
+    "local-8b-cached": Latency("local-8b-cached", 0.0, 0.0005, 0.025, prefix_cache=True),
 }
+
+
+def templated(body: dict[str, Any]) -> str:
+    """The prompt as a chat template lays it out: the tools first, then the messages in order."""
+    return json.dumps(body.get("tools", [])) + "".join(json.dumps(m) for m in body.get("messages", []))
+
+
+def generated_bytes(message: dict[str, Any]) -> int:
+    """What a model writes for ``message``: its text, and per tool call the name, the arguments
+    and a ~24-byte call wrapper (``<tool_call>{"name": …, "arguments": …}</tool_call>``). The
+    call id and the JSON envelope are the server's, not decoded tokens."""
+    calls = message.get("tool_calls") or []
+    text = len(message.get("content") or "")
+    return text + sum(len(c["function"]["name"]) + len(c["function"]["arguments"]) + 24 for c in calls)
+
+
+def shared_prefix(a: str, b: str) -> int:
+    """Length of the longest common prefix of ``a`` and ``b``."""
+    limit = min(len(a), len(b))
+    index = 0
+    while index < limit and a[index] == b[index]:
+        index += 1
+    return index
 
 
 @dataclass(frozen=True)
@@ -98,6 +128,11 @@ class Logged:
     tool_bytes: int
     at: float
     """``time.time()`` when the answer was sent."""
+    prefilled_tokens: int = 0
+    """Prompt tokens charged: all of them, or with a prefix cache those after the cached prefix."""
+    seconds: float = 0.0
+    """The latency the profile charged for this request."""
+    system_bytes: int = 0
 
 
 @dataclass
@@ -106,6 +141,8 @@ class Script:
 
     latency: Latency = PROFILES["none"]
     log: list[Logged] = field(default_factory=list)
+    cached: dict[str, str] = field(default_factory=dict)
+    """Per agent role, the last prompt (as templated), for the prefix-cache profile."""
     dump: str | None = None
     """A directory to write every request body to (``NNN-role.json``), to see where bytes go."""
     lock: threading.Lock = field(default_factory=threading.Lock)
@@ -203,9 +240,16 @@ class _Handler(BaseHTTPRequestHandler):
         messages = body.get("messages", [])
         role = "kernel" if LAUNCH in tools else "process"
         message = kernel_answer(messages) if role == "kernel" else process_answer(messages, tools)
-        answer = json.dumps(message)
-        prompt_tokens, output_tokens = len(raw) // 4, max(1, len(answer) // 4)
-        time.sleep(self.script.latency.seconds(prompt_tokens, output_tokens))
+        prompt_tokens, output_tokens = len(raw) // 4, max(1, generated_bytes(message) // 4)
+        latency, prompt = self.script.latency, templated(body)
+        prefilled = prompt_tokens
+        with self.script.lock:
+            if latency.prefix_cache:
+                cached = shared_prefix(self.script.cached.get(role, ""), prompt)
+                prefilled = max(0, prompt_tokens - cached // 4)
+            self.script.cached[role] = prompt
+        seconds = latency.seconds(prefilled, output_tokens)
+        time.sleep(seconds)
         finish = "tool_calls" if message.get("tool_calls") else "stop"
         reply = {
             "id": "chatcmpl-scripted",
@@ -220,14 +264,29 @@ class _Handler(BaseHTTPRequestHandler):
             },
         }
         data = json.dumps(reply).encode()
-        tool_bytes = len(json.dumps(body.get("tools", [])))
+        compact = {"separators": (",", ":"), "ensure_ascii": False}  # as the client sends them
+        tool_bytes = len(json.dumps(body.get("tools", []), **compact).encode())
         with self.script.lock:
             if self.script.dump:
                 path = f"{self.script.dump}/{len(self.script.log):03d}-{role}.json"
                 with open(path, "wb") as file:
                     file.write(raw)
+            system = sum(
+                len(json.dumps(m, **compact).encode()) for m in messages if m.get("role") == "system"
+            )
             self.script.log.append(
-                Logged(role, len(raw), prompt_tokens, output_tokens, len(tools), tool_bytes, time.time())
+                Logged(
+                    role,
+                    len(raw),
+                    prompt_tokens,
+                    output_tokens,
+                    len(tools),
+                    tool_bytes,
+                    time.time(),
+                    prefilled,
+                    round(seconds, 3),
+                    system,
+                )
             )
         self.send_response(200)
         self.send_header("Content-Type", "application/json")

@@ -23,6 +23,8 @@ from rosaos.kernel.api.app import create_app
 from rosaos.kernel.events import EventStore
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
+from rosaos.memory.sightings import SightingLog
+from rosaos.memory.store import MemoryStore
 
 # Test modules import kernel_support from this folder (pytest's importlib mode does not put it
 # on sys.path).
@@ -47,11 +49,18 @@ async def updates(store: EventStore) -> UpdateStream:
 
 
 @pytest.fixture
-async def runtime(store: EventStore, updates: UpdateStream) -> TestRuntime:
+async def runtime(store: EventStore, updates: UpdateStream, tmp_path: Path) -> TestRuntime:
     activity = await ActivityLog.open(store.database)
     timers = await TimerBook.open(store)
+    memory = MemoryStore.open(tmp_path / "memory")
     return TestRuntime(
-        events=store, updates=updates, device_list=[kitchen_light()], activity=activity, timers=timers
+        events=store,
+        updates=updates,
+        device_list=[kitchen_light()],
+        activity=activity,
+        timers=timers,
+        memory=memory,
+        sightings=SightingLog(memory),
     )
 
 

@@ -20,6 +20,8 @@ from rosaos.kernel.events import EventStore
 from rosaos.kernel.intake import Intake
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
+from rosaos.memory.sightings import SightingLog
+from rosaos.memory.store import MemoryStore
 
 TOKEN = "test-token-0123456789"
 ORIGIN = "http://127.0.0.1:8765"
@@ -62,6 +64,9 @@ class TestRuntime:
     confirmations: ConfirmationDesk = field(default_factory=lambda: ConfirmationDesk(timeout=60))
     timers: TimerBook | None = None
     """Set by the ``runtime`` fixture (opening the table needs the event loop)."""
+    memory: MemoryStore | None = None
+    sightings: SightingLog | None = None
+    """Both set by the ``runtime`` fixture, on a memory.db of the test's own."""
     intake: Intake = field(init=False)
     """The kernel's own intake on this store: the routes queue through it as in ``rosaos up``."""
 

@@ -92,6 +92,14 @@ def test_history_is_bounded_by_size_as_well_as_by_count() -> None:
     assert trim_history(long, 40, max_chars=1000) == []  # one turn too big to carry: none carried
 
 
+def test_a_cut_goes_down_to_half_the_budget_so_the_next_turns_keep_the_same_prefix() -> None:
+    history = turn(1) + turn(2) + turn(3) + turn(4) + turn(5)  # 20 messages
+    trimmed = trim_history(history, 16)
+    assert trimmed == history[12:]  # 8 messages: half of 16, not the 16 that would just fit
+    grown = trim_history([*trimmed, *turn(6)], 16)
+    assert grown[: len(trimmed)] == trimmed  # the next turn appends; nothing before it moved
+
+
 def test_the_default_prompt_tells_the_model_about_every_timer_tool_and_timer_event() -> None:
     from rosaos.kernel.timer_tools import TIMER_TOOL_NAMES
 

@@ -191,6 +191,17 @@ def claims_done() -> FunctionModel:
     return FunctionModel(respond, model_name="claims-done")
 
 
+def only_reads() -> FunctionModel:
+    """Reads the device's state (a ``readOnlyHint`` tool), then says the change is done."""
+
+    def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        if not _tool_returns(messages):
+            return ModelResponse(parts=[ToolCallPart("get_state", {})])
+        return ModelResponse(parts=[TextPart("Done, the level is 42.")])
+
+    return FunctionModel(respond, model_name="only-reads")
+
+
 def calls_unleased() -> FunctionModel:
     """Calls ``fan_set_level`` (a device it was not granted), then its own ``set_level``, then reports
     the answers it read."""

@@ -1,4 +1,4 @@
-"""Process prompts: base prompt, then the task, then one section per granted device."""
+"""Process prompts: base prompt, one section per granted device, then the task."""
 
 from __future__ import annotations
 
@@ -18,11 +18,21 @@ def device(name: str, driver: str = "tapo") -> GrantedDevice:
     )
 
 
-def test_parts_come_in_order_base_task_devices() -> None:
+def test_parts_come_in_order_base_devices_task() -> None:
     prompt = process_system_prompt("BASE", "turn the light red", [device("kitchen_light")])
     assert (
-        prompt.index("BASE") < prompt.index("turn the light red") < prompt.index("How to drive kitchen_light")
+        prompt.index("BASE") < prompt.index("How to drive kitchen_light") < prompt.index("turn the light red")
     )
+
+
+def test_every_task_on_the_same_devices_shares_the_prompt_up_to_the_task() -> None:
+    """A local model server that caches the prompt prefix prefills only the task of the next one."""
+    devices = [device("kitchen_light"), device("reachy", "reachy")]
+    first = process_system_prompt("BASE", "turn the light red", devices)
+    second = process_system_prompt("BASE", "dim the light", devices)
+    shared = first.index("# Your task")
+    assert first[:shared] == second[:shared]
+    assert first[shared:] == "# Your task\nturn the light red\n"
 
 
 def test_each_device_is_headed_by_its_name_driver_and_description() -> None:

@@ -86,6 +86,28 @@ async def test_a_model_that_says_done_without_a_device_call_does_not_end_ok(
     assert lamp.state["level"] == 0
 
 
+async def test_a_change_task_whose_calls_only_read_does_not_end_ok(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    lamp = devices["lamp"]
+    lamp.state["level"] = 0
+    job = make_job(kernel, "only_reads", [lamp]).model_copy(update={"task": "Set the lamp to 42 %."})
+    callback = await run_job(job)
+    assert callback.status == "unverified"
+    assert "only read state (lamp.get_state)" in (callback.error or "")
+    assert lamp.state["level"] == 0
+
+
+async def test_a_question_answered_by_reading_ends_ok(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    job = make_job(kernel, "only_reads", [devices["lamp"]]).model_copy(
+        update={"task": "What level is the lamp at?"}
+    )
+    callback = await run_job(job)
+    assert (callback.status, callback.error) == ("ok", None)
+
+
 async def test_a_call_to_a_device_not_granted_is_logged_and_named_by_the_missing_lease(
     kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
 ) -> None:

@@ -124,6 +124,11 @@ def trim_history(
     Cutting elsewhere could orphan a tool return from its call, which models reject. The size
     bound matters as much as the count: one callback with its receipts weighs like ten short
     turns, and every kernel request carries the whole history.
+
+    When it must cut, it cuts to half the budgets (if a turn boundary allows): dropping one turn
+    at a time would shift the whole history on every turn, so a local model server's prefix
+    cache (llama.cpp, vLLM, Ollama) would miss from the first message on; cut by half, the next
+    turns only append to a prefix it has seen, and the history carried is smaller on average.
     """
     messages = list(messages)
     starts = [
@@ -132,10 +137,20 @@ def trim_history(
         if isinstance(message, ModelRequest) and any(isinstance(p, UserPromptPart) for p in message.parts)
     ]
     sizes = [message_size(message) for message in messages]
-    for start in starts:
-        if len(messages) - start <= budget and (max_chars is None or sum(sizes[start:]) <= max_chars):
-            return messages[start:]
-    return []
+
+    def first_fitting(count: int, chars: int | None) -> int | None:
+        for start in starts:
+            if len(messages) - start <= count and (chars is None or sum(sizes[start:]) <= chars):
+                return start
+        return None
+
+    start = first_fitting(budget, max_chars)
+    if start is None:
+        return []
+    if start != starts[0]:  # something must go: go down to half, so the next turns need no cut
+        half = first_fitting(max(1, budget // 2), None if max_chars is None else max_chars // 2)
+        start = half if half is not None else start
+    return messages[start:]
 
 
 def message_size(message: ModelMessage) -> int:

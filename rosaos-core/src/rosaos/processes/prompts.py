@@ -1,4 +1,4 @@
-"""The process agent's system prompt: base prompt, then the kernel's task, then one section per device.
+"""The process agent's system prompt: base prompt, one section per device, then the kernel's task.
 
 The kernel agent decides *what* to do and which devices to grant; the process agent does it with
 exactly the tools of those devices. Its prompt therefore says how to behave (the base prompt),
@@ -51,7 +51,7 @@ def process_system_prompt(
     devices: Sequence[GrantedDevice],
     tools: Mapping[str, DeviceTools] | None = None,
 ) -> str:
-    """Assemble the process agent's system prompt for ``task`` with ``devices`` granted.
+    """Assemble the process agent's system prompt for ``task`` with ``devices`` granted, task last.
 
     Each device section is headed by its instance name and description, followed by the driver's
     device prompt and the device's tool list, written from its MCP metadata (``tools``, by
@@ -59,7 +59,7 @@ def process_system_prompt(
     With more than one device the tool names are prefixed by the instance name
     (``kitchen_light_set_color``), and the section says so, so the model can tell them apart.
     """
-    parts = [base_prompt.strip(), f"# Your task\n{task.strip()}"]
+    parts = [base_prompt.strip()]
     if not devices:
         parts.append("# Your devices\nYou hold no devices for this task, so you have no tools.")
     else:
@@ -74,4 +74,8 @@ def process_system_prompt(
             tool_list = listed.render(device.tools) if listed is not None else ""
             body = f"{device.prompt.strip()}\n\n{tool_list}" if tool_list else device.prompt.strip()
             parts.append(f"{heading}\n\n{body}")
+    # The task comes last: what stays the same for every task on these devices (the base prompt,
+    # the device sections, and the tool schemas before them) is then a prefix that a local model
+    # server caches (llama.cpp, vLLM, Ollama), so only the task is prefilled anew.
+    parts.append(f"# Your task\n{task.strip()}")
     return "\n\n".join(parts) + "\n"

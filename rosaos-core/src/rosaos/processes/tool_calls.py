@@ -27,6 +27,8 @@ class ToolCall:
     ok: bool
     error: str | None
     seconds: float
+    changes: bool = True
+    """False for a tool annotated ``readOnlyHint``: its success shows nothing changed (processes/outcome.py)."""
 
 
 @dataclass
@@ -57,14 +59,23 @@ class ObservedToolset(WrapperToolset[Any]):
         self, name: str, tool_args: dict[str, Any], ctx: RunContext[Any], tool: ToolsetTool[Any]
     ) -> Any:
         started = time.monotonic()
+        changes = not read_only(tool)
         try:
             result = await self.wrapped.call_tool(name, tool_args, ctx, tool)
         except Exception as failure:  # ToolFailed, ModelRetry, a lost connection: all are failures
             message = getattr(failure, "message", None) or str(failure) or type(failure).__name__
-            self.log.calls.append(ToolCall(self.device, name, False, message, time.monotonic() - started))
+            self.log.calls.append(
+                ToolCall(self.device, name, False, message, time.monotonic() - started, changes)
+            )
             raise
-        self.log.calls.append(ToolCall(self.device, name, True, None, time.monotonic() - started))
+        self.log.calls.append(ToolCall(self.device, name, True, None, time.monotonic() - started, changes))
         return result
+
+
+def read_only(tool: ToolsetTool[Any]) -> bool:
+    """Whether the MCP server annotated ``tool`` ``readOnlyHint: true`` (unannotated: it may change things)."""
+    annotations = (tool.tool_def.metadata or {}).get("annotations") or {}
+    return annotations.get("readOnlyHint") is True
 
 
 def observed(toolset: AbstractToolset[Any], device: str, log: ToolCallLog) -> ObservedToolset:

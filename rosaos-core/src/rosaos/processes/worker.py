@@ -45,6 +45,7 @@ from rosaos.processes.final_call import FINAL_CALL_MODEL, FinalCallModel
 from rosaos.processes.jobs import GrantedDevice, ProcessStatus, WorkerCallback, WorkerJob
 from rosaos.processes.keepalive import DeadlineToolset, DeviceLink, keepalives, owner_headers
 from rosaos.processes.lease_guard import LeaseGuardModel
+from rosaos.processes.outcome import judge
 from rosaos.processes.plan_runner import run_plan
 from rosaos.processes.prompts import process_system_prompt, tool_prefix
 from rosaos.processes.protocol import Done, Progress, Ready, Rejected, encode
@@ -111,18 +112,10 @@ async def run_job(job: WorkerJob) -> WorkerCallback:
         except Exception as failure:
             log.exception("process %d failed", job.process_id)
             status, error = "error", describe_error(failure)
-    failed = calls.unresolved_failure()
-    if status == "ok" and failed is not None:
-        # The model may have written a polite sentence about it; the device call still failed.
-        status, error = "error", f"{failed.device}: {failed.tool} failed: {failed.error}"
-    if status == "ok" and messages and job.devices and not any(call.ok for call in calls.calls):
-        # A model ran the process and said it was done, but no device call of it succeeded:
-        # success is the devices' word, not the model's (issue 22).
-        status = "unverified"
-        error = (
-            "the process agent said it was done, but it made no successful device call, so nothing "
-            "shows that it happened; its report is not a result"
-        )
+    # Success is the devices' word, not the model's (processes/outcome.py, issue 22).
+    status, error = judge(
+        status, error, task=job.task, devices=job.devices, calls=calls, model_ran=bool(messages)
+    )
     requests, tool_calls = count_usage(messages)
     if not messages:  # a plan run without an agent (processes/plan_runner.py): no model requests
         tool_calls = len(calls.calls)

@@ -10,6 +10,7 @@ import {
 import { followUpdates, showChatDetails } from "./stream.js";
 import { renderEmergencyStop, wireEmergencyStop } from "./estop.js";
 import { wireMap } from "./map.js";
+import { noteOrigins, renderPlaces, renderSightings } from "./memory_map.js";
 import { cancelTimer, detectTimers } from "./timers.js";
 import { answerConfirmation, renderConfirmations, timelineProcesses } from "./timeline.js";
 import { setMarkedText, suggestions } from "./words.js";
@@ -109,7 +110,9 @@ function start() {
   pollForever("/processes?all=true", timelineProcesses);
   pollForever("/confirmations", renderConfirmations);
   detectTimers();
-  pollForever("/devices", (devices) => { renderDevices(devices); suggest(devices); });
+  pollForever("/places", renderPlaces);
+  pollForever("/sightings", renderSightings);
+  pollForever("/devices", (devices) => { noteOrigins(devices); renderDevices(devices); suggest(devices); });
   pollForever("/estop", renderEmergencyStop);
 }
 

@@ -189,12 +189,13 @@ function describe(found) {
     return `${where}${r.docked ? ", docked" : ""}`;
   });
   if (found.length) lines.push(`${found.length} ${found.length === 1 ? "person" : "people"} seen`);
+  for (const layer of layers.values()) lines.push(...(layer.summary?.() || []));
   return lines.join(". ");
 }
 
 // Extra layers (named places, a floor plan...): addMapLayer({ name, points, draw }) where
 // points() gives [x, y] map metres to keep in view and draw(context) returns SVG nodes, drawn
-// under the robots. context: { toScreen, scale, shrink, svg, labels } (labels.place/block avoid overprinting).
+// under the robots; summary(), if given, adds sentences to the map's text description. context: { toScreen, scale, shrink, svg, labels } (labels.place/block avoid overprinting).
 const layers = new Map();
 
 /** Add or replace a map layer; the map redraws on the next device poll. */

@@ -30,6 +30,7 @@ from rosaos.kernel.api import (
     confirmation_routes,  # noqa: F401  (adds its routes to protected)
     control_routes,  # noqa: F401  (adds its routes to protected)
     frame_routes,  # noqa: F401  (adds its routes to protected)
+    memory_routes,  # noqa: F401  (adds its routes to protected)
     timer_routes,  # noqa: F401  (adds its routes to protected)
 )
 from rosaos.kernel.api.routes import WEB_DIR, protected, public

@@ -22,6 +22,8 @@ from rosaos.kernel.events import EventStore, IdempotencyKey, Source
 from rosaos.kernel.intake import Intake
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import Update, UpdateStream
+from rosaos.memory.sightings import SightingLog
+from rosaos.memory.store import MemoryStore
 from rosaos.processes.manager import ProcessInfo
 
 
@@ -51,6 +53,14 @@ class KernelRuntime(Protocol):
     @property
     def timers(self) -> TimerBook:
         """The durable timers (same SQLite file)."""
+
+    @property
+    def memory(self) -> MemoryStore:
+        """Named places and what people said (``memory.db``)."""
+
+    @property
+    def sightings(self) -> SightingLog:
+        """What the robots saw (``memory.db``)."""
 
     @property
     def login_codes(self) -> LoginCodes:
