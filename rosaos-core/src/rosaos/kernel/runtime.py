@@ -322,15 +322,21 @@ class Kernel:
 
     # --- lifecycle ---------------------------------------------------------------------------------
 
-    async def start(self, host: str | None = None, port: int | None = None) -> str:
-        """Start devices, the event store, the pool, the loop and the API; return the API's base URL."""
+    async def start(
+        self, host: str | None = None, port: int | None = None, *, wait_for_devices: bool = True
+    ) -> str:
+        """Start devices, the event store, the pool, the loop and the API; return the API's base URL.
+
+        With ``wait_for_devices=False`` (``rosaos up``) it returns once the kernel can take
+        commands, while the devices still come up: a launch that names a device still starting
+        waits briefly for it (:class:`~rosaos.processes.manager.ProcessManager`)."""
         host = host or self.config.kernel.host
         port = self.config.kernel.port if port is None else port
         self._token = load_or_create_token(self.data_dir)  # creates the data directory, owner-only
         sock = await _bind_or_explain(host, port, self._token)
         self.url = _base_url(sock)
         try:
-            await self._start_parts(sock)
+            await self._start_parts(sock, wait_for_devices)
         except BaseException:
             await self.stop()
             sock.close()
@@ -339,7 +345,7 @@ class Kernel:
         write_atomic(kernel_file(self.data_dir), json.dumps({"url": self.url, "pid": os.getpid()}))
         return self.url
 
-    async def _start_parts(self, sock: socket.socket) -> None:
+    async def _start_parts(self, sock: socket.socket, wait_for_devices: bool = True) -> None:
         self._store = await EventStore.open(self.data_dir / EVENTS_FILE)
         self._updates = await UpdateStream.open(self._store.database)
         self._activity = await ActivityLog.open(self._store.database)
@@ -377,28 +383,41 @@ class Kernel:
             on_ended=self._process_ended,
             first_process_id=await self._store.next_process_id(),
             emergency_stop=await _stored_emergency_stop(self._store),
+            starting=self.supervisor.settle if isinstance(self.supervisor, DeviceSupervisor) else None,
         )
         # Devices (a robot simulator takes seconds to boot) and the warm workers (seconds of
         # imports each) start side by side; neither needs the other until the first event.
         try:
             async with asyncio.TaskGroup() as group:
-                group.create_task(self.supervisor.start(), name="start devices")
+                devices = (
+                    self.supervisor.start(wait=False)
+                    if isinstance(self.supervisor, DeviceSupervisor) and not wait_for_devices
+                    else self.supervisor.start()
+                )
+                group.create_task(devices, name="start devices")
                 group.create_task(self.manager.start(), name="start worker pool")
         except BaseExceptionGroup as failed:
             raise failed.exceptions[0] from None
-        # Before the loop can grant anything: devices a dead kernel's processes held get safe_stop,
-        # so one still starting in the background (the Reachy simulator) is waited for first.
-        if isinstance(self.supervisor, DeviceSupervisor):
-            self.supervisor.release_background()
-            await self.supervisor.settle({name for p in await self._live.left() for name in p.devices})
-        # Opened before orphan recovery: a callback it republishes records its sightings.
-        self.memory = MemoryStore.open(self.data_dir)
-        self.sightings = SightingLog(self.memory, self.config.memory.sightings_days)
         self._pending_stops = PendingStops(
             self._store,
             self.supervisor.directory,
             lambda text, data: self._updates.publish("notice", text, data),
         )
+        # Before the loop can grant anything: devices a dead kernel's processes held get safe_stop,
+        # so one still starting in the background (the Reachy simulator) is waited for first.
+        if isinstance(self.supervisor, DeviceSupervisor):
+            if wait_for_devices:
+                self.supervisor.release_background()
+            else:  # still after the other devices, as above, but without holding up the banner
+                self._tasks.append(asyncio.create_task(self._release_background(), name="background devices"))
+            owed = {name for p in await self._live.left() for name in p.devices}
+            owed |= set(await self._pending_stops.names())
+            if self.manager.emergency_stop is not None:  # every host must hear of it before "up"
+                owed = set(self.world.instances)
+            await self.supervisor.settle(owed)
+        # Opened before orphan recovery: a callback it republishes records its sightings.
+        self.memory = MemoryStore.open(self.data_dir)
+        self.sightings = SightingLog(self.memory, self.config.memory.sightings_days)
         await self._pending_stops.deliver()  # owed by the last run: a device that is back is stopped now
         self._host_latches = HostLatches(self.supervisor.directory)
         if self.manager.emergency_stop is not None:  # latched before the restart: so are the hosts
@@ -465,6 +484,11 @@ class Kernel:
         self._tasks.append(asyncio.create_task(self._run_loop(), name="kernel loop"))
         # Timers that fell due while the kernel was down fire now, once, and say they are late.
         self._tasks.append(asyncio.create_task(self.timers.run(), name="timers"))
+
+    async def _release_background(self) -> None:
+        assert isinstance(self.supervisor, DeviceSupervisor)
+        await self.supervisor.foreground_settled()
+        self.supervisor.release_background()
 
     def _model_for_event(self, event: Event) -> Model | None:
         return self._models.for_event(event)

@@ -14,7 +14,9 @@ deliver it itself, so no ending is lost.
 
 from __future__ import annotations
 
+import asyncio
 import builtins
+import contextlib
 import logging
 from collections.abc import Awaitable, Callable, Mapping
 from datetime import UTC, datetime
@@ -30,6 +32,9 @@ from rosaos.processes.leases import LeaseRefused, LeaseTable
 from rosaos.processes.pool import PoolError, WorkerPool
 
 log = logging.getLogger("rosaos.processes.manager")
+
+STARTING_WAIT = 15.0
+"""Seconds a launch waits for a device that is still starting before it is refused (as not available)."""
 
 ProcessState = Literal["running", "ok", "error", "crashed", "timeout", "terminated", "unverified"]
 
@@ -93,6 +98,8 @@ class ProcessManager:
         on_ended: Callable[[WorkerCallback, bool], Awaitable[None]],
         first_process_id: int = 1,
         emergency_stop: EmergencyStop | None = None,
+        starting: Callable[[builtins.list[str]], Awaitable[None]] | None = None,
+        starting_wait: float = STARTING_WAIT,
     ) -> None:
         if first_process_id < 1:
             raise ValueError("first_process_id must be 1 or more")
@@ -108,6 +115,9 @@ class ProcessManager:
         self._next_id = first_process_id
         self._processes: dict[int, ProcessInfo] = {}
         self.leases = LeaseTable()
+        self._starting = starting
+        """Waits until the named devices have had their first start attempt (the supervisor's ``settle``)."""
+        self.starting_wait = starting_wait
         self.emergency_stop = emergency_stop
         """The latched emergency stop, or None. While latched every launch is refused. The kernel
         keeps it on disk and passes it in at start, so a restart does not unlatch it."""
@@ -176,7 +186,7 @@ class ProcessManager:
             )
         if not task:
             raise LaunchRefused("the task is empty; describe what the process should do")
-        endpoints = self._devices()
+        endpoints = await self._started(devices)
         process_id = self._next_id
         try:
             granted = self.leases.acquire(process_id, task, devices, endpoints)
@@ -218,6 +228,26 @@ class ProcessManager:
             # terminate() (or stop()) came while a one-off worker was being spawned: honour it now.
             await self._pool.terminate(process_id)
         return info.model_copy()
+
+    async def _started(self, devices: builtins.list[str]) -> Mapping[str, DeviceEndpoint]:
+        """The endpoints, once ``devices`` still starting (``rosaos up`` shows its banner before
+        every device is up) are up, or after ``starting_wait`` s: a command right after the banner
+        waits for its lamp instead of being refused. A device known to be down is not waited for."""
+        endpoints = self._devices()
+        starting = [
+            name
+            for name in devices
+            if (endpoint := endpoints.get(name)) is not None
+            and endpoint.status == "starting"
+            and not endpoint.url
+        ]
+        if not starting or self._starting is None:
+            return endpoints
+        log.info("waiting up to %g s for %s to start", self.starting_wait, ", ".join(starting))
+        with contextlib.suppress(TimeoutError):
+            async with asyncio.timeout(self.starting_wait):
+                await self._starting(starting)
+        return self._devices()
 
     async def terminate(self, process_id: int) -> ProcessInfo:
         """Kill a running process and release its leases; an ended process is returned as it is.
