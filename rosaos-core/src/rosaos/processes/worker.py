@@ -59,6 +59,7 @@ from rosaos.processes.recording import RecordingToolset
 from rosaos.processes.tool_calls import ToolCallLog, observed
 from rosaos.processes.vision import ImageFallbackModel, image_budget_for, image_headers
 from rosaos.receipts import Receipt
+from rosaos.tls import shared_context
 
 log = logging.getLogger("rosaos.processes.worker")
 
@@ -300,7 +301,9 @@ def plan_of(task: str) -> Plan | None:
 async def _connect(device: GrantedDevice, images: int | None = None) -> MCPToolset[Any]:
     """Open the device's MCP session up front, so a dead device is reported by name, not as a stack."""
     headers = {**image_headers(images), **owner_headers()}
-    transport = StreamableHttpTransport(device.url, headers=headers, auth=device.token)
+    transport = StreamableHttpTransport(
+        device.url, headers=headers, auth=device.token, verify=shared_context()
+    )
     client: Client[Any] = Client(
         transport,
         name=f"rosaos-{device.name}",
@@ -329,7 +332,7 @@ async def _connect(device: GrantedDevice, images: int | None = None) -> MCPTools
 async def _refused_token(device: GrantedDevice) -> str | None:
     """After a failed connect: whether the server answered 401/403 (the MCP error does not say)."""
     try:
-        async with httpx.AsyncClient(timeout=CONNECT_TIMEOUT) as http:
+        async with httpx.AsyncClient(timeout=CONNECT_TIMEOUT, verify=shared_context()) as http:
             response = await http.post(device.url, headers={"Authorization": f"Bearer {device.token}"})
     except httpx.HTTPError:
         return None
@@ -369,7 +372,7 @@ async def deliver_callback(job: WorkerJob, callback: WorkerCallback) -> bool:
     """Post ``callback`` to the kernel, retrying briefly. False if it did not get through."""
     headers = {"Authorization": f"Bearer {job.callback_token}"}
     body = callback_event(callback)
-    async with httpx.AsyncClient(timeout=CALLBACK_TIMEOUT) as http:
+    async with httpx.AsyncClient(timeout=CALLBACK_TIMEOUT, verify=shared_context()) as http:
         for delay in CALLBACK_RETRY_DELAYS:
             await asyncio.sleep(delay)
             try:
