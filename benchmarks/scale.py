@@ -134,6 +134,7 @@ async def burst(url: str, token: str, n: int, limit: float) -> dict[str, Any]:
         ended: dict[int, tuple[str, float]] = {}  # event id → (status, latency)
         refused: list[str] = []
         notices: list[str] = []
+        failures: list[str] = []  # why a process did not end ok
         replies: dict[int, str] = {}  # event id → the kernel's reply
         while time.perf_counter() - started < limit and len(ended) + len(refused) < n:
             page = (await api.get("/updates", params={"after": after, "limit": 1000})).json()["updates"]
@@ -146,6 +147,8 @@ async def burst(url: str, token: str, n: int, limit: float) -> dict[str, Any]:
                     source = launched[int(data["process_id"])]
                     at = datetime.fromisoformat(update["time"]).timestamp()
                     ended[source] = (str(data.get("status")), at - sent[source])
+                    if data.get("status") != "ok":
+                        failures.append(f"{data.get('status')}: {data.get('error') or update['text']}")
                 elif kind == "kernel_reply" and event in sent:
                     replies[event] = update["text"]
                 elif kind == "notice" and update["text"].startswith("launch refused"):
@@ -175,6 +178,7 @@ async def burst(url: str, token: str, n: int, limit: float) -> dict[str, Any]:
         "notices": len(notices),
         "notice_texts": notices[:10],
         "refusal_texts": refused[:3],
+        "failure_texts": failures[:5],
         "unfinished_replies": [replies.get(event, "") for event in sent if event not in ended][:5],
         "lamps_on": states.count(True),
         "lamps_off": states.count(False),

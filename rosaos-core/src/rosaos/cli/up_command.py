@@ -106,14 +106,30 @@ async def _serve(kernel: Kernel, console: Console, err: Console) -> int:
     try:
         _print_banner(kernel, url, console)
         progress = asyncio.create_task(report_devices(kernel.supervisor.directory, console, started))
-        await stop.wait()
-        console.print("Stopping rosaOS…", markup=False)
+        if await _stopped_or_pool_failed(stop, kernel.manager.warming):
+            console.print("Stopping rosaOS…", markup=False)
+        else:
+            return 1
     finally:
         if progress is not None:
             progress.cancel()
         await kernel.stop()
     console.print("Stopped. Unhandled events stay queued for the next start.", markup=False)
     return 0
+
+
+async def _stopped_or_pool_failed(stop: asyncio.Event, warming: asyncio.Task[None] | None) -> bool:
+    """Wait for Ctrl-C; False (after saying why) if the worker pool, still starting at the banner,
+    cannot start: nothing could run then."""
+    stopping = asyncio.create_task(stop.wait())
+    waiting: set[asyncio.Future[Any]] = {stopping, *([warming] if warming is not None else [])}
+    while not stopping.done():
+        done, waiting = await asyncio.wait(waiting, return_when=asyncio.FIRST_COMPLETED)
+        if warming in done and not warming.cancelled() and warming.exception() is not None:
+            stopping.cancel()
+            terminal(stderr=True).print(f"rosaos up: {warming.exception()}", markup=False)
+            return False
+    return True
 
 
 def _print_banner(kernel: Kernel, url: str, console: Console) -> None:

@@ -43,8 +43,8 @@ async def report_devices(
     """Print devices as they come up (see the module docstring); return once none is starting."""
     shown: dict[str, str] = {name: entry.status for name, entry in directory().items()}
     many = len(shown) > ONE_LINE_EACH
-    last_count = 0.0
-    counted = -1
+    last_count = time.monotonic()
+    counted = sum(1 for status in shown.values() if status == "healthy")  # the banner said so
     while True:
         entries = directory()
         settled = all(entry.status not in SETTLING for entry in entries.values())

@@ -395,7 +395,10 @@ class Kernel:
                     else self.supervisor.start()
                 )
                 group.create_task(devices, name="start devices")
-                group.create_task(self.manager.start(), name="start worker pool")
+                if wait_for_devices:
+                    group.create_task(self.manager.start(), name="start worker pool")
+                else:  # launches wait for it; `rosaos up` watches it (manager.warming)
+                    self.manager.start_in_background()
         except BaseExceptionGroup as failed:
             raise failed.exceptions[0] from None
         self._pending_stops = PendingStops(

@@ -116,6 +116,8 @@ class ProcessManager:
         self._processes: dict[int, ProcessInfo] = {}
         self.leases = LeaseTable()
         self._starting = starting
+        self.warming: asyncio.Task[None] | None = None
+        """The pool's start, when :meth:`start_in_background` began it."""
         """Waits until the named devices have had their first start attempt (the supervisor's ``settle``)."""
         self.starting_wait = starting_wait
         self.emergency_stop = emergency_stop
@@ -140,8 +142,20 @@ class ProcessManager:
         """Start the worker pool (its warm workers are ready when this returns)."""
         await self._pool.start()
 
+    def start_in_background(self) -> asyncio.Task[None]:
+        """Start the worker pool without waiting for it; a launch meanwhile waits for it.
+
+        ``rosaos up`` shows its banner while the fork server still imports: a command typed at
+        once is queued for the warm pool, instead of exec'ing workers that import everything
+        again. The task fails with :class:`PoolError` when the pool cannot start."""
+        self.warming = asyncio.create_task(self._pool.start(), name="start worker pool")
+        return self.warming
+
     async def stop(self) -> None:
         """Terminate every running process, release every lease, and stop the pool."""
+        if self.warming is not None and not self.warming.done():
+            self.warming.cancel()
+            await asyncio.gather(self.warming, return_exceptions=True)
         for info in self.list():
             await self.terminate(info.id)
         await self._pool.stop()
@@ -219,6 +233,8 @@ class ProcessManager:
                     f"could not record the launch, so it was not started: {failure}"
                 ) from None
         try:
+            if self.warming is not None and not self.warming.done():
+                await asyncio.shield(self.warming)  # in launch order: waiters wake first come, first served
             handle = await self._pool.run(job)
         except (PoolError, ValueError) as failure:
             self._end(process_id, "error")
