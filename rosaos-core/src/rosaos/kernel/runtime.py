@@ -415,8 +415,8 @@ class Kernel:
                 self._tasks.append(asyncio.create_task(self._release_background(), name="background devices"))
             owed = {name for p in await self._live.left() for name in p.devices}
             owed |= set(await self._pending_stops.names())
-            if self.manager.emergency_stop is not None:  # every host must hear of it before "up"
-                owed = set(self.world.instances)
+            if self.manager.emergency_stop is not None and not wait_for_devices:
+                await self.supervisor.foreground_settled()  # each host hears of the latch before "up"
             await self.supervisor.settle(owed)
         # Opened before orphan recovery: a callback it republishes records its sightings.
         self.memory = MemoryStore.open(self.data_dir)
