@@ -137,7 +137,12 @@ async def burst(url: str, token: str, n: int, limit: float) -> dict[str, Any]:
         failures: list[str] = []  # why a process did not end ok
         replies: dict[int, str] = {}  # event id → the kernel's reply
         while time.perf_counter() - started < limit and len(ended) + len(refused) < n:
-            page = (await api.get("/updates", params={"after": after, "limit": 1000})).json()["updates"]
+            try:
+                page = (await api.get("/updates", params={"after": after, "limit": 1000})).json()["updates"]
+            except httpx.TransportError as error:  # a kept-alive connection the server closed: ask again
+                print(f"GET /updates: {error!r}; asking again", flush=True)
+                await asyncio.sleep(0.2)
+                continue
             for update in page:
                 after = update["id"]
                 kind, data, event = update["kind"], update["data"], update.get("event_id")
