@@ -37,7 +37,7 @@ from pathlib import Path
 from typing import Any
 
 import httpx
-from footprint import BANNER, children, cpu_seconds, free_port, memory_kib, served
+from footprint import BANNER, children, cpu_seconds, free_port, host_instances, memory_kib, role, served
 
 START_LIMIT = 300.0
 BUSY_LOOP = (
@@ -65,6 +65,27 @@ def start_busy(count: int, seconds: float) -> list[subprocess.Popen[bytes]]:
 
 def tree(pid: int) -> list[int]:
     return [pid, *children(pid)]
+
+
+def cpu_by_role(pid: int, data_dir: Path) -> dict[str, float]:
+    """CPU seconds so far per role of the tree (kernel, fork server, device host, workers).
+
+    Reaped children count with their parent (a forked worker that ended, with the fork server):
+    a difference of two of these says where a burst's CPU went."""
+    hosts = {host: "shared" if "," in names else names for host, names in host_instances(data_dir).items()}
+    found: dict[str, float] = {}
+    for member in tree(pid):
+        try:
+            name = role(member, hosts)
+        except OSError:
+            continue
+        name = "workers" if name.startswith("worker") else name
+        found[name] = found.get(name, 0.0) + cpu_seconds([member])
+    return found
+
+
+def cpu_spent(before: dict[str, float], after: dict[str, float]) -> dict[str, float]:
+    return {name: round(after[name] - before.get(name, 0.0), 2) for name in sorted(after)}
 
 
 def pss_mib(pid: int) -> float:
@@ -113,9 +134,15 @@ async def burst(url: str, token: str, n: int, limit: float) -> dict[str, Any]:
         ended: dict[int, tuple[str, float]] = {}  # event id → (status, latency)
         refused: list[str] = []
         notices: list[str] = []
+        failures: list[str] = []  # why a process did not end ok
         replies: dict[int, str] = {}  # event id → the kernel's reply
         while time.perf_counter() - started < limit and len(ended) + len(refused) < n:
-            page = (await api.get("/updates", params={"after": after, "limit": 1000})).json()["updates"]
+            try:
+                page = (await api.get("/updates", params={"after": after, "limit": 1000})).json()["updates"]
+            except httpx.TransportError as error:  # a kept-alive connection the server closed: ask again
+                print(f"GET /updates: {error!r}; asking again", flush=True)
+                await asyncio.sleep(0.2)
+                continue
             for update in page:
                 after = update["id"]
                 kind, data, event = update["kind"], update["data"], update.get("event_id")
@@ -125,6 +152,8 @@ async def burst(url: str, token: str, n: int, limit: float) -> dict[str, Any]:
                     source = launched[int(data["process_id"])]
                     at = datetime.fromisoformat(update["time"]).timestamp()
                     ended[source] = (str(data.get("status")), at - sent[source])
+                    if data.get("status") != "ok":
+                        failures.append(f"{data.get('status')}: {data.get('error') or update['text']}")
                 elif kind == "kernel_reply" and event in sent:
                     replies[event] = update["text"]
                 elif kind == "notice" and update["text"].startswith("launch refused"):
@@ -154,6 +183,7 @@ async def burst(url: str, token: str, n: int, limit: float) -> dict[str, Any]:
         "notices": len(notices),
         "notice_texts": notices[:10],
         "refusal_texts": refused[:3],
+        "failure_texts": failures[:5],
         "unfinished_replies": [replies.get(event, "") for event in sent if event not in ended][:5],
         "lamps_on": states.count(True),
         "lamps_off": states.count(False),
@@ -210,25 +240,34 @@ def measure(
         raise RuntimeError("rosaos up exited before its banner:\n" + "\n".join(lines[-20:]))
     banner = time.perf_counter() - started
     banner_cpu = cpu_seconds(tree(up.pid))
+    banner_roles = cpu_by_role(up.pid, data_dir)
     # Drain its output from now on, so a full pipe never stalls it.
     drain = subprocess.Popen(["cat"], stdin=up.stdout, stdout=subprocess.DEVNULL)
     healthy = wait_healthy(data_dir, n, started)
     time.sleep(10.0)  # let start-up work end before the idle window
+    healthy_roles = cpu_by_role(up.pid, data_dir)
     cpu_before, at = cpu_seconds(tree(up.pid)), time.perf_counter()
+    idle_before = cpu_by_role(up.pid, data_dir)
     time.sleep(idle)
     idle_cpu = (cpu_seconds(tree(up.pid)) - cpu_before) / (time.perf_counter() - at)
+    idle_roles = cpu_spent(idle_before, cpu_by_role(up.pid, data_dir))
     pss = pss_mib(up.pid)
     restarts_before, pids_before = restarts(data_dir)
     token = (data_dir / "token").read_text().strip()
+    burst_before = cpu_by_role(up.pid, data_dir)
     result = asyncio.run(burst(f"http://127.0.0.1:{port}", token, n, burst_limit))
+    result["cpu_s_by_role"] = cpu_spent(burst_before, cpu_by_role(up.pid, data_dir))
     restarts_after, pids_after = restarts(data_dir)
     drain.kill()
     return {
         "n": n,
         "banner_s": round(banner, 2),
         "banner_cpu_s": round(banner_cpu, 2),
+        "banner_cpu_s_by_role": {name: round(value, 2) for name, value in sorted(banner_roles.items())},
         "all_healthy_s": None if healthy is None else round(healthy, 2),
+        "start_cpu_s_by_role": {name: round(value, 2) for name, value in sorted(healthy_roles.items())},
         "idle_cpu_pct_of_one_core": round(100 * idle_cpu, 2),
+        "idle_cpu_s_by_role": idle_roles,
         "idle_pss_mib": round(pss, 1),
         "burst": result,
         "host_restarts": restarts_after - restarts_before,

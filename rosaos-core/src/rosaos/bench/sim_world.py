@@ -126,8 +126,8 @@ class SimDevices:
         self.on_status_change: StatusListener | None = None
         """Never called: a simulator in this process does not go down on its own."""
 
-    async def start(self) -> None:
-        """Serve every implemented instance from the state its ``sim`` table gives."""
+    async def start(self, wait: bool = True) -> None:
+        """Serve every implemented instance from the state its ``sim`` table gives (always waits)."""
         for instance in self.world:
             served = _Served(instance)
             if not instance.spec.implemented:
@@ -172,6 +172,9 @@ class SimDevices:
             for name, s in self._served.items()
             if s.url is None
         ]
+
+    async def foreground_settled(self) -> None:
+        """Nothing to wait for: :meth:`start` returns once every simulator had its start."""
 
     def release_background(self) -> None:
         """Nothing to release: every simulator starts in :meth:`start`."""

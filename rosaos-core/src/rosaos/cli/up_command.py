@@ -5,6 +5,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import signal
+import time
 from pathlib import Path
 from typing import Any
 
@@ -12,6 +13,7 @@ from rich.console import Console
 
 from rosaos.auth import token_path
 from rosaos.cli.console import console as terminal
+from rosaos.cli.up_progress import ONE_LINE_EACH, device_line, report_devices
 from rosaos.config import ConfigError, RosaosConfig, load_config
 from rosaos.devices.world import build_world
 from rosaos.drivers import DeviceError
@@ -92,19 +94,42 @@ async def _serve(kernel: Kernel, console: Console, err: Console) -> int:
         loop.add_signal_handler(signum, stop.set)
     count = len(kernel.world)
     console.print(f"Starting rosaOS with {count} device{'' if count == 1 else 's'}…", markup=False)
+    started = time.monotonic()
     try:
-        url = await kernel.start()
+        # The banner does not wait for every device: a hundred lamps take seconds, and a command
+        # to one still starting waits for it. They are reported below as they come up.
+        url = await kernel.start(wait_for_devices=False)
     except (KernelError, DeviceError, ModelError) as error:
         err.print(f"rosaos up: {error}", markup=False)
         return 1
+    progress: asyncio.Task[None] | None = None
     try:
         _print_banner(kernel, url, console)
-        await stop.wait()
-        console.print("Stopping rosaOS…", markup=False)
+        progress = asyncio.create_task(report_devices(kernel.supervisor.directory, console, started))
+        if await _stopped_or_pool_failed(stop, kernel.manager.warming):
+            console.print("Stopping rosaOS…", markup=False)
+        else:
+            return 1
     finally:
+        if progress is not None:
+            progress.cancel()
         await kernel.stop()
     console.print("Stopped. Unhandled events stay queued for the next start.", markup=False)
     return 0
+
+
+async def _stopped_or_pool_failed(stop: asyncio.Event, warming: asyncio.Task[None] | None) -> bool:
+    """Wait for Ctrl-C; False (after saying why) if the worker pool, still starting at the banner,
+    cannot start: nothing could run then."""
+    stopping = asyncio.create_task(stop.wait())
+    waiting: set[asyncio.Future[Any]] = {stopping, *([warming] if warming is not None else [])}
+    while not stopping.done():
+        done, waiting = await asyncio.wait(waiting, return_when=asyncio.FIRST_COMPLETED)
+        if warming in done and not warming.cancelled() and warming.exception() is not None:
+            stopping.cancel()
+            terminal(stderr=True).print(f"rosaos up: {warming.exception()}", markup=False)
+            return False
+    return True
 
 
 def _print_banner(kernel: Kernel, url: str, console: Console) -> None:
@@ -119,9 +144,16 @@ def _print_banner(kernel: Kernel, url: str, console: Console) -> None:
     console.print(f"  Model:     {kernel.model_description}", markup=False)
     if kernel.model_notice:
         console.print(f"  {kernel.model_notice}", style="yellow", markup=False)
-    for entry in kernel.supervisor.directory().values():
-        where = entry.url or "-"
-        console.print(f"  Device:    {entry.name:<20} {entry.status:<16} {where}", markup=False)
+    entries = kernel.supervisor.directory()
+    if len(entries) <= ONE_LINE_EACH:
+        for entry in entries.values():
+            console.print(device_line(entry), markup=False)
+    else:
+        healthy = sum(1 for entry in entries.values() if entry.status == "healthy")
+        console.print(
+            f"  Devices:   {healthy} of {len(entries)} healthy so far; the rest are reported as they come up",
+            markup=False,
+        )
     if latch := kernel.manager.emergency_stop:
         since = latch.time.astimezone().strftime("%Y-%m-%d %H:%M:%S")
         console.print(

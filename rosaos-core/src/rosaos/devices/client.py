@@ -23,6 +23,7 @@ from fastmcp.exceptions import ToolError
 from mcp.shared.exceptions import MCPError
 
 from rosaos.drivers import DeviceError
+from rosaos.tls import shared_context
 
 DEFAULT_TIMEOUT = 10.0
 
@@ -52,7 +53,7 @@ class DeviceClient:
             self._in_process = False
             self.url = url
             self.name = name
-            self._client = Client(url, auth=token, timeout=timeout)
+            self._client = Client(url, auth=token, timeout=timeout, verify=shared_context())
         self.token = token
         self.timeout = timeout
 
@@ -134,7 +135,7 @@ class DeviceClient:
         if self._in_process:
             return f"{self._who()}: {error}"
         try:
-            async with httpx.AsyncClient(timeout=min(self.timeout, 3.0)) as http:
+            async with httpx.AsyncClient(timeout=min(self.timeout, 3.0), verify=shared_context()) as http:
                 headers = {"Authorization": f"Bearer {self.token}"} if self.token else {}
                 response = await http.post(self.url, headers=headers, json={})
         except httpx.HTTPError:

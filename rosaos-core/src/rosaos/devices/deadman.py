@@ -74,6 +74,8 @@ class Deadman:
         self._armed: dict[str, float] = {}
         """Owner → when it was last heard."""
         self.firings: list[DeadmanFiring] = []
+        self._wake = asyncio.Event()
+        """Set when an owner is armed: :meth:`run` sleeps on it while nothing is armed."""
 
     @property
     def armed(self) -> list[str]:
@@ -88,6 +90,7 @@ class Deadman:
     def arm(self, owner: str) -> None:
         """The owner started something that actuates: from now on it must keep talking."""
         self._armed[owner] = self._clock()
+        self._wake.set()
 
     def release(self, owner: str) -> None:
         """The owner's job ended: it no longer owes keepalives."""
@@ -118,8 +121,16 @@ class Deadman:
             self.firings.append(DeadmanFiring(owner, silent_for, True, "safe_stop done"))
 
     async def run(self) -> None:
-        """Check every :data:`CHECK_PERIOD` s until cancelled."""
+        """Check every :data:`CHECK_PERIOD` s while an owner is armed, until cancelled.
+
+        With nothing armed there is nothing to check: the loop waits for :meth:`arm` instead of
+        waking ten times a second, which for three hundred lamps in one host was most of its
+        idle CPU. An owner is armed before its call reaches the device, so no motion goes
+        unwatched."""
         while True:
+            if not self._armed:
+                self._wake.clear()
+                await self._wake.wait()
             await asyncio.sleep(CHECK_PERIOD)
             await self.check()
 

@@ -9,7 +9,7 @@ import logging
 import os
 import signal
 import sys
-from collections.abc import Sequence
+from collections.abc import Awaitable, Callable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -110,29 +110,40 @@ class HostProcess:
 
     @classmethod
     async def spawn_batch(
-        cls, jobs: Sequence[HostJob], log_file: Path, start_timeout: float, stop_grace: float
+        cls,
+        jobs: Sequence[HostJob],
+        log_file: Path,
+        start_timeout: float,
+        stop_grace: float,
+        on_ready: Callable[[HostProcess, str, str], Awaitable[None]] | None = None,
     ) -> HostProcess:
         """Start one host for several instances; ``urls`` has those that serve, ``errors`` the rest.
 
+        ``on_ready(host, instance, url)`` is awaited as each instance's ready line arrives, so the
+        first of a hundred instances can be used while the hundredth still starts.
         DeviceError when none of them came up (the host is stopped then). More instances may
         :meth:`join` it later.
         """
         from rosaos.devices.host_batch import HostBatch
 
         host = await cls._start(log_file)
+
+        async def arrived(reply: dict[str, Any]) -> None:
+            name = str(reply.get("instance", ""))
+            if "url" not in reply:
+                host.errors[name] = str(reply.get("error") or "no answer")
+                return
+            host.urls[name] = str(reply["url"])
+            if on_ready is not None:
+                await on_ready(host, name, host.urls[name])
+
         try:
-            replies = await host._handshake(
-                HostBatch(jobs=list(jobs)).model_dump_json(), len(jobs), start_timeout
+            await host._handshake(
+                HostBatch(jobs=list(jobs)).model_dump_json(), len(jobs), start_timeout, arrived
             )
         except BaseException:
             await host.stop(stop_grace)
             raise
-        for reply in replies:
-            name = str(reply.get("instance", ""))
-            if "url" in reply:
-                host.urls[name] = str(reply["url"])
-            else:
-                host.errors[name] = str(reply.get("error") or "no answer")
         for job in jobs:
             if job.instance not in host.urls and job.instance not in host.errors:
                 host.errors[job.instance] = f"the host did not report it (log: {log_file})"
@@ -163,7 +174,13 @@ class HostProcess:
             log_handle.close()
         return cls(process, log_file)
 
-    async def _handshake(self, job: str, lines: int, start_timeout: float) -> list[dict[str, Any]]:
+    async def _handshake(
+        self,
+        job: str,
+        lines: int,
+        start_timeout: float,
+        arrived: Callable[[dict[str, Any]], Awaitable[None]] | None = None,
+    ) -> list[dict[str, Any]]:
         stdin, stdout = self.process.stdin, self.process.stdout
         assert stdin is not None
         assert stdout is not None
@@ -185,6 +202,8 @@ class HostProcess:
                     if not is_tick(reply):  # a beat while other instances still start
                         replies.append(reply)
                         budget.reschedule(loop.time() + start_timeout)
+                        if arrived is not None:
+                            await arrived(reply)
         except TimeoutError:
             raise DeviceError(
                 f"the host did not become ready within {start_timeout:g} s; see {self.log_file}"

@@ -22,8 +22,11 @@ class DeviceHosting(Protocol):
     on_status_change: StatusListener | None
     """Called as ``(instance, old, new, error)`` when a device's status changes."""
 
-    async def start(self) -> None:
-        """Serve the devices; may return before background-start ones are up (see :meth:`settle`)."""
+    async def start(self, wait: bool = True) -> None:
+        """Serve the devices; may return before background-start ones are up (see :meth:`settle`).
+
+        With ``wait=False`` it returns as soon as the devices are starting (``rosaos up``'s early
+        banner): each becomes grantable as it comes up."""
 
     async def stop(self) -> None:
         """Stop serving every device; safe to call when :meth:`start` never ran or failed."""
@@ -33,6 +36,9 @@ class DeviceHosting(Protocol):
 
     async def safe_stop_all(self) -> list[SafeStopOutcome]:
         """Call ``safe_stop`` on every device (the emergency stop)."""
+
+    async def foreground_settled(self) -> None:
+        """Wait until every device but the background-start ones has had its first start attempt."""
 
     def release_background(self) -> None:
         """Let devices that boot in the background start now (the kernel's other parts are up)."""

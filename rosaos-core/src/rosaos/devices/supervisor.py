@@ -73,6 +73,10 @@ SHARED_HOST = "shared-sims"
 
 log = logging.getLogger("rosaos.devices.supervisor")
 
+SAVE_DELAY = 0.05
+"""Seconds a run-file write waits for more changes (a shared host reports its instances one by one):
+at most twenty writes a second however many instances start, and the file is never far behind."""
+
 
 StatusListener = Callable[[str, DeviceStatus, DeviceStatus, str | None], None]
 """``(instance, old status, new status, error)``."""
@@ -157,6 +161,7 @@ class DeviceSupervisor:
         self._save_lock = asyncio.Lock()
         self._token_file = token_path(data_dir)
         self._owns_runtime_file = False
+        self._save_later: asyncio.Task[None] | None = None
 
     async def __aenter__(self) -> DeviceSupervisor:
         try:
@@ -179,8 +184,12 @@ class DeviceSupervisor:
         """Where a host's stderr goes: driver output, uvicorn warnings, tracebacks."""
         return self.data_dir / "logs" / "devices" / f"{name}.log"
 
-    async def start(self) -> None:
-        """Start every local host and probe every remote instance; return once each has settled."""
+    async def start(self, wait: bool = True) -> None:
+        """Start every local host and probe every remote instance; return once each has settled.
+
+        With ``wait=False`` it returns as soon as the hosts are starting: ``rosaos up`` shows its
+        banner then, and each instance becomes grantable as its host reports it (:meth:`settle`
+        waits for named ones)."""
         other = await asyncio.to_thread(read_runtime_file, self.data_dir)
         if other is not None and other.supervisor_pid != os.getpid():
             raise DeviceError(
@@ -211,12 +220,18 @@ class DeviceSupervisor:
         # Record "starting" at once: `devices list` and `devices check` then wait for these
         # instances instead of starting second copies while their hosts boot.
         await self._save()
+        if not wait:
+            return
+        await self.foreground_settled()
+        await self._save()
+
+    async def foreground_settled(self) -> None:
+        """Wait until every instance but the background-start ones has had its first start attempt."""
         await self.settle(
             name
             for name, d in self._devices.items()
             if d.status != "not implemented" and not d.instance.spec.background_start
         )
-        await self._save()
 
     def release_background(self) -> None:
         """Let the background-start instances begin (see ``defer_background``)."""
@@ -240,6 +255,8 @@ class DeviceSupervisor:
 
     async def stop(self) -> None:
         """Stop watching, terminate every host (and its process group), remove the run file."""
+        if self._save_later is not None:
+            self._save_later.cancel()
         for task in self._tasks:
             task.cancel()
         await asyncio.gather(*self._tasks, return_exceptions=True)
@@ -358,7 +375,17 @@ class DeviceSupervisor:
             host.urls[group[0].instance.name] = host.url
         else:
             log_file = self.log_file(SHARED_HOST)
-            host = await HostProcess.spawn_batch(jobs, log_file, self.start_timeout, self.stop_grace)
+            arrivals = _Arrivals(self, now)
+            try:
+                host = await HostProcess.spawn_batch(
+                    jobs, log_file, self.start_timeout, self.stop_grace, on_ready=arrivals.ready
+                )
+            except BaseException:
+                await arrivals.close(cancel=True)
+                raise
+            await arrivals.close()
+            if arrivals.answered.is_set():  # the host has answered a real call already
+                await self._mark_healthy([hosted for hosted in now if hosted.instance.name in host.urls])
         for hosted in list(now):
             name = hosted.instance.name
             if name in host.errors:
@@ -415,6 +442,9 @@ class DeviceSupervisor:
 
         The budget is the start-up one: a host that has just said it serves is slow, not broken,
         when a busy machine delays its first answer."""
+        if all(hosted.status == "healthy" for hosted in group):  # answered while the others started
+            await self._save()
+            return
         error = await self._real_call(group[0], self.start_timeout)
         for hosted in group:
             self._set(hosted, "healthy" if error is None else "unhealthy", error=error)
@@ -528,6 +558,15 @@ class DeviceSupervisor:
         if status != old and self.on_status_change is not None:
             self.on_status_change(hosted.instance.name, old, status, error)
 
+    def _save_soon(self) -> None:
+        """Rewrite the run file within :data:`SAVE_DELAY` s: one write for a host's many ready lines."""
+        if self._save_later is None or self._save_later.done():
+            self._save_later = asyncio.create_task(self._save_after(SAVE_DELAY), name="save the run file")
+
+    async def _save_after(self, delay: float) -> None:
+        await asyncio.sleep(delay)
+        await self._save()
+
     async def _save(self) -> None:
         async with self._save_lock:
             if not self._tasks:  # stopped (or not started): the file must not reappear
@@ -548,6 +587,54 @@ class DeviceSupervisor:
                 },
             )
             await asyncio.to_thread(write_atomic, self.runtime_file, runtime.model_dump_json(indent=2))
+
+
+class _Arrivals:
+    """A shared host's instances, made grantable one by one as their ready lines arrive.
+
+    The first one to arrive gets the host's one real call (``get_state``); once that answered,
+    each later instance is healthy as soon as it says it serves: they share the process that
+    just answered, and a hundred more MCP sessions would only slow the start down.
+    """
+
+    def __init__(self, supervisor: DeviceSupervisor, group: list[_Hosted]) -> None:
+        self._supervisor = supervisor
+        self._group = {hosted.instance.name: hosted for hosted in group}
+        self.answered = asyncio.Event()
+        self._asking: asyncio.Task[None] | None = None
+
+    async def ready(self, host: HostProcess, name: str, url: str) -> None:
+        hosted = self._group.get(name)
+        if hosted is None:
+            return
+        hosted.host, hosted.port = host, urlsplit(url).port
+        status: DeviceStatus = "healthy" if self.answered.is_set() else hosted.status
+        error = None if self.answered.is_set() else hosted.error
+        self._supervisor._set(hosted, status, error=error, url=url)
+        if self.answered.is_set():
+            hosted.settled.set()
+        if self._asking is None:
+            self._asking = asyncio.create_task(self._ask(hosted), name=f"first answer of {name}")
+        self._supervisor._save_soon()
+
+    async def _ask(self, hosted: _Hosted) -> None:
+        if await self._supervisor._real_call(hosted, self._supervisor.start_timeout) is not None:
+            return  # the whole batch gets its real call again once it has started
+        self.answered.set()
+        for other in self._group.values():
+            if other.url is not None and other.host is hosted.host:
+                if other.status != "healthy":
+                    self._supervisor._set(other, "healthy", error=None)
+                other.settled.set()
+        await self._supervisor._save()
+
+    async def close(self, cancel: bool = False) -> None:
+        """Wait for the first answer (bounded by the start-up budget), or cancel it (start failed)."""
+        if self._asking is None:
+            return
+        if cancel:
+            self._asking.cancel()
+        await asyncio.gather(self._asking, return_exceptions=True)
 
 
 def _names(group: list[_Hosted]) -> str:

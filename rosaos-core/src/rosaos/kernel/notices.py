@@ -29,6 +29,7 @@ from pydantic import ValidationError
 from rosaos.device_notices import MAX_WAIT, Notice, NoticeBatch
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.kernel.events import DeviceNotice, DeviceNoticeEvent
+from rosaos.tls import shared_context
 
 log = logging.getLogger(__name__)
 
@@ -130,7 +131,12 @@ class NoticeWatcher:
     async def run(self) -> None:
         """Watch every device until cancelled (devices added to the world later are picked up)."""
         try:
-            async with httpx.AsyncClient(timeout=self.wait + 10) as client:
+            # One long poll per device, all open at once: httpx's default pool (100 connections,
+            # 20 kept alive) made the 101st wait and reconnected most of them every poll.
+            limits = httpx.Limits(max_connections=None, max_keepalive_connections=None)
+            async with httpx.AsyncClient(
+                timeout=self.wait + 10, limits=limits, verify=shared_context()
+            ) as client:
                 while True:
                     for name in self._endpoints():
                         if name not in self._tasks or self._tasks[name].done():

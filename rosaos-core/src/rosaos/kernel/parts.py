@@ -87,10 +87,13 @@ class KernelParts:
     stopper: Stopper
     loop: KernelLoop
     notices: NoticeWatcher
+    background_later: bool = False
+    """The background-start devices are released once the others settled, by a task of
+    :meth:`background` (``rosaos up``'s early banner), not before the API opened."""
 
     def background(self) -> dict[str, Coroutine[Any, Any, None]]:
         """The tasks that run for as long as the kernel does, by name (started after the API)."""
-        return {
+        tasks: dict[str, Coroutine[Any, Any, None]] = {
             "device states": self.states.run(),
             "device notices": self.notices.run(),
             "pending safe stops": self.pending_stops.run(),
@@ -99,6 +102,9 @@ class KernelParts:
             # Timers that fell due while the kernel was down fire now, once, and say they are late.
             "timers": self.timers.run(),
         }
+        if self.background_later:  # still after the other devices, but without holding up the banner
+            tasks["background devices"] = _release_background(self.hosting)
+        return tasks
 
 
 class LaunchRecords:
@@ -135,6 +141,7 @@ async def build_parts(
     hosting: DeviceHosting | None,
     token: str,
     url: str,
+    wait_for_devices: bool = True,
 ) -> KernelParts:
     """Build, start and wire every part of the kernel but its API; see the module docstring."""
     data_dir, kernel = config.data_dir, config.kernel
@@ -175,21 +182,35 @@ async def build_parts(
         on_ended=process_ended,
         first_process_id=await store.next_process_id(),
         emergency_stop=await stored_emergency_stop(store),
+        starting=devices.settle,
     )
     stack.push_async_callback(manager.stop)
     keep_latch(data_dir, manager.emergency_stop)  # a host starts latched from its first moment
     # Devices (a robot simulator takes seconds to boot) and the warm workers (seconds of
     # imports each) start side by side; neither needs the other until the first event.
+    # With ``wait_for_devices=False`` (``rosaos up``) neither is waited for: a launch waits for a
+    # device still starting (``starting`` above) and for the pool (``manager.warming``).
     try:
         async with asyncio.TaskGroup() as group:
-            group.create_task(devices.start(), name="start devices")
-            group.create_task(manager.start(), name="start worker pool")
+            group.create_task(devices.start(wait=wait_for_devices), name="start devices")
+            if wait_for_devices:
+                group.create_task(manager.start(), name="start worker pool")
+            else:
+                manager.start_in_background()
     except BaseExceptionGroup as failed:
         raise failed.exceptions[0] from None
-    # Before the loop can grant anything: devices a dead kernel's processes held get safe_stop,
-    # so one still starting in the background (the Reachy simulator) is waited for first.
-    devices.release_background()
-    await devices.settle({name for p in await live.left() for name in p.devices})
+    pending_stops = PendingStops(
+        store, devices.directory, lambda text, data: updates.publish("notice", text, data)
+    )
+    # Before the loop can grant anything: devices a dead kernel's processes held, or owed a
+    # safe_stop by the last run, get it, so one still starting (the Reachy simulator) is waited for.
+    if wait_for_devices:
+        devices.release_background()
+    owed = {name for p in await live.left() for name in p.devices}
+    owed |= set(await pending_stops.names())
+    if manager.emergency_stop is not None and not wait_for_devices:
+        await devices.foreground_settled()  # each host hears of the latch before "up"
+    await devices.settle(owed)
     # Opened before orphan recovery: a process end it queues records its sightings.
     memory = MemoryStore.open(data_dir)
     sightings = SightingLog(memory, config.memory.sightings_days)
@@ -200,9 +221,6 @@ async def build_parts(
     # is registered the same way, for "user_said" and "user_typed" (anywhere in this function:
     # the API, the notices and the timers start queueing only after it returns).
     intake.on("worker_callback", ProcessEnds(manager, activity, sightings, updates, live).arrived)
-    pending_stops = PendingStops(
-        store, devices.directory, lambda text, data: updates.publish("notice", text, data)
-    )
     await pending_stops.deliver()  # owed by the last run: a device that is back is stopped now
     host_latches = HostLatches(devices.directory, data_dir)
     if manager.emergency_stop is not None:  # latched before the restart: so are the hosts
@@ -271,7 +289,13 @@ async def build_parts(
         stopper=stopper,
         loop=loop,
         notices=NoticeWatcher(endpoints, intake.submit),
+        background_later=not wait_for_devices,
     )
+
+
+async def _release_background(devices: DeviceHosting) -> None:
+    await devices.foreground_settled()
+    devices.release_background()
 
 
 async def _run_loop(loop: KernelLoop, updates: UpdateStream) -> None:

@@ -42,6 +42,8 @@ from rosaos.kernel.notices import NoticeWatcher
 from rosaos.kernel.parts import EVENTS_FILE, KernelParts, build_parts
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
+from rosaos.memory.sightings import SightingLog
+from rosaos.memory.store import MemoryStore
 from rosaos.models.defaults import KernelModels, kernel_models
 from rosaos.models.select import ModelSpec
 from rosaos.processes.manager import ProcessInfo, ProcessManager
@@ -123,6 +125,14 @@ class Kernel:
     @property
     def loop(self) -> KernelLoop:
         return self.parts.loop
+
+    @property
+    def memory(self) -> MemoryStore:
+        return self.parts.memory
+
+    @property
+    def sightings(self) -> SightingLog:
+        return self.parts.sightings
 
     @property
     def notices(self) -> NoticeWatcher:
@@ -224,8 +234,14 @@ class Kernel:
 
     # --- lifecycle ---------------------------------------------------------------------------------
 
-    async def start(self, host: str | None = None, port: int | None = None) -> str:
-        """Start devices, the event store, the pool, the loop and the API; return the API's base URL."""
+    async def start(
+        self, host: str | None = None, port: int | None = None, *, wait_for_devices: bool = True
+    ) -> str:
+        """Start devices, the event store, the pool, the loop and the API; return the API's base URL.
+
+        With ``wait_for_devices=False`` (``rosaos up``) it returns once the kernel can take
+        commands, while the devices still come up: a launch that names a device still starting
+        waits briefly for it (:class:`~rosaos.processes.manager.ProcessManager`)."""
         host = host or self.config.kernel.host
         port = self.config.kernel.port if port is None else port
         self._token = load_or_create_token(self.data_dir)  # creates the data directory, owner-only
@@ -242,6 +258,7 @@ class Kernel:
                 hosting=self._hosting,
                 token=self._token,
                 url=self.url,
+                wait_for_devices=wait_for_devices,
             )
             await self._serve(sock)
         except BaseException:

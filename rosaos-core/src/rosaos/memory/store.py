@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import re
 import sqlite3
+import threading
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
@@ -115,6 +116,7 @@ class MemoryStore:
 
     def __init__(self, path: Path) -> None:
         self.path = path
+        self._local = threading.local()
         path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
         fresh = not path.exists()
         with self.connect() as db:
@@ -130,13 +132,16 @@ class MemoryStore:
 
     @contextmanager
     def connect(self) -> Iterator[sqlite3.Connection]:
-        db = sqlite3.connect(self.path, timeout=5)
-        db.row_factory = sqlite3.Row
-        try:
-            with db:
-                yield db
-        finally:
-            db.close()
+        """This thread's connection, in a transaction. It stays open: the kernel reads the memory
+        on every event (aliases, the summary in its prompt), and opening the file each time cost
+        more than the reads, on the event loop, for every command of a burst."""
+        db: sqlite3.Connection | None = getattr(self._local, "db", None)
+        if db is None:
+            db = sqlite3.connect(self.path, timeout=5)
+            db.row_factory = sqlite3.Row
+            self._local.db = db
+        with db:
+            yield db
 
     # Places
 

@@ -18,6 +18,7 @@ from pydantic_ai.toolsets import ToolsetTool, WrapperToolset
 
 from rosaos.kernel.confirmations import ConfirmRule, needs_confirmation
 from rosaos.receipts import redact, secret_args_of
+from rosaos.tls import shared_context
 
 POLL_SECONDS = 25.0
 
@@ -39,7 +40,7 @@ class KernelAsker:
         headers = {"Authorization": f"Bearer {self.token}"}
         body = {"process_id": self.process_id, "device": device, "tool": tool, "arguments": arguments}
         async with httpx.AsyncClient(
-            base_url=self.base_url, headers=headers, timeout=POLL_SECONDS + 10
+            base_url=self.base_url, headers=headers, timeout=POLL_SECONDS + 10, verify=shared_context()
         ) as http:
             response = await http.post("/confirmations", json=body)
             response.raise_for_status()

@@ -61,6 +61,8 @@ def main() -> None:
         with contextlib.suppress(Exception):
             importlib.import_module(module)
     importlib.import_module(WORKER)  # not optional: raise here if the worker cannot be imported
+    # Built once here, before any fork: every worker then shares the CA bundle's pages for free.
+    importlib.import_module("rosaos.tls").shared_context()
     # The worker's imports stay loaded; the module itself is dropped, so that each worker runs it
     # afresh as __main__, exactly as ``python -m`` does.
     sys.modules.pop(WORKER)

@@ -36,6 +36,7 @@ from pydantic_ai.toolsets import ToolsetTool, WrapperToolset
 
 from rosaos.devices.deadman import KEEPALIVE_INTERVAL, KEEPALIVE_PATH, OWNER_HEADER, SILENCE_LIMIT
 from rosaos.processes.jobs import GrantedDevice
+from rosaos.tls import shared_context
 
 log = logging.getLogger("rosaos.processes.keepalive")
 
@@ -110,7 +111,7 @@ class DeviceLink:
         headers = {**owner_headers(), "Authorization": f"Bearer {self.device.token}"}
         while True:
             # A fresh client after each failure: a connection into a silent network stays stuck.
-            async with httpx.AsyncClient(timeout=KEEPALIVE_INTERVAL) as http:
+            async with httpx.AsyncClient(timeout=KEEPALIVE_INTERVAL, verify=shared_context()) as http:
                 while True:
                     sent = time.monotonic()
                     try:
@@ -138,7 +139,7 @@ class DeviceLink:
         """Tell the host this worker's job ended (best effort: a silent host disarms by itself)."""
         headers = {**owner_headers(), "Authorization": f"Bearer {self.device.token}"}
         with contextlib.suppress(httpx.HTTPError):
-            async with httpx.AsyncClient(timeout=KEEPALIVE_INTERVAL) as http:
+            async with httpx.AsyncClient(timeout=KEEPALIVE_INTERVAL, verify=shared_context()) as http:
                 await http.post(keepalive_url(self.device.url), headers=headers, params={"release": "1"})
 
 

@@ -71,7 +71,12 @@ class LeaseTable:
         problems: list[str] = []
         for name in wanted:
             device = devices[name]
-            if not device.grantable:
+            if not device.grantable and device.status == "starting":
+                problems.append(
+                    f"{name} is still starting (its host has not reported it ready); "
+                    "try again in a few seconds, or see `rosaos devices list`"
+                )
+            elif not device.grantable:
                 problems.append(
                     f"{name} is not available now (status: {device.status}); "
                     "choose another device, or try again once it is healthy"

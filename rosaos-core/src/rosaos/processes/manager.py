@@ -9,7 +9,9 @@ kernel's ``on_ended``, which enqueues it as a ``worker_callback`` event.
 
 from __future__ import annotations
 
+import asyncio
 import builtins
+import contextlib
 import logging
 from collections.abc import Awaitable, Callable, Mapping
 from datetime import UTC, datetime
@@ -26,6 +28,9 @@ from rosaos.processes.pool import PoolError, WorkerPool
 from rosaos.processes.protocol import Progress
 
 log = logging.getLogger("rosaos.processes.manager")
+
+STARTING_WAIT = 15.0
+"""Seconds a launch waits for a device that is still starting before it is refused (as not available)."""
 
 ProcessState = Literal["running", "ok", "error", "crashed", "timeout", "terminated", "unverified"]
 
@@ -89,6 +94,8 @@ class ProcessManager:
         on_ended: Callable[[WorkerCallback], Awaitable[None]],
         first_process_id: int = 1,
         emergency_stop: EmergencyStop | None = None,
+        starting: Callable[[builtins.list[str]], Awaitable[None]] | None = None,
+        starting_wait: float = STARTING_WAIT,
     ) -> None:
         if first_process_id < 1:
             raise ValueError("first_process_id must be 1 or more")
@@ -104,6 +111,11 @@ class ProcessManager:
         self._next_id = first_process_id
         self._processes: dict[int, ProcessInfo] = {}
         self.leases = LeaseTable()
+        self._starting = starting
+        self.warming: asyncio.Task[None] | None = None
+        """The pool's start, when :meth:`start_in_background` began it."""
+        """Waits until the named devices have had their first start attempt (the supervisor's ``settle``)."""
+        self.starting_wait = starting_wait
         self.emergency_stop = emergency_stop
         """The latched emergency stop, or None. While latched every launch is refused. The kernel
         keeps it on disk and passes it in at start, so a restart does not unlatch it."""
@@ -126,8 +138,20 @@ class ProcessManager:
         """Start the worker pool (its warm workers are ready when this returns)."""
         await self._pool.start()
 
+    def start_in_background(self) -> asyncio.Task[None]:
+        """Start the worker pool without waiting for it; a launch meanwhile waits for it.
+
+        ``rosaos up`` shows its banner while the fork server still imports: a command typed at
+        once is queued for the warm pool, instead of exec'ing workers that import everything
+        again. The task fails with :class:`PoolError` when the pool cannot start."""
+        self.warming = asyncio.create_task(self._pool.start(), name="start worker pool")
+        return self.warming
+
     async def stop(self) -> None:
         """Terminate every running process, release every lease, and stop the pool."""
+        if self.warming is not None and not self.warming.done():
+            self.warming.cancel()
+            await asyncio.gather(self.warming, return_exceptions=True)
         for info in self.list():
             await self.terminate(info.id)
         await self._pool.stop()
@@ -172,7 +196,7 @@ class ProcessManager:
             )
         if not task:
             raise LaunchRefused("the task is empty; describe what the process should do")
-        endpoints = self._devices()
+        endpoints = await self._started(devices)
         process_id = self._next_id
         try:
             granted = self.leases.acquire(process_id, task, devices, endpoints)
@@ -205,6 +229,8 @@ class ProcessManager:
                     f"could not record the launch, so it was not started: {failure}"
                 ) from None
         try:
+            if self.warming is not None and not self.warming.done():
+                await asyncio.shield(self.warming)  # in launch order: waiters wake first come, first served
             handle = await self._pool.run(job)
         except (PoolError, ValueError) as failure:
             self._end(process_id, "error")
@@ -214,6 +240,26 @@ class ProcessManager:
             # terminate() (or stop()) came while a one-off worker was being spawned: honour it now.
             await self._pool.terminate(process_id)
         return info.model_copy()
+
+    async def _started(self, devices: builtins.list[str]) -> Mapping[str, DeviceEndpoint]:
+        """The endpoints, once ``devices`` still starting (``rosaos up`` shows its banner before
+        every device is up) are up, or after ``starting_wait`` s: a command right after the banner
+        waits for its lamp instead of being refused. A device known to be down is not waited for."""
+        endpoints = self._devices()
+        starting = [
+            name
+            for name in devices
+            if (endpoint := endpoints.get(name)) is not None
+            and endpoint.status == "starting"
+            and not endpoint.url
+        ]
+        if not starting or self._starting is None:
+            return endpoints
+        log.info("waiting up to %g s for %s to start", self.starting_wait, ", ".join(starting))
+        with contextlib.suppress(TimeoutError):
+            async with asyncio.timeout(self.starting_wait):
+                await self._starting(starting)
+        return self._devices()
 
     async def terminate(self, process_id: int) -> ProcessInfo:
         """Kill a running process and release its leases; an ended process is returned as it is.

@@ -54,6 +54,7 @@ from rosaos.processes.tool_calls import ToolCallLog, observed
 from rosaos.processes.tool_list import DeviceTools
 from rosaos.processes.vision import ImageFallbackModel, image_budget_for, image_headers
 from rosaos.receipts import Receipt
+from rosaos.tls import shared_context
 
 log = logging.getLogger("rosaos.processes.worker")
 
@@ -298,7 +299,9 @@ def plan_of(task: str) -> Plan | None:
 async def _connect(device: GrantedDevice, images: int | None = None) -> MCPToolset[Any]:
     """Open the device's MCP session up front, so a dead device is reported by name, not as a stack."""
     headers = {**image_headers(images), **owner_headers()}
-    transport = StreamableHttpTransport(device.url, headers=headers, auth=device.token)
+    transport = StreamableHttpTransport(
+        device.url, headers=headers, auth=device.token, verify=shared_context()
+    )
     client: Client[Any] = Client(
         transport,
         name=f"rosaos-{device.name}",
@@ -327,7 +330,7 @@ async def _connect(device: GrantedDevice, images: int | None = None) -> MCPTools
 async def _refused_token(device: GrantedDevice) -> str | None:
     """After a failed connect: whether the server answered 401/403 (the MCP error does not say)."""
     try:
-        async with httpx.AsyncClient(timeout=CONNECT_TIMEOUT) as http:
+        async with httpx.AsyncClient(timeout=CONNECT_TIMEOUT, verify=shared_context()) as http:
             response = await http.post(device.url, headers={"Authorization": f"Bearer {device.token}"})
     except httpx.HTTPError:
         return None

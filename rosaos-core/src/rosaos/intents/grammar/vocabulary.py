@@ -13,7 +13,7 @@ from __future__ import annotations
 import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
-from functools import cached_property
+from functools import cached_property, lru_cache
 from pathlib import Path
 
 from rosaos.config import DeviceConfig
@@ -84,7 +84,7 @@ class DeviceVocabulary:
     def mapping_file(self) -> IntentsFile | None:
         """The ``intents.yaml`` that holds the ``homeassistant:`` mapping (language-independent)."""
         if "*" not in self._files:
-            self._files["*"] = load_intents_file(self.intents) if self.intents else None
+            self._files["*"] = _load(self.intents) if self.intents else None
         return self._files["*"]
 
     @cached_property
@@ -196,9 +196,26 @@ def _intents_in(path: Path | None, language: str) -> IntentsFile | None:
         return None
     translated = path.with_name(f"{path.stem}.{language}{path.suffix}")
     if translated.is_file():
-        return load_intents_file(translated)
-    loaded = load_intents_file(path)
+        return _load(translated)
+    loaded = _load(path)
     return loaded if loaded.language == language else None
+
+
+def _load(path: Path) -> IntentsFile:
+    """``load_intents_file``, once per file (as long as it is unchanged), not once per device.
+
+    A hundred Tapo lamps share one ``intents.yaml``; parsing it a hundred times was most of the
+    kernel's start-up CPU. The parsed file is frozen, so the instances share one copy."""
+    try:
+        stat = path.stat()
+    except OSError:
+        return load_intents_file(path)  # raises the error that says what is wrong
+    return _load_unchanged(path, stat.st_mtime_ns, stat.st_size)
+
+
+@lru_cache(maxsize=64)
+def _load_unchanged(path: Path, mtime_ns: int, size: int) -> IntentsFile:
+    return load_intents_file(path)
 
 
 def _unique(items: Iterable[str]) -> list[str]:
