@@ -50,8 +50,8 @@ def manager_for(lamp: StartingLamp, kernel: KernelStandIn, endings: Endings, wai
         base_prompt="You are a test process.",
         job_timeout=60,
         request_limit=10,
-        callback_url=kernel.url,
-        callback_token=KERNEL_TOKEN,
+        kernel_url=kernel.url,
+        kernel_token=KERNEL_TOKEN,
         pool=WorkerPool(size=1, env=worker_env()),
         on_ended=endings.record,
         starting=lamp.settle,
@@ -73,8 +73,8 @@ async def test_a_launch_waits_for_its_device_still_starting_and_for_the_pool_sti
         lamp.up()
         info = await asyncio.wait_for(launch, 60)
         assert warming.done() and warming.exception() is None  # the launch waited for the pool too
-        callback, delivered = await endings.wait(info.id)
-        assert (callback.status, delivered) == ("ok", True)
+        callback = await endings.wait(info.id)
+        assert callback.status == "ok"
         assert devices["lamp"].state["level"] == 42
     finally:
         await manager.stop()
