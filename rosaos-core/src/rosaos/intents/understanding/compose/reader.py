@@ -74,8 +74,15 @@ class Composer:
         self.colours = frozenset(colours)
         self.references = References(devices, self.capabilities, language)
 
-    def read(self, text: str, focus: Focus, literal: LiteralReading) -> MatchResult | None:
-        """What ``text`` asks for, or None when this reader cannot say (left to the engine)."""
+    def read(
+        self, text: str, focus: Focus, literal: LiteralReading, complete: bool = False
+    ) -> MatchResult | None:
+        """What ``text`` asks for, or None when this reader cannot say (left to the engine).
+
+        ``complete``: None when a clause that is not plainly a remark ("it's so bright") would be
+        dropped as commentary. The engine asks this of the reader before its template paths,
+        which may read such a clause ("… and some jazz") where this reader cannot.
+        """
         if not self.capabilities or not self.language.startswith("en"):
             return None
         plain = normalise(text)
@@ -100,6 +107,8 @@ class Composer:
             elif clause.said is None:
                 reading = literal(clause.text, focus) if clause.reference.named else None
                 if reading is None and (not clause.reference.named or _COMMENT.match(clause.text)):
+                    if complete and not _COMMENT.match(clause.text):
+                        return None  # "… and some jazz": maybe a command the templates read
                     continue  # commentary around a command: "ugh, it's so bright, ..."
             else:
                 reading = self._reading(clause.text, clause.said, clause.reference, before, focus)
