@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from rosaos.intents.grammar.capabilities import Capabilities, Capability
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.planning.plan import PlanStep
-from rosaos.intents.understanding.compose.actions import Said, read_action
+from rosaos.intents.understanding.compose.actions import Said, read_action, restate
 from rosaos.intents.understanding.compose.references import Reference, References
 from rosaos.intents.understanding.compose.speech import asks, clauses, negated, normalise, says_stop
 from rosaos.intents.understanding.match_result import MatchResult, build_result
@@ -176,7 +176,7 @@ class Composer:
         calls = {device: [step] for device, step in steps.items() if step is not None}
         if len(calls) != len(steps):
             return None
-        return Reading(text, RANK_DRIVER, len(text), calls=calls)
+        return Reading(restate(text, said), RANK_DRIVER, len(text), calls=calls)
 
     def _capability(self, device: str, said: Said) -> Capability | None:
         declared = self.capabilities.get(device)
