@@ -94,16 +94,21 @@ class Composer:
         parsed = [self._clause(piece) for piece in pieces]
         parsed = self._addressed(parsed)
         commands = [clause for clause in parsed if clause.said is not None]
+        if complete and any(clause.said.action == "play" for clause in commands if clause.said):
+            # A free-text query is the user's own words ("Here Comes the Sun", "Take Five"): the
+            # templates keep them as said, where this reader has lowercased them and made digits.
+            return None
         if not commands:
             need = self._need(plain, focus)
             return build_result(self.context, text, [need], focus is not None) if need else None
         readings: list[Reading] = []
         before: tuple[str, ...] = ()
-        last_said: Said | None = None
+        last: _Clause | None = None
         for clause in parsed:
             reading: Reading | None
-            if clause.said is None and clause.reference.named and last_said is not None:
-                reading = self._reading(clause.text, last_said, clause.reference, before, focus)
+            if clause.said is None and clause.reference.named and last is not None and last.said:
+                again = _again(last, clause.text)
+                reading = self._reading(again, last.said, clause.reference, before, focus)
             elif clause.said is None:
                 reading = literal(clause.text, focus) if clause.reference.named else None
                 if reading is None and (not clause.reference.named or _COMMENT.match(clause.text)):
@@ -114,7 +119,7 @@ class Composer:
                 reading = self._reading(clause.text, clause.said, clause.reference, before, focus)
                 if reading is None or not (reading.actionable or reading.issue):
                     reading = literal(clause.text, focus) or reading
-                last_said = clause.said
+                last = clause
             if reading is None or not (reading.actionable or reading.issue):
                 return None
             readings.append(reading)
@@ -233,3 +238,13 @@ class Composer:
         if len(able) > 1:
             return self.context.clarify(text, 0, RANK_DRIVER, fitting or able)
         return None
+
+
+def _again(command: _Clause, devices: str) -> str:
+    """``command`` said again of other ``devices``, for the reply: "turn off the kitchen light"
+    and "the desk lamp" → "turn off the desk lamp" (``devices`` alone when the command's own
+    device words are not one stretch of it)."""
+    said = command.said.rest if command.said is not None else ""
+    if said and said in command.text:
+        return command.text.replace(said, devices, 1)
+    return devices
