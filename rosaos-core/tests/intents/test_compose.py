@@ -215,7 +215,10 @@ def test_a_clause_the_reader_cannot_read_is_left_to_the_templates(home: IntentMa
 @pytest.mark.parametrize(
     ("said", "reply"),
     [
-        ("put the bedroom lamp at three quarters brightness", "Done: put the bedroom lamp at 75% brightness."),
+        (
+            "put the bedroom lamp at three quarters brightness",
+            "Done: put the bedroom lamp at 75% brightness.",
+        ),
         ("kitchen light to half brightness please", "Done: kitchen light to 50% brightness."),
         ("turn the robot a quarter turn to the right", "Done: turn the robot 90° to the right."),
         ("scoot the robot forward thirty centimetres", "Done: scoot the robot forward 30 cm."),
