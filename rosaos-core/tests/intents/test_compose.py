@@ -185,9 +185,10 @@ def test_a_sentence_the_reader_reads_whole_is_not_rebuilt_for_the_templates(
     home: IntentMatcher, said: str, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     """Issue 20's match-time goal (p95 ≤ 10 ms): a sentence the reader reads in full is answered
-    after one recognition per grammar (three drivers and Home Assistant's), not after the
-    rephrasings, splits and left-out names that rebuilt it 150-240 times. Counted, not timed,
-    so it holds on a busy machine; ``benchmarks/local_intent.py`` has the times."""
+    after one recognition per grammar (three drivers and Home Assistant's) for the sentence, and
+    one per grammar again for a clause whose vague amount ("louder") the driver's template may
+    set, not after the rephrasings, splits and left-out names that rebuilt it 150-240 times.
+    Counted, not timed, so it holds on a busy machine; ``benchmarks/local_intent.py`` has times."""
     recognitions = 0
     recognize = home._recognize
 
@@ -199,7 +200,7 @@ def test_a_sentence_the_reader_reads_whole_is_not_rebuilt_for_the_templates(
     home.clear_cache()
     monkeypatch.setattr(home, "_recognize", counted)
     assert home.match(said).is_exact
-    assert recognitions <= 4
+    assert recognitions <= 8
 
 
 def test_a_clause_the_reader_cannot_read_is_left_to_the_templates(home: IntentMatcher) -> None:
@@ -229,3 +230,21 @@ def test_a_reply_says_a_number_the_way_a_person_would(home: IntentMatcher, said:
     """Not "set the lamp to 0.75": the value the device got, in its unit."""
     [process] = home.match(said).processes
     assert process.plan.reply == reply
+
+
+@pytest.mark.parametrize(
+    ("alone", "sentence"),
+    [
+        ("dim the hall light", "dim the hall light, then turn on the bedroom lamp"),
+        ("dim the hall light", "oh man, dim the hall light real quick"),
+        ("turn the music up", "turn the music up and switch on the kitchen light"),
+    ],
+)
+def test_a_vague_amount_means_what_the_same_words_mean_alone(
+    home: IntentMatcher, alone: str, sentence: str
+) -> None:
+    """How much "dim" is comes from the driver's template when it says so, whether the words are a
+    whole sentence or one clause of a longer one, with fillers or not."""
+    expected = _calls(home.match(alone))
+    said = _calls(home.match(sentence))
+    assert expected and all(call in said for call in expected)

@@ -119,6 +119,8 @@ class Composer:
                 reading = self._reading(clause.text, clause.said, clause.reference, before, focus)
                 if reading is None or not (reading.actionable or reading.issue):
                     reading = literal(clause.text, focus) or reading
+                elif _vague(clause.said):
+                    reading = _driver_amount(reading, literal(clause.text, focus))
                 last = clause
             if reading is None or not (reading.actionable or reading.issue):
                 return None
@@ -248,3 +250,23 @@ def _again(command: _Clause, devices: str) -> str:
     if said and said in command.text:
         return command.text.replace(said, devices, 1)
     return devices
+
+
+_VAGUE = ("change", "kelvin_change", "distance", "angle")
+
+
+def _vague(said: Said) -> bool:
+    """An amount the words do not say ("dim", "a bit closer"): the reader's default size."""
+    return said.quantity is None and any(meaning in said.values for meaning in _VAGUE)
+
+
+def _driver_amount(reading: Reading, template: Reading | None) -> Reading:
+    """``reading``, or the driver's own template for the same clause when it makes the same calls
+    but says how much a vague word is ("dim" is 25 % for the Tapo driver): as when the
+    sentence is a template, the driver's author decides that, not the reader's default."""
+    if template is None or not template.actionable:
+        return reading
+    same = {device: [step.tool for step in steps] for device, steps in reading.calls.items()}
+    if same != {device: [step.tool for step in steps] for device, steps in template.calls.items()}:
+        return reading
+    return template
