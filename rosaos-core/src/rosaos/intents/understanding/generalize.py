@@ -1,20 +1,30 @@
 """From the exact reading of a sentence to what an everyday sentence means: the order of attempts.
 
-:meth:`rosaos.intents.understanding.matching.IntentMatcher.match` reads a sentence literally first. When that is
-not an exact command, :func:`understand` tries, in order, and stops at the first that is:
+:meth:`rosaos.intents.understanding.matching.IntentMatcher.match` calls :func:`understand`, which
+tries, in order, and stops at the first that is an exact command:
 
-1. **a negation** ("don't turn on the lamp"): when the rest is an exact command, it is refused by
+1. **the sentence as one template** (``template``): a driver's or Home Assistant's template that
+   spells the whole sentence out. One recognition: the common case stays cheap;
+2. **the compositional reader** (:mod:`rosaos.intents.understanding.compose`), when it reads
+   every clause: actions from a lexicon, devices from their names, kinds, places and
+   descriptions, quantities with units, fillers peeled off, several clauses; a clear sentence is
+   acted on. It reads the whole sentence in one pass, so it comes before the template paths
+   below, which rebuild the sentence many ways (each a full recognition, tens of ms);
+3. **a negation** ("don't turn on the lamp"): when the rest is an exact command, it is refused by
    name and nothing else is tried (no rephrasing, no guessing);
-2. **rephrasings** (:mod:`rosaos.intents.understanding.rephrase`): fillers dropped, a split name joined, a name
-   said first or last ("dog, a bit closer") taken as the device the command is for;
-3. **the compositional reader** (:mod:`rosaos.intents.understanding.compose`): actions from a
-   lexicon, devices from their names, kinds, places and descriptions, quantities with units,
-   several clauses; a clear sentence is acted on, a real ambiguity asks "which one?";
-4. **the fuzzy model** (:mod:`rosaos.intents.understanding.fuzzy`), only when the literal reading found nothing
-   at all (a question or a refusal stands): a close guess acts; a weaker one asks "Did you mean
-   …?" and does nothing; questions are never guessed into actions.
+4. **the literal paths** (``literal``): the sentence split at conjunctions, a number out of a
+   device's range refused, a name the world lacks, a device left out ("drive forward one meter");
+5. **rephrasings** (:mod:`rosaos.intents.understanding.rephrase`): fillers dropped, a split name
+   joined, a name said first or last ("dog, a bit closer") taken as the device the command is for;
+6. the reader again, now allowed to drop commentary around a command ("ugh, it's so bright,
+   …"); its "which one?" too when the literal reading found nothing;
+7. **the fuzzy model** (:mod:`rosaos.intents.understanding.fuzzy`), only when the literal reading
+   found nothing at all (a question or a refusal stands): a close guess acts; a weaker one asks
+   "Did you mean …?" and does nothing; questions are never guessed into actions.
 
 Everything else keeps the literal result: "which one?", "I don't know …", "not understood".
+The reader never reads negations, questions or "stop", and refuses a number out of a device's
+range rather than clipping it, so answering first cannot act where a refusal was due.
 """
 
 from __future__ import annotations
@@ -46,13 +56,21 @@ def understand(
     language: str,
     whole: Literal | None = None,
     compose: Compose | None = None,
+    template: Literal | None = None,
+    compose_first: Compose | None = None,
 ) -> MatchResult:
     """What ``text`` means (see the module docstring). ``literal`` reads a sentence exactly as
-    said (whole, split or elided); ``whole`` (default: ``literal``) only as one whole command,
-    which is all a filled-in fuzzy guess needs and is much cheaper."""
-    first = literal(text, focus)
-    if first.is_exact:
-        return first
+    said (whole, split or elided); ``template`` (default: ``literal``) only as one whole
+    template, the cheap first try; ``whole`` (default: ``literal``) only as one whole command,
+    which is all a filled-in fuzzy guess needs and is much cheaper. ``compose_first`` is the
+    reader asked for a reading of every clause, before the literal paths; ``compose`` the reader
+    after them, which may drop commentary around a command."""
+    said = (template or literal)(text, focus)
+    if said.is_exact:
+        return said
+    early = compose_first(text, focus) if compose_first is not None else None
+    if early is not None and early.is_exact:
+        return early
     command = negated(text, language)
     if command is not None:
         meant = literal(command, focus)
@@ -61,6 +79,8 @@ def understand(
             return MatchResult(
                 "no_match", text, reply=phrase(language, "negated", clause=clause), refusal=True
             )
+    first = said if template is None else literal(text, focus)
+    if first.is_exact or command is not None:
         return first
     spoken = [(name, frozenset(devices)) for name, devices in names.items()]
     for rephrased in rephrasings(text, language, spoken):

@@ -116,7 +116,7 @@ class IntentMatcher:
         words = "|".join(re.escape(word) for word in conjunctions(language))
         # ", and then" is one separator: a comma, a conjunction, or a comma then a conjunction.
         self._splitter = re.compile(rf"\s*((?:,\s*)?\b(?:{words})\b|,)\s*", re.IGNORECASE)
-        self._cache: dict[tuple[str, Focus], Reading | None] = {}
+        self._cache: dict[tuple[str, Focus, str | None], Reading | None] = {}
         self._fuzzy = FuzzyMatcher(
             [(driver.intents, frozenset(driver.device_list_names)) for driver in self._drivers],
             self.context.names,
@@ -194,10 +194,15 @@ class IntentMatcher:
             self.language,
             self._whole,
             self._compose,
+            self._template,
+            self._compose_complete,
         )
 
     def _compose(self, text: str, focus: Focus = None) -> MatchResult | None:
         return self._composer.read(text, focus, self._clause_reading)
+
+    def _compose_complete(self, text: str, focus: Focus = None) -> MatchResult | None:
+        return self._composer.read(text, focus, self._clause_reading, complete=True)
 
     def _clause_reading(self, clause: str, focus: Focus) -> Reading | None:
         """One clause read as an exact template match, for the compositional reader."""
@@ -207,17 +212,25 @@ class IntentMatcher:
     def _whole(self, text: str, focus: Focus = None) -> MatchResult:
         return self._exact(text, focus)
 
+    def _template(self, text: str, focus: Focus = None) -> MatchResult:
+        """``text`` as one whole template (one recognition), or "not understood"."""
+        whole = self._best(text, focus)
+        if whole is None or not whole.actionable or self._hides_command(whole):
+            return no_match(self.context, text)
+        if whole.rank == RANK_ANY:
+            # A template that names no target ("turn off all the lights" for "all the
+            # lamps") ignored what the sentence says of its devices; the reader does not.
+            composed = self._compose(text, focus)
+            if composed is not None and composed.is_exact:
+                return composed
+        return build_result(self.context, text, [whole], focus is not None)
+
     def _literal(self, text: str, focus: Focus = None) -> MatchResult:
         """``text`` read against the templates as said: whole, split at conjunctions, or elided."""
+        template = self._template(text, focus)
+        if template.is_exact:
+            return template
         whole = self._best(text, focus)
-        if whole is not None and whole.actionable and not self._hides_command(whole):
-            if whole.rank == RANK_ANY:
-                # A template that names no target ("turn off all the lights" for "all the
-                # lamps") ignored what the sentence says of its devices; the reader does not.
-                composed = self._compose(text, focus)
-                if composed is not None and composed.is_exact:
-                    return composed
-            return build_result(self.context, text, [whole], focus is not None)
         pieces = self._splitter.split(text)
         if 3 <= len(pieces) <= 2 * MAX_PIECES - 1:
             for allow_unknown in (False, True):
@@ -241,9 +254,15 @@ class IntentMatcher:
 
     # Recognition
 
-    def _readings(self, clause: str, focus: Focus) -> list[Reading]:
+    def _readings(self, clause: str, focus: Focus, device: str | None = None) -> list[Reading]:
+        """Every reading of ``clause``; with ``device``, only those that could act on it alone:
+        its own driver's templates, and HA's only when its driver maps HA intents (another
+        driver's templates, or HA's for a robot, cannot yield a call to it)."""
+        owner = self.devices[device].driver if device is not None else None
         readings: list[Reading] = []
         for driver in self._drivers:
+            if owner is not None and driver.driver != owner:
+                continue
             for result in self._recognize(clause, driver.intents, driver.lists):
                 action = driver.file.actions[result.intent.name]
                 reading = driver_reading(self.context, clause, result, driver.devices, action, focus)
@@ -251,7 +270,8 @@ class IntentMatcher:
                     readings.append(reading)
         # A driver's own template outranks any HA reading, so HA (the slower, bigger grammar)
         # is only consulted when no driver template settled the clause.
-        if self._ha is not None and not any(reading.actionable for reading in readings):
+        ha = device is None or device in self.context.mappings
+        if self._ha is not None and ha and not any(reading.actionable for reading in readings):
             for result in self._recognize(clause, self._ha, self._ha_lists, ha=True):
                 if self._only_names(clause, result):
                     continue
@@ -291,13 +311,14 @@ class IntentMatcher:
                 text = text.replace(entity.text.strip().lower(), " ", 1)
         return all(word in self._filler for word in re.findall(r"[\w']+", text))
 
-    def _best(self, clause: str, focus: Focus) -> Reading | None:
+    def _best(self, clause: str, focus: Focus, device: str | None = None) -> Reading | None:
+        """The best reading of ``clause`` (``device``: see :meth:`_readings`)."""
         # Cached: a split tries the same clauses again, and users repeat themselves.
-        key = (clause, focus)
+        key = (clause, focus, device)
         if key not in self._cache:
             if len(self._cache) >= CACHE_SIZE:
                 self._cache.pop(next(iter(self._cache)))
-            readings = self._readings(clause, focus)
+            readings = self._readings(clause, focus, device)
             self._cache[key] = max(readings, key=Reading.sort_key) if readings else None
         return self._cache[key]
 
@@ -403,7 +424,7 @@ class IntentMatcher:
         if focus is not None and device not in focus:
             return None
         for sentence in sentences:
-            found = self._best(sentence, frozenset({device}))
+            found = self._best(sentence, frozenset({device}), device)
             if found is not None and found.actionable and set(found.calls) == {device}:
                 return found
         return None
@@ -414,7 +435,18 @@ class IntentMatcher:
         One device fits: its reading. Several: "which one?". None: None. A pronoun with nothing
         before it to refer to ("turn it off") is read the same way.
         """
-        fits = [device for device in self.devices if self._elided(clause, device, focus) is not None]
+        fits: list[str] = []
+        unfit: set[str] = set()
+        for device in self.devices:
+            driver = self.devices[device].driver
+            if driver in unfit or (focus is not None and device not in focus):
+                continue
+            if self._elided(clause, device, focus) is not None:
+                fits.append(device)
+            elif not any(self.devices[other].driver == driver for other in fits):
+                # Devices of one driver share its templates (only the name differs), so one
+                # that does not fit rules the driver out: a recognition per driver, not per device.
+                unfit.add(driver)
         if len(fits) == 1:
             return self._elided(clause, fits[0], focus)
         if fits:

@@ -10,7 +10,7 @@ sentence; the words it used are taken out (:attr:`Said.rest`), and what is left 
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from rosaos.intents.understanding.compose.quantities import (
@@ -99,6 +99,8 @@ class Said:
     rest: str = ""
     family: str | None = None
     """For ``level``: ``brightness`` or ``volume`` when the words say which."""
+    quantity: Quantity | None = None
+    """The number the values came from, to restate in the reply (:func:`restate`)."""
 
 
 def _cut(text: str, *patterns: re.Pattern[str]) -> str:
@@ -141,7 +143,33 @@ def read_action(clause: str, colours: frozenset[str]) -> Said | None:
     said = _motion(plain, quantity, size) or _light_or_sound(plain, quantity, size, colours)
     if said is not None and quantity is not None and not said.values:
         return None  # a number the action does not take: not this reader's to guess
-    return said
+    return replace(said, quantity=quantity) if said is not None and quantity is not None else said
+
+
+def restate(clause: str, said: Said) -> str:
+    """``clause`` with its number said the way a person would say it back.
+
+    The reader works on digits (:func:`~.quantities.spell_numbers` made "three quarters" 0.75),
+    so a reply built from the clause would say "set the lamp to 0.75". The value the action
+    took is said instead, in its unit: "75%", "90°", "30 cm", "2.5 m", "2700 K".
+    """
+    if said.quantity is None:
+        return clause
+    for meaning in ("level", "change", "angle", "distance", "kelvin"):
+        value = said.values.get(meaning)
+        if isinstance(value, int | float) and not isinstance(value, bool):
+            return clause.replace(said.quantity.text, _spoken(meaning, abs(float(value))), 1)
+    return clause
+
+
+def _spoken(meaning: str, value: float) -> str:
+    if meaning in ("level", "change"):
+        return f"{round(value)}%"
+    if meaning == "angle":
+        return f"{value:g}°"
+    if meaning == "distance":
+        return f"{round(value * 100)} cm" if value < 1 else f"{value:g} m"
+    return f"{value:g} K"
 
 
 def _motion(text: str, quantity: Quantity | None, size: Size) -> Said | None:

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from rosaos.intents.grammar.capabilities import Capabilities, Capability
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.planning.plan import PlanStep
-from rosaos.intents.understanding.compose.actions import Said, read_action
+from rosaos.intents.understanding.compose.actions import Said, read_action, restate
 from rosaos.intents.understanding.compose.references import Reference, References
 from rosaos.intents.understanding.compose.speech import asks, clauses, negated, normalise, says_stop
 from rosaos.intents.understanding.match_result import MatchResult, build_result
@@ -74,8 +74,15 @@ class Composer:
         self.colours = frozenset(colours)
         self.references = References(devices, self.capabilities, language)
 
-    def read(self, text: str, focus: Focus, literal: LiteralReading) -> MatchResult | None:
-        """What ``text`` asks for, or None when this reader cannot say (left to the engine)."""
+    def read(
+        self, text: str, focus: Focus, literal: LiteralReading, complete: bool = False
+    ) -> MatchResult | None:
+        """What ``text`` asks for, or None when this reader cannot say (left to the engine).
+
+        ``complete``: None when a clause that is not plainly a remark ("it's so bright") would be
+        dropped as commentary. The engine asks this of the reader before its template paths,
+        which may read such a clause ("… and some jazz") where this reader cannot.
+        """
         if not self.capabilities or not self.language.startswith("en"):
             return None
         plain = normalise(text)
@@ -87,25 +94,34 @@ class Composer:
         parsed = [self._clause(piece) for piece in pieces]
         parsed = self._addressed(parsed)
         commands = [clause for clause in parsed if clause.said is not None]
+        if complete and any(clause.said.action == "play" for clause in commands if clause.said):
+            # A free-text query is the user's own words ("Here Comes the Sun", "Take Five"): the
+            # templates keep them as said, where this reader has lowercased them and made digits.
+            return None
         if not commands:
             need = self._need(plain, focus)
             return build_result(self.context, text, [need], focus is not None) if need else None
         readings: list[Reading] = []
         before: tuple[str, ...] = ()
-        last_said: Said | None = None
+        last: _Clause | None = None
         for clause in parsed:
             reading: Reading | None
-            if clause.said is None and clause.reference.named and last_said is not None:
-                reading = self._reading(clause.text, last_said, clause.reference, before, focus)
+            if clause.said is None and clause.reference.named and last is not None and last.said:
+                again = _again(last, clause.text)
+                reading = self._reading(again, last.said, clause.reference, before, focus)
             elif clause.said is None:
                 reading = literal(clause.text, focus) if clause.reference.named else None
                 if reading is None and (not clause.reference.named or _COMMENT.match(clause.text)):
+                    if complete and not _COMMENT.match(clause.text):
+                        return None  # "… and some jazz": maybe a command the templates read
                     continue  # commentary around a command: "ugh, it's so bright, ..."
             else:
                 reading = self._reading(clause.text, clause.said, clause.reference, before, focus)
                 if reading is None or not (reading.actionable or reading.issue):
                     reading = literal(clause.text, focus) or reading
-                last_said = clause.said
+                elif _vague(clause.said):
+                    reading = _driver_amount(reading, literal(clause.text, focus))
+                last = clause
             if reading is None or not (reading.actionable or reading.issue):
                 return None
             readings.append(reading)
@@ -167,7 +183,7 @@ class Composer:
         calls = {device: [step] for device, step in steps.items() if step is not None}
         if len(calls) != len(steps):
             return None
-        return Reading(text, RANK_DRIVER, len(text), calls=calls)
+        return Reading(restate(text, said), RANK_DRIVER, len(text), calls=calls)
 
     def _capability(self, device: str, said: Said) -> Capability | None:
         declared = self.capabilities.get(device)
@@ -224,3 +240,33 @@ class Composer:
         if len(able) > 1:
             return self.context.clarify(text, 0, RANK_DRIVER, fitting or able)
         return None
+
+
+def _again(command: _Clause, devices: str) -> str:
+    """``command`` said again of other ``devices``, for the reply: "turn off the kitchen light"
+    and "the desk lamp" → "turn off the desk lamp" (``devices`` alone when the command's own
+    device words are not one stretch of it)."""
+    said = command.said.rest if command.said is not None else ""
+    if said and said in command.text:
+        return command.text.replace(said, devices, 1)
+    return devices
+
+
+_VAGUE = ("change", "kelvin_change", "distance", "angle")
+
+
+def _vague(said: Said) -> bool:
+    """An amount the words do not say ("dim", "a bit closer"): the reader's default size."""
+    return said.quantity is None and any(meaning in said.values for meaning in _VAGUE)
+
+
+def _driver_amount(reading: Reading, template: Reading | None) -> Reading:
+    """``reading``, or the driver's own template for the same clause when it makes the same calls
+    but says how much a vague word is ("dim" is 25 % for the Tapo driver): as when the
+    sentence is a template, the driver's author decides that, not the reader's default."""
+    if template is None or not template.actionable:
+        return reading
+    same = {device: [step.tool for step in steps] for device, steps in reading.calls.items()}
+    if same != {device: [step.tool for step in steps] for device, steps in template.calls.items()}:
+        return reading
+    return template
