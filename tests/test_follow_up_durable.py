@@ -41,15 +41,17 @@ async def kernel(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Kern
         yield kernel
 
 
-def first_task(kernel: Kernel) -> str:
+def first_launch(kernel: Kernel) -> dict[str, Any]:
+    """The first process's task and plan (the plan carries the follow-up), as the engine launches it."""
     model = LocalIntentModel(device_vocabularies(kernel.world))
     result = plan_follow_up("Turn on the desk lamp, then turn on the shelf lamp", model.match)
     assert result is not None
-    return result.processes[0].task
+    args = result.processes[0].launch_args
+    return {"task": args["task"], "plan": args["plan"]}
 
 
 async def post_callback(kernel: Kernel, process_id: int, **fields: Any) -> None:
-    payload = {"process_id": process_id, "task": first_task(kernel), **fields}
+    payload = {"process_id": process_id, **first_launch(kernel), **fields}
     async with kernel_api(kernel) as api:
         answer = await api.post(
             "/event", json={"kind": "worker_callback", "source": "worker", "payload": payload}

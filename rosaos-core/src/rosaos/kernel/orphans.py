@@ -23,6 +23,7 @@ from typing import Any
 from pydantic import BaseModel, ValidationError
 
 from rosaos.devices.supervisor import DirectoryEntry, SafeStopOutcome, safe_stop_entry
+from rosaos.intents.planning.plan import Plan
 from rosaos.kernel.events import EventStore, WorkerCallbackEvent
 from rosaos.kernel.launch_cause import LaunchCause
 from rosaos.processes.jobs import WorkerCallback, callback_idempotency_key
@@ -45,6 +46,8 @@ class LiveProcess(BaseModel):
     task: str
     devices: list[str]
     started_at: datetime
+    plan: Plan | None = None
+    then: str | None = None
     event_id: int | None = None
     """The event whose handling launched it (None: launched outside the loop)."""
     step: int | None = None
@@ -66,6 +69,8 @@ class LiveProcesses:
                 task=info.task,
                 devices=info.devices,
                 started_at=info.started_at,
+                plan=info.plan,
+                then=info.then,
                 event_id=cause.event_id if cause else None,
                 step=cause.step if cause else None,
             )
@@ -156,6 +161,8 @@ async def recover_orphans(
             error=f"{RESTART_ERROR}: the kernel stopped while this process ran"
             + (f"; {stopped}" if stopped else ""),
             task=process.task,
+            plan=process.plan,
+            then=None if process.plan is not None else process.then,
         )
         event = WorkerCallbackEvent(
             kind="worker_callback",

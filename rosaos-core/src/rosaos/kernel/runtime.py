@@ -32,6 +32,7 @@ from rosaos.devices.state_cache import DeviceStateCache
 from rosaos.devices.supervisor import DeviceSupervisor, DirectoryEntry, SafeStopOutcome
 from rosaos.devices.world import World
 from rosaos.drivers import DeviceError
+from rosaos.intents.planning.plan import Plan
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
 from rosaos.kernel.api.app import create_app
@@ -165,9 +166,9 @@ class Kernel:
     async def terminate(self, process_id: int) -> ProcessInfo:
         return await self.manager.terminate(process_id)
 
-    async def launch(self, task: str, devices: list[str]) -> ProcessInfo:
+    async def launch(self, task: str, devices: list[str], plan: Plan | None = None) -> ProcessInfo:
         """A process the page launched (a card control), recorded and announced as the kernel's own are."""
-        info = await self.manager.launch(task, devices, before_start=self._launching_uncaused)
+        info = await self.manager.launch(task, devices, before_start=self._launching_uncaused, plan=plan)
         data = {"process_id": info.id, "devices": info.devices, "state": info.state}
         await self._updates.publish(
             "process_launched", f"process {info.id} launched with {', '.join(info.devices)}", data
@@ -528,9 +529,9 @@ class Kernel:
         if not appended.duplicate:
             await self._updates.publish_event(appended.id, event)
 
-    async def _launch(self, task: str, devices: list[str]) -> ProcessInfo:
+    async def _launch(self, task: str, devices: list[str], plan: Plan) -> ProcessInfo:
         """Launch a process as ``launch_process`` does (a memory tool's: drive to a place)."""
-        return await self.manager.launch(task, devices, before_start=self._launching_uncaused)
+        return await self.manager.launch(task, devices, before_start=self._launching_uncaused, plan=plan)
 
     async def _launching_uncaused(self, info: ProcessInfo) -> None:
         """Before a worker has the job of a launch no event step caused (a card control, a memory

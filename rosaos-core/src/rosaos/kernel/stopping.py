@@ -31,7 +31,6 @@ from pydantic import BaseModel
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.drivers import DeviceError, Halt
-from rosaos.intents.planning.plan import task_summary
 from rosaos.kernel.state_words import doing
 from rosaos.processes.manager import ProcessInfo, ProcessManager
 
@@ -202,7 +201,7 @@ class Stopper:
 
 def describe_task(task: str) -> str:
     """A process's task in a few words: its readable summary's first line, shortened."""
-    first = task_summary(task).strip().splitlines()[0] if task.strip() else ""
+    first = task.strip().splitlines()[0] if task.strip() else ""
     first = first.strip().rstrip(".")
     if len(first) > TASK_WORDS:
         first = first[: TASK_WORDS - 1].rstrip() + "…"

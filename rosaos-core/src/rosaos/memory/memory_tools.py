@@ -20,6 +20,7 @@ from fastmcp.exceptions import ToolError
 from pydantic import Field
 
 from rosaos.drivers import CHANGES, DELETES, READ_ONLY
+from rosaos.intents.planning.plan import Plan
 from rosaos.memory.robots import Endpoints, choose_robot, frame_refusal, go_to_task, read_pose
 from rosaos.memory.sightings import SightingLog, ago
 from rosaos.memory.store import NAME_MAX, MemoryRequestError, MemoryStore, NoteKind, Place
@@ -47,7 +48,7 @@ Device = Annotated[
     ),
 ]
 Coordinate = Annotated[float | None, Field(ge=-1000, le=1000, allow_inf_nan=False)]
-Launch = Callable[[str, list[str]], Awaitable[ProcessInfo]]
+Launch = Callable[[str, list[str], Plan], Awaitable[ProcessInfo]]
 
 
 def place_data(place: Place) -> dict[str, Any]:
@@ -150,7 +151,8 @@ def add_memory_tools(
         if refusal is not None:
             raise ToolError(refusal)
         try:
-            info = await launch(go_to_task(place, robot), [robot])
+            task, plan = go_to_task(place, robot)
+            info = await launch(task, [robot], plan)
         except LaunchRefused as refused:
             raise ToolError(str(refused)) from None
         return {"process_id": info.id, "devices": info.devices, "place": place_data(place)}

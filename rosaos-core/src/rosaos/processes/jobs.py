@@ -10,6 +10,7 @@ from typing import Literal
 
 from pydantic import AliasChoices, BaseModel, ConfigDict, Field
 
+from rosaos.intents.planning.plan import Plan
 from rosaos.models.select import ModelSpec
 from rosaos.receipts import Receipt
 
@@ -45,6 +46,11 @@ class WorkerJob(BaseModel):
 
     process_id: int = Field(ge=1)
     task: str = Field(min_length=1)
+    plan: Plan | None = None
+    """The offline engine's exact tool calls, when it planned the task: the worker runs them
+    without a model (an LLM running the process reads them rendered, in its prompt)."""
+    then: str | None = None
+    """An LLM kernel's follow-up (``launch_process(..., then=...)``): not this process's to do."""
     devices: list[GrantedDevice]
     model: ModelSpec
     base_prompt: str
@@ -74,6 +80,10 @@ class WorkerCallback(BaseModel):
     output: str | None = None
     error: str | None = None
     task: str | None = None
+    plan: Plan | None = None
+    """The job's plan, back to the kernel: its replies and follow-up are read as fields."""
+    then: str | None = None
+    """The job's follow-up for an LLM kernel, back to the kernel with the outcome."""
     model_requests: int = Field(default=0, ge=0)
     tool_calls: int = Field(default=0, ge=0)
     receipts: list[Receipt] = Field(

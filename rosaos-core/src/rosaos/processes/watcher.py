@@ -225,4 +225,6 @@ def describe_exit(returncode: int) -> str:
 
 
 def ended(job: WorkerJob, status: ProcessStatus, error: str) -> WorkerCallback:
-    return WorkerCallback(process_id=job.process_id, status=status, error=error, task=job.task)
+    return WorkerCallback(
+        process_id=job.process_id, status=status, error=error, task=job.task, plan=job.plan, then=job.then
+    )

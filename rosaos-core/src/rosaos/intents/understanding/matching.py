@@ -188,7 +188,7 @@ class IntentMatcher:
         return understand(
             text,
             focus,
-            self._literal,
+            self.literal,
             self.context.names,
             self._fuzzy,
             self.language,
@@ -207,7 +207,7 @@ class IntentMatcher:
     def _whole(self, text: str, focus: Focus = None) -> MatchResult:
         return self._exact(text, focus)
 
-    def _literal(self, text: str, focus: Focus = None) -> MatchResult:
+    def literal(self, text: str, focus: Focus = None) -> MatchResult:
         """``text`` read against the templates as said: whole, split at conjunctions, or elided."""
         whole = self._best(text, focus)
         if whole is not None and whole.actionable and not self._hides_command(whole):
