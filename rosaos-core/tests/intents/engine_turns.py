@@ -1,6 +1,6 @@
 """Turns of the offline engine as the kernel loop runs them: a typed event in, the reply out.
 
-The kernel hands the local-intent engine the :class:`~rosaos.kernel.events.Event` itself
+The kernel hands the local-intent engine the :class:`~rosaos.events.types.Event` itself
 (:func:`rosaos.kernel.offline_turn.offline_turn`); the rendered text rides along only for an LLM
 that reads the history later. These helpers build such events and run such turns against a
 real in-process FastMCP ``launch_process`` (and whatever else a test adds to it).
@@ -15,12 +15,12 @@ from fastmcp import FastMCP
 from pydantic_ai.mcp import MCPToolset
 from pydantic_ai.messages import ModelMessage, ModelResponse
 
-from rosaos.intents.planning.plan import Plan
+from rosaos.events.callback import ProcessStatus, WorkerCallback
+from rosaos.events.plan import Plan
+from rosaos.events.types import DeviceNotice, ErrorReport, Event, TimerFired, UserText
 from rosaos.kernel.event_text import render_event
-from rosaos.kernel.events import DeviceNotice, ErrorReport, Event, TimerFired, UserText
 from rosaos.kernel.offline_turn import offline_turn
 from rosaos.models.kernel_model import LocalIntentModel
-from rosaos.processes.jobs import ProcessStatus, WorkerCallback
 
 
 def event(kind: str, payload: Any, event_id: int = 1) -> Event:

@@ -39,8 +39,8 @@ from rosaos.bench.tasks import BenchTask, TaskFile, TaskSelection, load_task_fil
 from rosaos.config import DeviceConfig, RosaosConfig
 from rosaos.devices.serve import open_device
 from rosaos.devices.world import build_world
+from rosaos.events.plan import Plan
 from rosaos.intents.grammar.vocabulary import sources_from_config
-from rosaos.intents.planning.plan import Plan
 from rosaos.intents.understanding.matching import IntentMatcher
 from rosaos.models.process_model import LocalPlanModel
 from rosaos.plugins import DriverRegistry, load_drivers

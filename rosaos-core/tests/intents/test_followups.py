@@ -11,9 +11,9 @@ from intents_support import home_world
 from pydantic_ai import Agent
 from pydantic_ai.mcp import MCPToolset
 
+from rosaos.events.plan import Plan
+from rosaos.events.types import Event
 from rosaos.intents.planning.followups import plan_follow_up, unmet_output
-from rosaos.intents.planning.plan import Plan
-from rosaos.kernel.events import Event
 from rosaos.models.kernel_model import LocalIntentModel
 
 WHEN_FOUND = "Turn on the kitchen light, and when you find someone turn off the bedroom light"
@@ -145,7 +145,7 @@ async def test_a_terminated_first_step_cancels_the_follow_up(model: LocalIntentM
     ("found", "expected"), [(True, "Done: search."), (False, "I did not find anyone, so I did not x.")]
 )
 async def test_the_process_reports_an_unmet_condition_as_its_output(found: bool, expected: str) -> None:
-    from rosaos.intents.planning.plan import FollowUp, FollowUpLaunch, PlanStep
+    from rosaos.events.plan import FollowUp, FollowUpLaunch, PlanStep
     from rosaos.models.process_model import LocalPlanModel
 
     device = FastMCP("turtlebot")

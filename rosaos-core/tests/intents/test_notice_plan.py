@@ -8,8 +8,8 @@ from engine_turns import EngineKernel, callback, event
 from fastmcp import FastMCP
 from intents_support import home_world
 
-from rosaos.intents.planning.plan import Plan
-from rosaos.kernel.events import DeviceNotice
+from rosaos.events.plan import Plan
+from rosaos.events.types import DeviceNotice
 from rosaos.kernel.notice_text import render_notice
 from rosaos.models.kernel_model import LocalIntentModel
 

@@ -4,15 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from rosaos.intents.planning.plan import (
-    Plan,
-    PlanAnswer,
-    PlanStep,
-    fill_state,
-    launch_args,
-    plan_text,
-    render_result,
-)
+from rosaos.events.plan import Plan, PlanAnswer, PlanStep, fill_state, launch_args, plan_text, render_result
 
 PLAN = Plan(
     steps=[PlanStep(device="kitchen_light", tool="set_brightness", args={"brightness": 20})],

@@ -12,8 +12,8 @@ from engine_turns import EngineKernel, event, said
 from fastmcp import FastMCP
 from intents_support import home_world
 
-from rosaos.intents.planning.plan import Plan
-from rosaos.kernel.events import EventStore
+from rosaos.events.plan import Plan
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.timer_tools import add_timer_tools
 from rosaos.kernel.timers import TimerBook, fired_event
 from rosaos.models.kernel_model import LocalIntentModel

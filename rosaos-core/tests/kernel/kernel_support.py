@@ -12,15 +12,15 @@ from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from typing import Any
 
-from rosaos.intents.planning.plan import Plan
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.plan import Plan
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.login_codes import LoginCodes
 from rosaos.kernel.api.schemas import DeviceView, EmergencyStopReport, EmergencyStopState, Understanding
 from rosaos.kernel.confirmations import ConfirmationDesk
-from rosaos.kernel.events import EventStore
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
-from rosaos.processes.jobs import WorkerCallback
 
 TOKEN = "test-token-0123456789"
 ORIGIN = "http://127.0.0.1:8765"

@@ -14,12 +14,13 @@ from fastapi import FastAPI
 from kernel_support import AUTH, TOKEN, TestRuntime, kitchen_light
 
 from rosaos.cli.log_command import log_command, parse_since
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.types import Event
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.app import create_app
-from rosaos.kernel.events import Event, EventStore
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.loop import render_event
 from rosaos.kernel.updates import UpdateStream
-from rosaos.processes.jobs import WorkerCallback
 from rosaos.receipts import Receipt, SafetyDecision
 
 

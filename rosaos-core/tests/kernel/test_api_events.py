@@ -8,8 +8,9 @@ import httpx
 import pytest
 from kernel_support import AUTH, TestRuntime
 
-from rosaos.kernel.events import EventStore, UserText
-from rosaos.processes.jobs import WorkerCallback
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.types import UserText
+from rosaos.kernel.event_store import EventStore
 
 
 async def test_chat_commits_a_user_typed_event_and_answers_202(

@@ -7,9 +7,9 @@ from datetime import UTC, datetime
 
 from pydantic_ai.messages import ModelRequest, ModelResponse, ToolCallPart, ToolReturnPart
 
-from rosaos.kernel.events import DeviceNotice, ErrorReport, Event, UserText
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.types import DeviceNotice, ErrorReport, Event, UserText
 from rosaos.kernel.loop import render_event, tool_activity
-from rosaos.processes.jobs import WorkerCallback
 
 
 def event(kind: str, payload: object) -> Event:

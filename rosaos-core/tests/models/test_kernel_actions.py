@@ -13,9 +13,9 @@ from pydantic_ai.messages import (
     ToolReturnPart,
 )
 
+from rosaos.events.types import Event
 from rosaos.intents.planning.notice_plan import SILENCE
 from rosaos.kernel.event_text import render_event
-from rosaos.kernel.events import Event
 from rosaos.models.conversation import event_request
 from rosaos.models.kernel_actions import help_text
 from rosaos.models.kernel_model import LocalIntentModel

@@ -14,7 +14,7 @@ from intents_support import home_world
 from pydantic_ai import Agent
 from pydantic_ai.messages import ToolCallPart
 
-from rosaos.intents.planning.plan import Plan
+from rosaos.events.plan import Plan
 from rosaos.models.kernel_model import LocalIntentModel
 
 

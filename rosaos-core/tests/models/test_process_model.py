@@ -12,7 +12,7 @@ from pydantic_ai.mcp import MCPToolset
 from pydantic_ai.messages import ToolCallPart
 from pydantic_ai.toolsets import AbstractToolset
 
-from rosaos.intents.planning.plan import Plan, PlanAnswer, PlanStep
+from rosaos.events.plan import Plan, PlanAnswer, PlanStep
 from rosaos.models.process_model import NO_PLAN_REPLY, LocalPlanModel, resolve_tool
 from rosaos.processes.jobs import GrantedDevice
 from rosaos.processes.prompts import DEFAULT_PROCESS_PROMPT, process_system_prompt

@@ -13,7 +13,7 @@ from pydantic_ai.mcp import MCPToolset
 from pydantic_ai.messages import ModelMessage, ModelResponse, TextPart
 from pydantic_ai.models.function import AgentInfo, FunctionModel
 
-from rosaos.kernel.events import Event, UserText
+from rosaos.events.types import Event, UserText
 from rosaos.models.kernel_model import LocalIntentModel
 from rosaos.models.process_model import LocalPlanModel
 from rosaos.models.routing import KernelRouter, RoutingModel, process_model_for

@@ -13,9 +13,9 @@ import pytest
 from processes_support import TOKEN, KernelStandIn, LoopbackDevice, build_test_device, make_job, model_spec
 
 from rosaos.devices.serve import serve_http
-from rosaos.intents.planning.plan import Plan, PlanStep
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.plan import Plan, PlanStep
 from rosaos.models.select import ModelSpec
-from rosaos.processes.jobs import WorkerCallback
 from rosaos.processes.worker import SESSIONS, deliver_callback, run_job
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")

@@ -18,7 +18,7 @@ import json
 from collections.abc import Sequence
 from typing import Any
 
-from rosaos.kernel.events import Event
+from rosaos.events.types import Event
 from rosaos.kernel.notice_text import render_notice
 from rosaos.kernel.timer_text import render_timer_fired
 from rosaos.receipts import receipts_text

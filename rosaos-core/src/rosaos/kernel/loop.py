@@ -20,9 +20,10 @@ from pydantic_ai.models.wrapper import WrapperModel
 from pydantic_ai.toolsets import CombinedToolset
 from pydantic_ai.usage import UsageLimits
 
+from rosaos.events.types import Event
 from rosaos.kernel.agent import trim_history
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.event_text import render_event, render_events
-from rosaos.kernel.events import Event, EventStore
 from rosaos.kernel.launch_cause import CurrentEvent
 from rosaos.kernel.offline_turn import offline_turn
 from rosaos.kernel.short_turns import LaunchAckModel, relayable, relayed_messages

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import json
 
-from rosaos.kernel.events import DeviceNotice
+from rosaos.events.types import DeviceNotice
 
 
 def render_notice(notice: DeviceNotice) -> str:

@@ -36,7 +36,7 @@ from pydantic_ai.models import Model, ModelRequestParameters
 from pydantic_ai.toolsets import AbstractToolset, ToolsetTool
 from pydantic_ai.usage import RunUsage
 
-from rosaos.kernel.events import Event
+from rosaos.events.types import Event
 from rosaos.models.conversation import event_request
 from rosaos.models.kernel_model import LocalIntentModel
 

@@ -23,10 +23,11 @@ from typing import Any
 from pydantic import BaseModel, ValidationError
 
 from rosaos.devices.supervisor import DirectoryEntry, SafeStopOutcome, safe_stop_entry
-from rosaos.intents.planning.plan import Plan
-from rosaos.kernel.events import EventStore, WorkerCallbackEvent
+from rosaos.events.callback import WorkerCallback, callback_idempotency_key
+from rosaos.events.plan import Plan
+from rosaos.events.types import WorkerCallbackEvent
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.launch_cause import LaunchCause
-from rosaos.processes.jobs import WorkerCallback, callback_idempotency_key
 from rosaos.processes.manager import ProcessInfo
 
 log = logging.getLogger("rosaos.kernel.orphans")

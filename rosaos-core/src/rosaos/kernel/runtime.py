@@ -32,7 +32,9 @@ from rosaos.devices.state_cache import DeviceStateCache
 from rosaos.devices.supervisor import DeviceSupervisor, DirectoryEntry, SafeStopOutcome
 from rosaos.devices.world import World
 from rosaos.drivers import DeviceError
-from rosaos.intents.planning.plan import Plan
+from rosaos.events.callback import WorkerCallback, callback_idempotency_key
+from rosaos.events.plan import Plan
+from rosaos.events.types import DeviceNoticeEvent, Event, WorkerCallbackEvent
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
 from rosaos.kernel.api.app import create_app
@@ -47,8 +49,9 @@ from rosaos.kernel.api.schemas import (
 )
 from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people, record_confirmation
 from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
+from rosaos.kernel.database import StoreClosedError
 from rosaos.kernel.device_status import DeviceStatusUpdates
-from rosaos.kernel.events import DeviceNoticeEvent, Event, EventStore, StoreClosedError, WorkerCallbackEvent
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.host_latch import HostLatches
 from rosaos.kernel.launch_cause import CurrentEvent, LaunchCause
 from rosaos.kernel.loop import KernelLoop
@@ -66,7 +69,6 @@ from rosaos.memory.sightings import SightingLog
 from rosaos.memory.store import MemoryStore
 from rosaos.models.defaults import KernelModels, kernel_models
 from rosaos.models.select import ModelSpec
-from rosaos.processes.jobs import WorkerCallback, callback_idempotency_key
 from rosaos.processes.manager import EmergencyStop, LaunchRefused, ProcessInfo, ProcessManager
 from rosaos.processes.pool import WorkerPool
 from rosaos.processes.prompts import base_process_prompt

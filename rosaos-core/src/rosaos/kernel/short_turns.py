@@ -19,9 +19,9 @@ from pydantic_ai.models import ModelRequestParameters
 from pydantic_ai.models.wrapper import WrapperModel
 from pydantic_ai.settings import ModelSettings
 
-from rosaos.kernel.events import Event
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.types import Event
 from rosaos.models.conversation import report_with_accepted_calls
-from rosaos.processes.jobs import WorkerCallback
 
 LAUNCH_TOOL = "launch_process"
 ACK_MODEL = "rosaos-launch-ack"

@@ -9,7 +9,7 @@ from __future__ import annotations
 import re
 from datetime import datetime, timedelta
 
-from rosaos.kernel.events import TimerFired
+from rosaos.events.types import TimerFired
 
 LATE_AFTER_SECONDS = 5.0
 """A firing later than this is reported as late (the kernel was down, or busy starting)."""

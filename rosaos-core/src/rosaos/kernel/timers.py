@@ -22,7 +22,8 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field
 
-from rosaos.kernel.events import EventStore, TimerFired, TimerFiredEvent
+from rosaos.events.types import TimerFired, TimerFiredEvent
+from rosaos.kernel.event_store import EventStore
 
 log = logging.getLogger(__name__)
 

@@ -15,7 +15,7 @@ from pydantic import Field
 
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.drivers import CHANGES, DELETES, READ_ONLY
-from rosaos.intents.planning.plan import Plan
+from rosaos.events.plan import Plan
 from rosaos.kernel.launch_cause import CurrentEvent, LaunchCause
 from rosaos.processes.manager import LaunchRefused, ProcessInfo, ProcessManager
 

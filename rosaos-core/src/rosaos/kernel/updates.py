@@ -22,16 +22,10 @@ from typing import Any, Literal
 
 from pydantic import BaseModel
 
-from rosaos.kernel.events import (
-    Database,
-    DeviceNotice,
-    Event,
-    NewEvent,
-    TimerFired,
-    UserText,
-    WorkerCallback,
-    mark_handled_in,
-)
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.types import DeviceNotice, Event, NewEvent, TimerFired, UserText
+from rosaos.kernel.database import Database
+from rosaos.kernel.event_store import mark_handled_in
 
 UpdateKind = Literal[
     "event", "kernel_reply", "process_launched", "process_ended", "tool_call", "error", "notice"

@@ -20,7 +20,7 @@ from fastmcp.exceptions import ToolError
 from pydantic import Field
 
 from rosaos.drivers import CHANGES, DELETES, READ_ONLY
-from rosaos.intents.planning.plan import Plan
+from rosaos.events.plan import Plan
 from rosaos.memory.robots import Endpoints, choose_robot, frame_refusal, go_to_task, read_pose
 from rosaos.memory.sightings import SightingLog, ago
 from rosaos.memory.store import NAME_MAX, MemoryRequestError, MemoryStore, NoteKind, Place

@@ -13,7 +13,7 @@ from typing import Any
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.drivers import DeviceError
-from rosaos.intents.planning.plan import Plan, PlanStep
+from rosaos.events.plan import Plan, PlanStep
 from rosaos.memory.store import MemoryRequestError, Place
 
 POSE_TOOL, GO_TOOL = "get_pose", "go_to"

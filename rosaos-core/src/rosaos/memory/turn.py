@@ -14,7 +14,7 @@ from typing import Any
 
 from pydantic_ai.messages import ModelMessage, ModelResponsePart, TextPart, ToolCallPart
 
-from rosaos.intents.planning.plan import result_data
+from rosaos.events.plan import result_data
 from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.memory.memory_phrases import (
     Forget,

@@ -4,7 +4,7 @@ The local models are stateless: every request carries the whole conversation, so
 is read off the last messages (the kernel event being handled, the tool calls already made and
 what they returned). This module holds that reading, shared by the kernel and process models.
 
-The event is typed: the kernel's request carries the :class:`~rosaos.kernel.events.Event` in its
+The event is typed: the kernel's request carries the :class:`~rosaos.events.types.Event` in its
 metadata (:func:`event_request`) beside the text an LLM reads, and the engine reads the event,
 never the text. A bare string prompt (an agent run in a test, a ``python:`` model spec) is what
 the user typed.
@@ -27,8 +27,8 @@ from pydantic_ai.messages import (
     UserPromptPart,
 )
 
-from rosaos.kernel.events import Event, UserText
-from rosaos.processes.jobs import WorkerCallback
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.types import Event, UserText
 
 EVENT_METADATA = "rosaos_event"
 """The key under which a kernel request carries its typed event (``ModelRequest.metadata``)."""

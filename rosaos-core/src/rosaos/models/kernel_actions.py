@@ -25,9 +25,9 @@ from typing import Any
 
 from pydantic_ai.messages import ModelMessage, ModelResponsePart, TextPart, ToolCallPart
 
+from rosaos.events.plan import result_data
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.planning.notice_plan import SILENCE
-from rosaos.intents.planning.plan import result_data
 from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.intents.understanding.questions import Question, read_question
 from rosaos.intents.understanding.stop_words import DeviceRefs, read_stop

@@ -10,13 +10,13 @@ handled (:func:`rosaos.models.conversation.turn_event`, never the text an LLM re
   refusal naming what exists, or "not understood". Nothing is launched on a guess.
 - the ``launch_process`` results: a short acknowledgement from each plan ("On it: turn on the
   kitchen light."), or the refusal (an exclusive device held by another process) passed on.
-- a :class:`~rosaos.processes.jobs.WorkerCallback`: the process's output (its plan made it a
+- a :class:`~rosaos.events.callback.WorkerCallback`: the process's output (its plan made it a
   user-facing sentence), or an apology with the error; its plan's follow-up, if it has one.
-- a :class:`~rosaos.kernel.events.DeviceNotice`: ``notify`` ones are said through the Reachy Mini (one process that calls its
+- a :class:`~rosaos.events.types.DeviceNotice`: ``notify`` ones are said through the Reachy Mini (one process that calls its
   ``speak``); ``info`` ones get no reply (:mod:`rosaos.intents.planning.notice_plan`).
-- an :class:`~rosaos.kernel.events.ErrorReport`: acknowledged in one sentence.
+- an :class:`~rosaos.events.types.ErrorReport`: acknowledged in one sentence.
 - timers ("… in ten minutes", "what timers are set?", "cancel that timer") and a
-  :class:`~rosaos.kernel.events.TimerFired`:
+  :class:`~rosaos.events.types.TimerFired`:
   :mod:`rosaos.intents.planning.timer_plan`, asked first;
 - "stop" however it is said, questions about a device's state and "what can you do?": the
   kernel's lease-free ``stop`` and ``device_state`` tools (:mod:`rosaos.models.kernel_actions`),
@@ -41,15 +41,16 @@ from pydantic_ai.messages import (
 from pydantic_ai.models import Model, ModelRequestParameters
 from pydantic_ai.settings import ModelSettings
 
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.plan import Plan
+from rosaos.events.types import DeviceNotice, ErrorReport, Event
 from rosaos.intents.grammar.phrases import phrase
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.planning.followups import callback_response, plan_follow_up
 from rosaos.intents.planning.notice_plan import SILENCE, notice_response
-from rosaos.intents.planning.plan import Plan
 from rosaos.intents.planning.timer_plan import is_timer_sentence, timer_turn
 from rosaos.intents.understanding.matching import IntentMatcher, MatchResult
 from rosaos.intents.understanding.stop_words import DeviceRefs
-from rosaos.kernel.events import DeviceNotice, ErrorReport, Event
 from rosaos.memory.memory_phrases import resolve_aliases
 from rosaos.memory.store import MemoryStore
 from rosaos.memory.turn import is_memory_sentence, memory_turn
@@ -65,7 +66,6 @@ from rosaos.models.conversation import (
     tool_outcomes,
     turn_event,
 )
-from rosaos.processes.jobs import WorkerCallback
 
 LAUNCH_TOOL = "launch_process"
 NO_OUTPUT = "(no output)"

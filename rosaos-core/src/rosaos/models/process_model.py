@@ -1,6 +1,6 @@
 """The process agent's offline model: runs the plan of its job, step by step.
 
-The worker gives it the job's typed :class:`~rosaos.intents.planning.plan.Plan` (written by the
+The worker gives it the job's typed :class:`~rosaos.events.plan.Plan` (written by the
 kernel's local-intent engine, carried on the job). Per request this model looks at what has been
 done so far and:
 
@@ -28,9 +28,9 @@ from pydantic_ai.models import Model, ModelRequestParameters
 from pydantic_ai.settings import ModelSettings
 from pydantic_ai.tools import ToolDefinition
 
+from rosaos.events.plan import Plan, fill_state, render_result, result_data
 from rosaos.intents.grammar.phrases import phrase
 from rosaos.intents.planning.followups import unmet_output
-from rosaos.intents.planning.plan import Plan, fill_state, render_result, result_data
 from rosaos.models.conversation import (
     ToolOutcome,
     content_text,

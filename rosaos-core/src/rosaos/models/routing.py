@@ -28,8 +28,8 @@ from pydantic_ai.models import Model, ModelRequestParameters, StreamedResponse
 from pydantic_ai.models.wrapper import WrapperModel
 from pydantic_ai.settings import ModelSettings
 
-from rosaos.intents.planning.plan import Plan
-from rosaos.kernel.events import Event
+from rosaos.events.plan import Plan
+from rosaos.events.types import Event
 from rosaos.models.kernel_model import LocalIntentModel
 from rosaos.models.process_model import LocalPlanModel
 

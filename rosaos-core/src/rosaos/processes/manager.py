@@ -23,10 +23,11 @@ from typing import Any, Literal
 from pydantic import BaseModel, Field
 
 from rosaos.devices.endpoints import DeviceEndpoint
-from rosaos.intents.planning.plan import Plan
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.plan import Plan
 from rosaos.models.select import ModelSpec
 from rosaos.processes.forking import preload_modules
-from rosaos.processes.jobs import GrantedDevice, WorkerCallback, WorkerJob
+from rosaos.processes.jobs import GrantedDevice, WorkerJob
 from rosaos.processes.leases import LeaseRefused, LeaseTable
 from rosaos.processes.pool import PoolError, WorkerPool
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-from rosaos.intents.planning.plan import plan_text
+from rosaos.events.plan import plan_text
 from rosaos.processes.jobs import GrantedDevice, WorkerJob
 
 DEFAULT_PROCESS_PROMPT = """\

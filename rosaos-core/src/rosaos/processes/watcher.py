@@ -26,7 +26,8 @@ from typing import Any, Protocol
 
 from pydantic import ValidationError
 
-from rosaos.processes.jobs import ProcessStatus, WorkerCallback, WorkerJob
+from rosaos.events.callback import ProcessStatus, WorkerCallback
+from rosaos.processes.jobs import WorkerJob
 
 log = logging.getLogger(__name__)
 

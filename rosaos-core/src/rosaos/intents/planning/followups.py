@@ -1,6 +1,6 @@
 """Follow-ups in the offline engine: "X, then Y", "X, and when you find someone, Y", "X; if you see …, Y".
 
-One sentence becomes one process for X whose plan carries Y as :class:`~rosaos.intents.planning.plan.FollowUp`.
+One sentence becomes one process for X whose plan carries Y as :class:`~rosaos.events.plan.FollowUp`.
 Nothing holds Y's devices while X runs: the kernel launches Y when X's callback arrives, and only
 when X succeeded. The follow-up travels in X's plan, a field of X's job and of its
 ``worker_callback`` event, so it survives a kernel restart (the event store has it).
@@ -25,15 +25,9 @@ from typing import Any
 
 from pydantic_ai.messages import ModelResponsePart, TextPart, ToolCallPart
 
-from rosaos.intents.planning.plan import (
-    FollowUp,
-    FollowUpLaunch,
-    Plan,
-    launch_args,
-    result_data,
-)
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.plan import FollowUp, FollowUpLaunch, Plan, launch_args, result_data
 from rosaos.intents.understanding.match_result import MatchResult, ProcessPlan
-from rosaos.processes.jobs import WorkerCallback
 
 # Where a follow-up starts: "…, then Y", "… and then Y"; "…, and when/once/if … Y".
 _THEN = re.compile(r"(?:\s*[,;]\s*|\s+)(?:and\s+)?(?:then|after that|afterwards)\s*,?\s+", re.IGNORECASE)

@@ -1,4 +1,4 @@
-"""How the offline engine answers a :class:`~rosaos.kernel.events.DeviceNotice`: tell the user when it matters, else nothing.
+"""How the offline engine answers a :class:`~rosaos.events.types.DeviceNotice`: tell the user when it matters, else nothing.
 
 A ``notify`` notice becomes one process on the user-interface device (the Reachy Mini) that says
 the driver's sentence with its ``speak`` tool. An ``info`` notice gets no reply at all: the web
@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from pydantic_ai.messages import ModelResponsePart, TextPart, ToolCallPart
 
-from rosaos.intents.planning.plan import Plan, PlanStep, launch_args
-from rosaos.kernel.events import DeviceNotice
+from rosaos.events.plan import Plan, PlanStep, launch_args
+from rosaos.events.types import DeviceNotice
 
 SPEAK_TOOL = "speak"
 SILENCE = " "

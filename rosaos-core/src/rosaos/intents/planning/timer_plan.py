@@ -7,7 +7,7 @@
   now (a timer is never set for something it could not do when it fires);
 - those tools' results with one sentence ("Timer 2 set: turn off the kitchen light at 22:10
   (in 10 minutes).");
-- a :class:`~rosaos.kernel.events.TimerFired` event with the action's ``launch_process`` calls, as if just asked, and
+- a :class:`~rosaos.events.types.TimerFired` event with the action's ``launch_process`` calls, as if just asked, and
   their results with the acknowledgement, saying which timer it was and how late.
 
 Anything else is left to the model (None).
@@ -21,9 +21,9 @@ from typing import Any
 
 from pydantic_ai.messages import ModelMessage, ModelResponsePart, TextPart, ToolCallPart
 
+from rosaos.events.types import TimerFired
 from rosaos.intents.grammar.timer_phrases import CancelTimer, ListTimers, SetTimer, read_timer_request
 from rosaos.intents.understanding.match_result import MatchResult
-from rosaos.kernel.events import TimerFired
 from rosaos.kernel.timer_text import LATE_AFTER_SECONDS, duration_text
 from rosaos.models.conversation import (
     ToolOutcome,

@@ -10,8 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Literal
 
+from rosaos.events.plan import Plan, PlanStep, launch_args
 from rosaos.intents.grammar.phrases import join_options, phrase
-from rosaos.intents.planning.plan import Plan, PlanStep, launch_args
 from rosaos.intents.understanding.readings import Reading, ReadingContext, readout_reply
 
 MatchKind = Literal["plans", "clarify", "no_match"]

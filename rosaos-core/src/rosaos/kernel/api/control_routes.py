@@ -20,7 +20,7 @@ from fastapi import Path as FastPath
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from rosaos.card_controls import CardControl, ControlValueError
-from rosaos.intents.planning.plan import Plan, PlanStep
+from rosaos.events.plan import Plan, PlanStep
 from rosaos.kernel.api.routes import Runtime, protected
 from rosaos.processes.manager import LaunchRefused
 

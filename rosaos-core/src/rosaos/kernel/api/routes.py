@@ -23,6 +23,7 @@ from fastapi.security import HTTPBearer
 from sse_starlette import EventSourceResponse, ServerSentEvent
 
 import rosaos
+from rosaos.events.types import Event, NewEvent, UserSaidEvent, UserText, UserTypedEvent, WorkerCallbackEvent
 from rosaos.kernel.activity import DEFAULT_LIMIT as DEFAULT_ACTIVITY
 from rosaos.kernel.activity import MAX_LIMIT as MAX_ACTIVITY
 from rosaos.kernel.activity import ActivityPage
@@ -45,14 +46,6 @@ from rosaos.kernel.api.schemas import (
     Understanding,
     UnderstandRequest,
     UpdatesPage,
-)
-from rosaos.kernel.events import (
-    Event,
-    NewEvent,
-    UserSaidEvent,
-    UserText,
-    UserTypedEvent,
-    WorkerCallbackEvent,
 )
 from rosaos.kernel.updates import UpdateStream
 

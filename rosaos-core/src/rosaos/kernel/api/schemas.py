@@ -14,14 +14,15 @@ from typing import Any, Literal, Protocol
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from rosaos.config import MapOrigin
-from rosaos.intents.planning.plan import Plan
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.plan import Plan
+from rosaos.events.types import IdempotencyKey, Source
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.login_codes import LoginCodes
 from rosaos.kernel.confirmations import ConfirmationDesk
-from rosaos.kernel.events import EventStore, IdempotencyKey, Source
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import Update, UpdateStream
-from rosaos.processes.jobs import WorkerCallback
 from rosaos.processes.manager import ProcessInfo
 
 
