@@ -86,6 +86,14 @@ class TimerFired(BaseModel):
     late_seconds: float = Field(default=0.0, ge=0)
     """How long after ``due`` it fired: more than a few seconds means the kernel was down."""
 
+    @property
+    def late(self) -> bool:
+        """Whether it fired late enough to say so (the kernel was down, or busy starting)."""
+        return self.late_seconds >= LATE_AFTER_SECONDS
+
+
+LATE_AFTER_SECONDS = 5.0
+"""A timer that fires later than this after it was due is reported as late."""
 
 EventPayload = UserText | WorkerCallback | DeviceNotice | ErrorReport | TimerFired
 

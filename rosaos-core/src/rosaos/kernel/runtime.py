@@ -48,7 +48,7 @@ from rosaos.kernel.api.schemas import (
     Understanding,
 )
 from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people, record_confirmation
-from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmRule, confirm_rule
+from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.database import StoreClosedError
 from rosaos.kernel.device_status import DeviceStatusUpdates
 from rosaos.kernel.event_store import EventStore
@@ -69,6 +69,7 @@ from rosaos.memory.sightings import SightingLog
 from rosaos.memory.store import MemoryStore
 from rosaos.models.defaults import KernelModels, kernel_models
 from rosaos.models.select import ModelSpec
+from rosaos.processes.confirming import ConfirmRule, confirm_rule
 from rosaos.processes.manager import EmergencyStop, LaunchRefused, ProcessInfo, ProcessManager
 from rosaos.processes.pool import WorkerPool
 from rosaos.processes.prompts import base_process_prompt

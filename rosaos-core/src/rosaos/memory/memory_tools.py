@@ -21,22 +21,13 @@ from pydantic import Field
 
 from rosaos.drivers import CHANGES, DELETES, READ_ONLY
 from rosaos.events.plan import Plan
+from rosaos.memory.memory_phrases import MEMORY_TOOL_NAMES
 from rosaos.memory.robots import Endpoints, choose_robot, frame_refusal, go_to_task, read_pose
 from rosaos.memory.sightings import SightingLog, ago
 from rosaos.memory.store import NAME_MAX, MemoryRequestError, MemoryStore, NoteKind, Place
 from rosaos.processes.manager import LaunchRefused, ProcessInfo
 
-MEMORY_TOOL_NAMES = (
-    "remember_place",
-    "list_places",
-    "forget_place",
-    "go_to_place",
-    "remember",
-    "recall",
-    "forget",
-    "recall_sightings",
-    "forget_sightings",
-)
+__all__ = ["MEMORY_TOOL_NAMES", "add_memory_tools"]
 
 PlaceName = Annotated[
     str, Field(min_length=1, max_length=NAME_MAX, description="The place's name, e.g. 'the kitchen'.")

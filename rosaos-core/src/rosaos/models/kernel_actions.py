@@ -26,12 +26,12 @@ from typing import Any
 from pydantic_ai.messages import ModelMessage, ModelResponsePart, TextPart, ToolCallPart
 
 from rosaos.events.plan import result_data
+from rosaos.intents.grammar.state_words import battery, doing, people_seen, position
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.planning.notice_plan import SILENCE
 from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.intents.understanding.questions import Question, read_question
 from rosaos.intents.understanding.stop_words import DeviceRefs, read_stop
-from rosaos.kernel.state_words import battery, doing, people_seen, position
 from rosaos.models.conversation import (
     ToolOutcome,
     callback_of,

@@ -17,12 +17,12 @@ handled (:func:`rosaos.models.conversation.turn_event`, never the text an LLM re
 - an :class:`~rosaos.events.types.ErrorReport`: acknowledged in one sentence.
 - timers ("… in ten minutes", "what timers are set?", "cancel that timer") and a
   :class:`~rosaos.events.types.TimerFired`:
-  :mod:`rosaos.intents.planning.timer_plan`, asked first;
+  :mod:`rosaos.models.timer_turn`, asked first;
 - "stop" however it is said, questions about a device's state and "what can you do?": the
   kernel's lease-free ``stop`` and ``device_state`` tools (:mod:`rosaos.models.kernel_actions`),
   asked next;
 - memory ("remember this spot as the kitchen", "go to the kitchen", "call the dog Rex"):
-  :mod:`rosaos.memory.turn`, asked after them; aliases people gave are resolved before any match.
+  :mod:`rosaos.models.memory_turn`, asked after them; aliases people gave are resolved before any match.
 """
 
 from __future__ import annotations
@@ -48,12 +48,10 @@ from rosaos.intents.grammar.phrases import phrase
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.planning.followups import callback_response, plan_follow_up
 from rosaos.intents.planning.notice_plan import SILENCE, notice_response
-from rosaos.intents.planning.timer_plan import is_timer_sentence, timer_turn
 from rosaos.intents.understanding.matching import IntentMatcher, MatchResult
 from rosaos.intents.understanding.stop_words import DeviceRefs
 from rosaos.memory.memory_phrases import resolve_aliases
 from rosaos.memory.store import MemoryStore
-from rosaos.memory.turn import is_memory_sentence, memory_turn
 from rosaos.models import kernel_actions
 from rosaos.models.conversation import (
     ToolOutcome,
@@ -66,6 +64,8 @@ from rosaos.models.conversation import (
     tool_outcomes,
     turn_event,
 )
+from rosaos.models.memory_turn import is_memory_sentence, memory_turn
+from rosaos.models.timer_turn import is_timer_sentence, timer_turn
 
 LAUNCH_TOOL = "launch_process"
 NO_OUTPUT = "(no output)"

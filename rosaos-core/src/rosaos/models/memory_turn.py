@@ -17,6 +17,7 @@ from pydantic_ai.messages import ModelMessage, ModelResponsePart, TextPart, Tool
 from rosaos.events.plan import result_data
 from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.memory.memory_phrases import (
+    MEMORY_TOOL_NAMES,
     Forget,
     ForgetPlace,
     ForgetSightings,
@@ -31,7 +32,6 @@ from rosaos.memory.memory_phrases import (
     read_memory_request,
     resolve_aliases,
 )
-from rosaos.memory.memory_tools import MEMORY_TOOL_NAMES
 from rosaos.memory.store import MemoryStore
 from rosaos.models.conversation import (
     ToolOutcome,

@@ -22,9 +22,14 @@ from typing import Any
 from pydantic_ai.messages import ModelMessage, ModelResponsePart, TextPart, ToolCallPart
 
 from rosaos.events.types import TimerFired
-from rosaos.intents.grammar.timer_phrases import CancelTimer, ListTimers, SetTimer, read_timer_request
+from rosaos.intents.grammar.timer_phrases import (
+    CancelTimer,
+    ListTimers,
+    SetTimer,
+    duration_text,
+    read_timer_request,
+)
 from rosaos.intents.understanding.match_result import MatchResult
-from rosaos.kernel.timer_text import LATE_AFTER_SECONDS, duration_text
 from rosaos.models.conversation import (
     ToolOutcome,
     content_text,
@@ -117,7 +122,7 @@ def _call(tools: Sequence[str], name: str, args: dict[str, Any]) -> list[ModelRe
 def _fired_name(fired: TimerFired) -> str:
     """How to name a fired timer to the user: "Timer 3", or "Timer 3 (2 h late: …)"."""
     name = f"Timer {fired.timer_id}"
-    if fired.late_seconds >= LATE_AFTER_SECONDS:
+    if fired.late:
         name += f" ({duration_text(fired.late_seconds)} late: the kernel was not running when it was due)"
     return name
 
