@@ -5,7 +5,7 @@ Workers import this module in their own subprocess as ``python:paper_scripts:pro
 The kernel script understands the two requests of the rosaOS paper (section 6) the way the kernel
 prompt asks an LLM to: the search is launched alone on the TurtleBot with the lamp as its
 follow-up (``launch_process(..., then=...)``); the follow-up is launched from the search's
-``[Worker callback]`` only when it found someone. The process script plays a process agent that
+``[Process callback]`` only when it found someone. The process script plays a process agent that
 reads its task and calls its granted device's tools.
 """
 
@@ -40,9 +40,9 @@ def _last_user_text(messages: list[ModelMessage]) -> str:
 
 
 def _callback(body: str) -> dict[str, Any]:
-    """The fields of a ``[Worker callback]`` as an LLM reads them: the head, output or error, then."""
+    """The fields of a ``[Process callback]`` as an LLM reads them: the head, output or error, then."""
     head, *lines = body.splitlines()
-    fields: dict[str, Any] = dict(re.findall(r"\b(process|worker|status)=(\S+)", head))
+    fields: dict[str, Any] = dict(re.findall(r"\b(process|status)=(\S+)", head))
     then = re.search(r" then=(['\"])(?P<then>.*)\1$", head)
     fields["then"] = then["then"] if then else None
     for line in lines:
@@ -92,11 +92,11 @@ def kernel_model() -> FunctionModel:
                     ),
                 ]
             )
-        if tag == "[Worker callback":
+        if tag == "[Process callback":
             callback = _callback(body)
             follow_up, output = callback["then"], callback.get("output") or ""
             if follow_up is None:
-                return ModelResponse(parts=[TextPart(f"process {callback['worker']}: {output}")])
+                return ModelResponse(parts=[TextPart(f"process {callback['process']}: {output}")])
             if callback["status"] == "ok" and output.startswith("Found"):
                 return ModelResponse(
                     parts=[ToolCallPart("launch_process", {"task": follow_up, "devices": ["lamp"]})]

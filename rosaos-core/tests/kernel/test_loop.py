@@ -24,14 +24,14 @@ def test_user_input_is_tagged_by_how_it_arrived() -> None:
 def test_a_worker_callback_carries_worker_status_task_and_output() -> None:
     callback = WorkerCallback(process_id=7, status="ok", task="turn on the light", output="it is on")
     assert render_event(event("worker_callback", callback)) == (
-        "[Worker callback] worker=7 status=ok task='turn on the light'\noutput: \"it is on\""
+        "[Process callback] process=7 status=ok task='turn on the light'\noutput: \"it is on\""
     )
 
 
 def test_a_failed_worker_callback_shows_the_error() -> None:
     callback = WorkerCallback(process_id=7, status="crashed", error="worker killed by SIGKILL")
     assert render_event(event("worker_callback", callback)) == (
-        '[Worker callback] worker=7 status=crashed\nerror: "worker killed by SIGKILL"'
+        '[Process callback] process=7 status=crashed\nerror: "worker killed by SIGKILL"'
     )
 
 

@@ -26,10 +26,12 @@ RENDERED = (
     "User said",
     "User typed",
     "Worker callback",
+    "Process callback",
     "Device notice",
     "Timer fired",
     "[Error]",
     "worker=",
+    "process=",
     "status=",
     "timer=",
     "importance=",
@@ -110,7 +112,7 @@ def test_a_report_that_reads_like_a_command_is_only_a_report(model: LocalIntentM
 def test_a_callback_is_answered_from_its_plan_not_from_its_task_words(model: LocalIntentModel) -> None:
     [process] = model.match("Turn on the kitchen light").processes
     event = callback(4, status="error", task="(any words)", plan=process.plan, error="the bulb is offline")
-    [reply] = model.respond([event_request(event, "[Worker callback] worker=4 status=ok")], TOOLS)
+    [reply] = model.respond([event_request(event, "[Process callback] process=4 status=ok")], TOOLS)
     assert isinstance(reply, TextPart)
     assert reply.content == "Sorry, I couldn't turn on the kitchen light: the bulb is offline"
 

@@ -40,7 +40,7 @@ def render_event(event: Event) -> str:
         case "user_typed":
             return f"[User typed] {payload.text}"
         case "worker_callback":
-            head = f"[Worker callback] worker={payload.process_id} status={payload.status}"
+            head = f"[Process callback] process={payload.process_id} status={payload.status}"
             if payload.task:
                 head += f" task={payload.task!r}"  # repr: one line, its quotes escaped
             then = payload.then or (payload.plan.then.summary if payload.plan and payload.plan.then else None)

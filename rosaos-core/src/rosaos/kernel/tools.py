@@ -62,7 +62,7 @@ def build_kernel_tools(
                 description=(
                     "Optional follow-up: what to launch when this process succeeds (e.g. 'turn the lamp "
                     "green' after a search that finds someone). It is not done by this process; it comes "
-                    "back to you with the [Worker callback], so it survives a restart."
+                    "back to you with the [Process callback], so it survives a restart."
                 ),
             ),
         ] = None,
@@ -73,7 +73,7 @@ def build_kernel_tools(
     ) -> dict[str, Any]:
         """Start a process agent on a task with the devices it needs; returns its id at once.
 
-        The result arrives later as a [Worker callback] event, with ``then`` (a follow-up to launch
+        The result arrives later as a [Process callback] event, with ``then`` (a follow-up to launch
         only if this process succeeds) beside its task. An exclusive device held by
         another process is refused with the holder named: wait for its callback, ask the user,
         or terminate_process(holder). The always-attached device is granted automatically.

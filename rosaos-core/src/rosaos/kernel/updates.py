@@ -71,12 +71,12 @@ def describe_event(event: Event | NewEvent) -> str:
         label = "User said" if event.kind == "user_said" else "User typed"
         return f"[{label}] {payload.text}"
     if isinstance(payload, WorkerCallback):
-        parts = [f"worker={payload.process_id}", f"status={payload.status}"]
+        parts = [f"process={payload.process_id}", f"status={payload.status}"]
         if payload.output:
             parts.append(f"output={payload.output}")
         if payload.error:
             parts.append(f"error={payload.error}")
-        return "[Worker callback] " + " ".join(parts)
+        return "[Process callback] " + " ".join(parts)
     if isinstance(payload, DeviceNotice):
         return f"[Device notice] {payload.device}: {payload.message}"
     if isinstance(payload, TimerFired):

@@ -131,7 +131,7 @@ def add_memory_tools(
         """Send a robot to a named place (the one that saved it, by default); returns the process id.
 
         Refused at once when the robot is in another frame than the place (another map, or
-        odometry that restarted). The result arrives later as a [Worker callback].
+        odometry that restarted). The result arrives later as a [Process callback].
         """
         try:
             place = store.require_place(name)
