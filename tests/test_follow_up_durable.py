@@ -16,7 +16,7 @@ import pytest_asyncio
 from e2e_support import device_state, eventually, kernel_api, running_kernel
 
 from rosaos.intents.grammar.vocabulary import device_vocabularies
-from rosaos.intents.planning.followups import plan_follow_up
+from rosaos.intents.planning.follow_ups import plan_follow_up
 from rosaos.kernel.runtime import Kernel
 from rosaos.models.kernel_model import LocalIntentModel
 

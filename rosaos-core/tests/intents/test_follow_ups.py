@@ -13,7 +13,7 @@ from pydantic_ai.mcp import MCPToolset
 
 from rosaos.events.plan import Plan
 from rosaos.events.types import Event
-from rosaos.intents.planning.followups import plan_follow_up, unmet_output
+from rosaos.intents.planning.follow_ups import plan_follow_up, unmet_output
 from rosaos.models.kernel_model import LocalIntentModel
 
 WHEN_FOUND = "Turn on the kitchen light, and when you find someone turn off the bedroom light"

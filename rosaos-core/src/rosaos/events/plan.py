@@ -85,7 +85,7 @@ class FollowUpLaunch(BaseModel):
 
 
 class FollowUp(BaseModel):
-    """The next step of a plan, launched by the kernel on the callback (see :mod:`rosaos.intents.planning.followups`)."""
+    """The next step of a plan, launched by the kernel on the callback (see :mod:`rosaos.intents.planning.follow_ups`)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 

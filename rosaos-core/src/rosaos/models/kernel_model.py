@@ -46,7 +46,7 @@ from rosaos.events.plan import Plan
 from rosaos.events.types import DeviceNotice, ErrorReport, Event
 from rosaos.intents.grammar.phrases import phrase
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
-from rosaos.intents.planning.followups import callback_response, plan_follow_up
+from rosaos.intents.planning.follow_ups import callback_response, plan_follow_up
 from rosaos.intents.planning.notice_plan import SILENCE, notice_response
 from rosaos.intents.understanding.matching import IntentMatcher, MatchResult
 from rosaos.intents.understanding.stop_words import DeviceRefs

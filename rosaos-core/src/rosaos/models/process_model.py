@@ -30,7 +30,7 @@ from pydantic_ai.tools import ToolDefinition
 
 from rosaos.events.plan import Plan, fill_state, render_result, result_data
 from rosaos.intents.grammar.phrases import phrase
-from rosaos.intents.planning.followups import unmet_output
+from rosaos.intents.planning.follow_ups import unmet_output
 from rosaos.models.conversation import (
     ToolOutcome,
     content_text,
