@@ -4,7 +4,7 @@ Plugged in where an LLM would be, so the kernel runs unchanged: same queue, same
 ``launch_process``, same workers, leases and MCP tools. Per request it reads the typed event being
 handled (:func:`rosaos.models.conversation.turn_event`, never the text an LLM reads) and answers:
 
-- ``[User said]`` / ``[User typed]``: the sentence is matched (:class:`~rosaos.intents.understanding.matching.
+- what the user said or typed (:class:`~rosaos.events.types.UserText`): the sentence is matched (:class:`~rosaos.intents.understanding.matching.
   IntentMatcher`). An exact match becomes one ``launch_process`` call per process, all in one
   response (parallel tool calls). Anything else becomes a text reply: a clarifying question, a
   refusal naming what exists, or "not understood". Nothing is launched on a guess.
