@@ -43,7 +43,7 @@ CALLBACKS: dict[int, float] = {}
 
 _REQUEST = re.compile(r"bench (\d+) (\w+) (\w+)")
 _TASK = re.compile(r"bench (\d+): call (\w+)")
-_CALLBACK = re.compile(r"\[Worker callback\] worker=(\d+)")
+_CALLBACK = re.compile(r"\[Process callback\] process=(\d+)")
 
 
 def now() -> float:

@@ -66,10 +66,10 @@ def kernel_model() -> FunctionModel:
             return ModelResponse(parts=[TextPart("; ".join(said))])
         text = _user_text(messages)
         tag, _, body = text.partition("] ")
-        if tag == "[Worker callback":
+        if tag == "[Process callback":
             head = body.splitlines()[0]
             fields = dict(item.split("=", 1) for item in head.split() if "=" in item)
-            return ModelResponse(parts=[TextPart(f"process {fields['worker']}: {fields['status']}")])
+            return ModelResponse(parts=[TextPart(f"process {fields['process']}: {fields['status']}")])
         if tag == "[Timer fired":
             body = body.split("\naction: ", 1)[1]
         if body.startswith("timer "):

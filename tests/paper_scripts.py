@@ -5,13 +5,14 @@ Workers import this module in their own subprocess as ``python:paper_scripts:pro
 The kernel script understands the two requests of the rosaOS paper (section 6) the way the kernel
 prompt asks an LLM to: the search is launched alone on the TurtleBot with the lamp as its
 follow-up (``launch_process(..., then=...)``); the follow-up is launched from the search's
-``[Worker callback]`` only when it found someone. The process script plays a process agent that
+``[Process callback]`` only when it found someone. The process script plays a process agent that
 reads its task and calls its granted device's tools.
 """
 
 from __future__ import annotations
 
 import json
+import re
 from typing import Any
 
 from pydantic_ai.messages import (
@@ -25,9 +26,6 @@ from pydantic_ai.messages import (
 )
 from pydantic_ai.models.function import AgentInfo, FunctionModel
 
-from rosaos.kernel.follow_ups import follow_up_of
-from rosaos.models.conversation import parse_callback
-
 SEARCH_REQUEST = "undock the TurtleBot, search the environment for a person, and when someone is found, turn the lamp green"
 SECOND_REQUEST = "make the PuppyPi walk forward and play a song on Spotify"
 
@@ -39,6 +37,19 @@ def _last_user_text(messages: list[ModelMessage]) -> str:
                 if isinstance(part, UserPromptPart) and isinstance(part.content, str):
                     return part.content
     return ""
+
+
+def _callback(body: str) -> dict[str, Any]:
+    """The fields of a ``[Process callback]`` as an LLM reads them: the head, output or error, then."""
+    head, *lines = body.splitlines()
+    fields: dict[str, Any] = dict(re.findall(r"\b(process|status)=(\S+)", head))
+    then = re.search(r" then=(['\"])(?P<then>.*)\1$", head)
+    fields["then"] = then["then"] if then else None
+    for line in lines:
+        key, _, value = line.partition(": ")
+        if key in ("output", "error"):
+            fields[key] = json.loads(value)
+    return fields
 
 
 def _returns(messages: list[ModelMessage]) -> list[ToolReturnPart]:
@@ -81,17 +92,17 @@ def kernel_model() -> FunctionModel:
                     ),
                 ]
             )
-        if tag == "[Worker callback":
-            callback = parse_callback(body)
-            follow_up = follow_up_of(callback.task)
+        if tag == "[Process callback":
+            callback = _callback(body)
+            follow_up, output = callback["then"], callback.get("output") or ""
             if follow_up is None:
-                return ModelResponse(parts=[TextPart(f"process {callback.worker}: {callback.output}")])
-            if callback.status == "ok" and (callback.output or "").startswith("Found"):
+                return ModelResponse(parts=[TextPart(f"process {callback['process']}: {output}")])
+            if callback["status"] == "ok" and output.startswith("Found"):
                 return ModelResponse(
                     parts=[ToolCallPart("launch_process", {"task": follow_up, "devices": ["lamp"]})]
                 )
             return ModelResponse(
-                parts=[TextPart(f"{callback.output or callback.error} So I did not: {follow_up}")]
+                parts=[TextPart(f"{output or callback.get('error')} So I did not: {follow_up}")]
             )
         return ModelResponse(parts=[TextPart(f"I don't know how to handle: {text[:80]}")])
 

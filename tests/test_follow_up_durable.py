@@ -16,7 +16,7 @@ import pytest_asyncio
 from e2e_support import device_state, eventually, running_kernel
 
 from rosaos.intents.grammar.vocabulary import device_vocabularies
-from rosaos.intents.planning.followups import plan_follow_up
+from rosaos.intents.planning.follow_ups import plan_follow_up
 from rosaos.kernel.process_ends import end_event
 from rosaos.kernel.runtime import Kernel
 from rosaos.models.kernel_model import LocalIntentModel
@@ -43,15 +43,17 @@ async def kernel(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Kern
         yield kernel
 
 
-def first_task(kernel: Kernel) -> str:
+def first_launch(kernel: Kernel) -> dict[str, Any]:
+    """The first process's task and plan (the plan carries the follow-up), as the engine launches it."""
     model = LocalIntentModel(device_vocabularies(kernel.world))
     result = plan_follow_up("Turn on the desk lamp, then turn on the shelf lamp", model.match)
     assert result is not None
-    return result.processes[0].task
+    args = result.processes[0].launch_args
+    return {"task": args["task"], "plan": args["plan"]}
 
 
 async def post_callback(kernel: Kernel, process_id: int, **fields: Any) -> None:
-    callback = WorkerCallback(process_id=process_id, task=first_task(kernel), **fields)
+    callback = WorkerCallback(process_id=process_id, **first_launch(kernel), **fields)
     assert not (await kernel.intake.submit(end_event(callback))).duplicate
 
 

@@ -14,7 +14,8 @@ from pathlib import Path
 
 from e2e_support import TWO_LIGHTS, device_state, kernel_api, running_kernel
 
-from rosaos.kernel.events import EventStore, UserText, UserTypedEvent
+from rosaos.events.types import UserText, UserTypedEvent
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.launch_cause import LaunchCause
 from rosaos.kernel.orphans import LiveProcesses
 from rosaos.kernel.runtime import EVENTS_FILE

@@ -62,7 +62,7 @@ def memory_kernel() -> FunctionModel:
             )
         text = str(last.parts[-1].content) if last.parts else ""
         body = text.partition("] ")[2].strip()
-        if text.startswith("[Worker callback"):
+        if text.startswith("[Process callback"):
             return ModelResponse(parts=[TextPart(body.splitlines()[0])])
         if body.lower() in SCRIPT:
             return ModelResponse(parts=[SCRIPT[body.lower()]])

@@ -78,7 +78,7 @@ async def test_the_paper_demonstration(kernel: Kernel) -> None:
         assert (await api.post("/stt", json={"text": SEARCH_REQUEST})).status_code == 202
         search = await eventually(lambda: _process_on(api, "turtlebot"))
         assert search["devices"] == ["turtlebot"]  # the lamp is not held while the search runs
-        assert "Kernel follow-up" in search["task"]
+        assert search["then"] == "Turn the lamp green."  # the follow-up rides beside the task
         await asyncio.sleep(3)
         assert (await api.post("/stt", json={"text": SECOND_REQUEST})).status_code == 202
 

@@ -46,7 +46,7 @@ def model() -> LocalIntentModel:
 def test_a_template_question_reads_device_state(
     model: LocalIntentModel, said: str, device: str, state: dict[str, Any], answer: str
 ) -> None:
-    messages: list[ModelMessage] = [ModelRequest(parts=[UserPromptPart(f"[User said] {said}")])]
+    messages: list[ModelMessage] = [ModelRequest(parts=[UserPromptPart(said)])]  # a bare prompt: typed text
     [call] = model.respond(messages, TOOLS)
     assert isinstance(call, ToolCallPart) and call.tool_name == "device_state"
     assert call.args_as_dict() == {"device": device}

@@ -13,8 +13,9 @@ from typing import Any
 
 from rosaos.devices.serve import serve_http
 from rosaos.drivers import DeviceContext
+from rosaos.events.callback import WorkerCallback
 from rosaos.models.select import ModelSpec
-from rosaos.processes.jobs import GrantedDevice, WorkerCallback, WorkerJob
+from rosaos.processes.jobs import GrantedDevice, WorkerJob
 from rosaos.processes.worker import run_job
 from rosaos_ros.plugin import sim_backend
 from rosaos_ros.server import build_server

@@ -179,7 +179,7 @@ def _describe(value: Any) -> Any:
 
 
 RECEIPTS_HEADING = "tool calls:"
-"""Heads the receipts in a rendered ``[Worker callback]``, after the output or error line."""
+"""Heads the receipts in a rendered ``[Process callback]``, after the output or error line."""
 RECEIPTS_SHOWN = 20
 """Receipts shown to the kernel model per callback (the first and the last ones)."""
 

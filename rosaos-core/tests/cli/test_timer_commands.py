@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from rosaos.cli.timer_commands import cancel_timer_command, timers_command
-from rosaos.kernel.events import EventStore
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.timers import TimerBook
 
 

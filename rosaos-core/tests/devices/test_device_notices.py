@@ -14,7 +14,7 @@ from rosaos.device_notices import NoticeBatch, NoticeBoard, NoticeError, NoticeS
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.devices.serve import add_notice_route, serve_http
 from rosaos.drivers import DeviceContext, DeviceSettings
-from rosaos.kernel.events import DeviceNoticeEvent
+from rosaos.events.types import DeviceNoticeEvent
 from rosaos.kernel.notices import NoticeFilter, NoticeWatcher, notice_event, notices_url
 
 TOKEN = "notice-token-0123456789"

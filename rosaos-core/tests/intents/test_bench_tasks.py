@@ -39,6 +39,7 @@ from rosaos.bench.tasks import BenchTask, TaskFile, TaskSelection, load_task_fil
 from rosaos.config import DeviceConfig, RosaosConfig
 from rosaos.devices.serve import open_device
 from rosaos.devices.world import build_world
+from rosaos.events.plan import Plan
 from rosaos.intents.grammar.vocabulary import sources_from_config
 from rosaos.intents.understanding.matching import IntentMatcher
 from rosaos.models.process_model import LocalPlanModel
@@ -84,9 +85,10 @@ def _devices(world: TaskFile, task: BenchTask) -> tuple[dict[str, DeviceConfig],
 
 
 async def _run(
-    task_text: str, device: str, config: DeviceConfig, data_dir: Path
+    task_text: str, plan: Plan, device: str, config: DeviceConfig, data_dir: Path
 ) -> tuple[str, dict[str, Any]]:
-    """Run one process the way the worker does; return its output and the device's state after."""
+    """Run one process the way the worker does (the plan a field of the job); return its output
+    and the device's state after."""
     # Only this device is built: other drivers of the world may be placeholders.
     instance = build_world(RosaosConfig(devices={device: config}), REGISTRY).get(device)
     granted = GrantedDevice(
@@ -99,7 +101,7 @@ async def _run(
     )
     async with open_device(instance, data_dir) as opened:
         agent = Agent(
-            LocalPlanModel(),
+            LocalPlanModel(plan=plan),
             system_prompt=process_system_prompt(DEFAULT_PROCESS_PROMPT, task_text, [granted]),
             toolsets=[MCPToolset(opened.server)],
         )
@@ -160,7 +162,7 @@ async def test_bench_task_runs_on_simulators(world: TaskFile, task: BenchTask, t
     replies = [result.reply]
     for process in result.processes:
         [device] = process.devices
-        output, state = await _run(process.task, device, devices[device], tmp_path)
+        output, state = await _run(process.summary, process.plan, device, devices[device], tmp_path)
         replies.append(output)
         problems = device_differences(task.expect.get(device, {}), initial[device], state, device)
         assert not problems, f"{task.said!r} on {device}: {[str(p) for p in problems]}"

@@ -17,7 +17,7 @@ import pytest
 from rosaos.bench.sim_world import bench_world
 from rosaos.bench.tasks import BenchTask, TaskFile, load_task_file
 from rosaos.intents.grammar.vocabulary import device_vocabularies
-from rosaos.intents.planning.followups import plan_follow_up
+from rosaos.intents.planning.follow_ups import plan_follow_up
 from rosaos.models.kernel_model import LocalIntentModel
 from rosaos.plugins import load_drivers
 

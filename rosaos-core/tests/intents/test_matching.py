@@ -303,10 +303,12 @@ def test_a_new_command_is_not_taken_for_an_answer(matcher: IntentMatcher) -> Non
 # The task a process receives
 
 
-def test_the_task_reads_as_a_sentence_and_carries_the_plan(matcher: IntentMatcher) -> None:
+def test_the_task_reads_as_a_sentence_and_the_plan_rides_beside_it(matcher: IntentMatcher) -> None:
     [process] = matcher.match("Turn on the kitchen light").processes
-    assert process.task.startswith("Turn on the kitchen light.\n")
-    assert "```rosaos-plan\n" in process.task
+    args = process.launch_args
+    assert args["task"] == "Turn on the kitchen light."
+    assert args["devices"] == ["kitchen_light"]
+    assert args["plan"]["steps"] == [{"device": "kitchen_light", "tool": "turn_on", "args": {}}]
     assert process.plan.ack == "On it: turn on the kitchen light."
 
 

@@ -1,21 +1,10 @@
-"""The plan a task carries: encoded into the task text and read back exactly."""
+"""The plan a process carries: a typed field of the launch, the job and the callback; rendered only for an LLM."""
 
 from __future__ import annotations
 
 import pytest
 
-from rosaos.intents.planning.plan import (
-    Plan,
-    PlanAnswer,
-    PlanError,
-    PlanStep,
-    decode_plan,
-    encode_task,
-    fill_state,
-    has_plan,
-    render_result,
-    task_summary,
-)
+from rosaos.events.plan import Plan, PlanAnswer, PlanStep, fill_state, launch_args, plan_text, render_result
 
 PLAN = Plan(
     steps=[PlanStep(device="kitchen_light", tool="set_brightness", args={"brightness": 20})],
@@ -25,30 +14,26 @@ PLAN = Plan(
 )
 
 
-def test_a_plan_survives_the_round_trip_through_the_task_text() -> None:
-    task = encode_task("Set the kitchen light to 20 percent.", PLAN)
-    assert decode_plan(task) == PLAN
-    assert task_summary(task) == "Set the kitchen light to 20 percent."
+def test_the_launch_carries_the_words_as_the_task_and_the_plan_as_data() -> None:
+    args = launch_args(" Set the kitchen light to 20 percent. ", ["kitchen_light"], PLAN)
+    assert args["task"] == "Set the kitchen light to 20 percent."
+    assert args["devices"] == ["kitchen_light"]
+    assert Plan.model_validate(args["plan"]) == PLAN  # JSON data in the tool call, validated by the tool
 
 
-def test_a_question_plan_keeps_its_answer_and_unicode() -> None:
+def test_a_question_plan_keeps_its_answer_and_unicode_for_an_llm_to_read() -> None:
     plan = PLAN.model_copy(
         update={"answer": PlanAnswer(when={"on": True}, yes="Oui, allumée.", no="Non, éteinte.")}
     )
-    task = encode_task("La lumière est-elle allumée ?", plan)
-    assert "éteinte" in task  # readable, not \\u-escaped
-    assert decode_plan(task) == plan
+    text = plan_text(plan)
+    assert "éteinte" in text  # readable, not \\u-escaped
+    assert Plan.model_validate(launch_args("La lumière est-elle allumée ?", ["lamp"], plan)["plan"]) == plan
 
 
-def test_a_task_without_a_block_has_no_plan() -> None:
-    assert decode_plan("Turn on the kitchen light.") is None
-    assert not has_plan("Turn on the kitchen light.")
-
-
-@pytest.mark.parametrize("body", ["not json", '{"steps": []}', '{"steps": [{"tool": "x"}], "reply": "r"}'])
-def test_a_broken_block_is_an_error_that_says_so(body: str) -> None:
-    with pytest.raises(PlanError, match="not a valid plan"):
-        decode_plan(f"Do it.\n```rosaos-plan\n{body}\n```")
+@pytest.mark.parametrize("data", [{}, {"steps": []}, {"steps": [{"tool": "x"}], "reply": "r"}])
+def test_a_broken_plan_is_refused_by_validation(data: dict[str, object]) -> None:
+    with pytest.raises(ValueError, match="validation error"):
+        Plan.model_validate(data)
 
 
 def test_devices_are_listed_once_in_order_of_use() -> None:

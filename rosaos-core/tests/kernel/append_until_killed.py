@@ -10,7 +10,8 @@ import asyncio
 import sys
 from pathlib import Path
 
-from rosaos.kernel.events import EventStore, UserText, UserTypedEvent
+from rosaos.events.types import UserText, UserTypedEvent
+from rosaos.kernel.event_store import EventStore
 
 
 async def main(path: Path) -> None:

@@ -20,7 +20,7 @@ from fastapi import FastAPI
 
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.app import create_app
-from rosaos.kernel.events import EventStore
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
 from rosaos.memory.sightings import SightingLog

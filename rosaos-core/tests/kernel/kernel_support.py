@@ -12,11 +12,12 @@ from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from typing import Any
 
+from rosaos.events.plan import Plan
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.login_codes import LoginCodes
 from rosaos.kernel.api.schemas import DeviceView, EmergencyStopReport, EmergencyStopState, Understanding
 from rosaos.kernel.confirmations import ConfirmationDesk
-from rosaos.kernel.events import EventStore
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.intake import Intake
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
@@ -39,6 +40,8 @@ class Process:
     started_at: datetime = field(default_factory=lambda: datetime.now(UTC))
     ended_at: datetime | None = None
     worker_pid: int | None = 4242
+    plan: Plan | None = None
+    then: str | None = None
 
 
 @dataclass
@@ -84,10 +87,10 @@ class TestRuntime:
                 return process
         raise KeyError(f"no process {process_id}")
 
-    async def launch(self, task: str, devices: list[str]) -> Any:
+    async def launch(self, task: str, devices: list[str], plan: Plan | None = None) -> Any:
         """Records the process as running; the real kernel hands it to a worker."""
         process = Process(
-            id=max((p.id for p in self.process_list), default=0) + 1, task=task, devices=devices
+            id=max((p.id for p in self.process_list), default=0) + 1, task=task, devices=devices, plan=plan
         )
         self.process_list.append(process)
         return process

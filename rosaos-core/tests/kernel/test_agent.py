@@ -82,7 +82,7 @@ def test_history_is_cut_at_a_user_turn_so_no_tool_return_is_orphaned() -> None:
 
 def test_history_is_bounded_by_size_as_well_as_by_count() -> None:
     long = [
-        ModelRequest(parts=[UserPromptPart("[Worker callback] worker=1 status=ok\noutput: " + "x" * 5000)]),
+        ModelRequest(parts=[UserPromptPart("[Process callback] process=1 status=ok\noutput: " + "x" * 5000)]),
         ModelResponse(parts=[TextPart("done")]),
     ]
     history = long + turn(2) + turn(3)

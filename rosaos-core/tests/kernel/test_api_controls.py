@@ -5,7 +5,6 @@ from __future__ import annotations
 import httpx
 from kernel_support import AUTH, Process, TestRuntime
 
-from rosaos.intents.planning.plan import decode_plan
 from rosaos.plugins import load_drivers
 
 
@@ -29,10 +28,10 @@ async def test_the_power_switch_launches_a_quiet_process_whose_plan_is_the_one_c
     assert (body["tool"], body["arguments"]) == ("turn_off", {})
     [process] = runtime.process_list
     assert process.devices == ["kitchen_light"] and body["process_id"] == process.id
-    plan = decode_plan(process.task)
+    plan = process.plan  # a field of the launch, beside the task's words
     assert plan is not None and plan.quiet
     assert [(s.device, s.tool, s.args) for s in plan.steps] == [("kitchen_light", "turn_off", {})]
-    assert process.task.startswith("Power: off on the kitchen light")
+    assert process.task == "Power: off on the kitchen light (from its card on the web page)."
 
 
 async def test_a_slider_sends_its_number_and_refuses_one_out_of_range(

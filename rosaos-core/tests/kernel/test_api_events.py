@@ -8,7 +8,8 @@ import httpx
 import pytest
 from kernel_support import AUTH, TestRuntime
 
-from rosaos.kernel.events import EventStore, UserText
+from rosaos.events.types import UserText
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.intake import Queued
 
 

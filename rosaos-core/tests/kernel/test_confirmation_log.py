@@ -13,7 +13,7 @@ import pytest
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.confirmation_chat import record_confirmation
 from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmationRequest
-from rosaos.kernel.events import EventStore
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.updates import UpdateStream
 
 pytestmark = pytest.mark.asyncio

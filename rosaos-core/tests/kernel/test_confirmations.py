@@ -6,14 +6,8 @@ import asyncio
 
 import pytest
 
-from rosaos.kernel.confirmations import (
-    ConfirmationDesk,
-    ConfirmationRequest,
-    confirm_rule,
-    needs_confirmation,
-    question,
-    read_answer,
-)
+from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmationRequest, question, read_answer
+from rosaos.processes.confirming import confirm_rule, needs_confirmation
 
 
 def test_real_ros_robots_confirm_destructive_tools_by_default_and_sims_do_not() -> None:

@@ -7,7 +7,8 @@ import signal
 import sys
 from pathlib import Path
 
-from rosaos.kernel.events import EventStore, UserText, UserTypedEvent
+from rosaos.events.types import UserText, UserTypedEvent
+from rosaos.kernel.event_store import EventStore
 
 APPENDER = Path(__file__).parent / "append_until_killed.py"
 ACKNOWLEDGED_BEFORE_KILL = 150

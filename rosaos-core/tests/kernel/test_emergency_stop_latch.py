@@ -30,7 +30,7 @@ from pydantic_ai.models.function import AgentInfo, FunctionModel
 
 from rosaos.config import load_config
 from rosaos.devices.world import World
-from rosaos.kernel.events import EventStore
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.runtime import EMERGENCY_STOP_KEY, Kernel, events_path
 
 

@@ -9,17 +9,17 @@ from pathlib import Path
 import pytest
 from pydantic import ValidationError
 
-from rosaos.kernel.events import (
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.types import (
     NEW_EVENT,
     DeviceNotice,
     DeviceNoticeEvent,
-    EventStore,
-    StoreClosedError,
     UserText,
     UserTypedEvent,
     WorkerCallbackEvent,
 )
-from rosaos.processes.jobs import WorkerCallback
+from rosaos.kernel.database import StoreClosedError
+from rosaos.kernel.event_store import EventStore
 
 
 def typed(text: str, key: str | None = None) -> UserTypedEvent:

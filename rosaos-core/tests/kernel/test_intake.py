@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from kernel_support import eventually
 
-from rosaos.kernel.events import EventStore, UserText, UserTypedEvent, WorkerCallbackEvent
+from rosaos.events.types import UserText, UserTypedEvent, WorkerCallbackEvent
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.intake import Intake, Queued
 from rosaos.kernel.process_ends import end_event
 from rosaos.kernel.updates import UpdateStream

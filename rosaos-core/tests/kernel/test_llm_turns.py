@@ -30,11 +30,12 @@ from pydantic_ai.messages import (
 )
 from pydantic_ai.models.function import AgentInfo, FunctionModel
 
-from rosaos.kernel.events import EventStore, UserText, UserTypedEvent, WorkerCallbackEvent
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.types import UserText, UserTypedEvent, WorkerCallbackEvent
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.loop import KernelLoop
 from rosaos.kernel.short_turns import ACK_MODEL, RELAY_MODEL
 from rosaos.kernel.updates import UpdateStream
-from rosaos.processes.jobs import WorkerCallback
 
 pytestmark = pytest.mark.asyncio
 

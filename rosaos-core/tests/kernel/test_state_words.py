@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import math
 
-from rosaos.kernel.state_words import battery, describe, doing, position
+from rosaos.intents.grammar.state_words import battery, describe, doing, position
 
 
 def test_a_docked_robot_is_at_its_dock() -> None:

@@ -8,7 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from rosaos.kernel.events import EventStore, NewEvent, TimerFired
+from rosaos.events.types import NewEvent, TimerFired
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.intake import Intake, Queued
 from rosaos.kernel.loop import render_event
 from rosaos.kernel.timer_text import DueTimeError, resolve_due

@@ -9,7 +9,8 @@ from pathlib import Path
 
 from kernel_support import eventually
 
-from rosaos.kernel.events import EventStore, UserText, UserTypedEvent
+from rosaos.events.types import UserText, UserTypedEvent
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.updates import Update, UpdateStream
 
 

@@ -16,7 +16,7 @@ import pytest
 from kernel_support import AUTH, Process, TestRuntime, eventually
 from playwright.async_api import Page, async_playwright
 
-from rosaos.kernel.events import EventStore
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.updates import UpdateStream
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")

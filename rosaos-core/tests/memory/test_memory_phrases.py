@@ -81,7 +81,7 @@ def test_an_alias_is_replaced_as_a_whole_word_in_any_case() -> None:
 def test_a_command_the_engine_understands_is_not_read_as_an_alias(tmp_path: Path) -> None:
     from rosaos.intents.understanding.match_result import MatchResult
     from rosaos.memory.store import MemoryStore
-    from rosaos.memory.turn import memory_request
+    from rosaos.models.memory_turn import memory_request
 
     store = MemoryStore.open(tmp_path)
     asks = MatchResult(text="call the turtlebot back", kind="clarify", reply="Which robot?")

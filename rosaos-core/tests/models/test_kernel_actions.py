@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import engine_turns
 from intents_support import home_world
 from pydantic_ai.messages import (
     ModelMessage,
@@ -10,10 +11,12 @@ from pydantic_ai.messages import (
     TextPart,
     ToolCallPart,
     ToolReturnPart,
-    UserPromptPart,
 )
 
+from rosaos.events.types import Event
 from rosaos.intents.planning.notice_plan import SILENCE
+from rosaos.kernel.event_text import render_event
+from rosaos.models.conversation import event_request
 from rosaos.models.kernel_actions import help_text
 from rosaos.models.kernel_model import LocalIntentModel
 
@@ -21,8 +24,13 @@ TOOLS = ["launch_process", "terminate_process", "stop", "device_state"]
 MODEL = LocalIntentModel(home_world())
 
 
+def request(event: Event) -> ModelRequest:
+    """The kernel's request for ``event``: the typed event for the engine, the text for an LLM."""
+    return event_request(event, render_event(event))
+
+
 def said(text: str) -> list[ModelMessage]:
-    return [ModelRequest(parts=[UserPromptPart(f"[User said] {text}")])]
+    return [request(engine_turns.said(text))]
 
 
 def test_a_stop_is_a_stop_call_and_its_summary_is_the_reply() -> None:
@@ -41,8 +49,8 @@ def test_a_stop_is_a_stop_call_and_its_summary_is_the_reply() -> None:
 
     # The callback of the process the stop ended gets no second reply.
     messages += [ModelResponse(parts=[reply], model_name=MODEL.model_name)]
-    callback = "[Worker callback] worker=4 status=terminated task='Search for a person'\nerror: terminated"
-    [quiet] = MODEL.respond([*messages, ModelRequest(parts=[UserPromptPart(callback)])], TOOLS)
+    callback = engine_turns.callback(4, status="terminated", task="Search for a person", error="terminated")
+    [quiet] = MODEL.respond([*messages, request(callback)], TOOLS)
     assert isinstance(quiet, TextPart) and quiet.content == SILENCE
 
 

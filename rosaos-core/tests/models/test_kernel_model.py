@@ -1,38 +1,40 @@
-"""LocalIntentModel as the kernel agent's model, with a real MCP launch_process tool in-process."""
+"""LocalIntentModel as the kernel agent's model, with a real MCP launch_process tool in-process.
+
+Each turn hands the engine a typed event, as the kernel loop does (``engine_turns``)."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
 from typing import Any
 
 import pytest
+from engine_turns import EngineKernel, callback, error, notice, said
 from fastmcp import FastMCP
 from fastmcp.exceptions import ToolError
 from intents_support import home_world
 from pydantic_ai import Agent
-from pydantic_ai.mcp import MCPToolset
-from pydantic_ai.messages import ModelMessage, ModelResponse, ToolCallPart
+from pydantic_ai.messages import ToolCallPart
 
-from rosaos.intents.planning.plan import decode_plan
+from rosaos.events.plan import Plan
 from rosaos.models.kernel_model import LocalIntentModel
 
 
-@dataclass
-class Kernel:
-    """A kernel agent on the local model, whose launch_process records what it is asked."""
+class Kernel(EngineKernel):
+    """The offline engine with a launch_process that records what it is asked (task, devices, plan)."""
 
-    agent: Agent[None, str]
-    launched: list[tuple[str, list[str]]] = field(default_factory=list)
-    held: dict[str, int] = field(default_factory=dict)
-    history: list[ModelMessage] = field(default_factory=list)
+    def __init__(self, model: LocalIntentModel) -> None:
+        tools = FastMCP("kernel-tools")
+        super().__init__(model, tools)
+        self.launched: list[tuple[str, list[str], Plan | None]] = []
+        self.held: dict[str, int] = {}
 
-    async def say(self, event: str) -> str:
-        result = await self.agent.run(event, message_history=self.history)
-        self.history = result.all_messages()
-        return result.output
-
-    def responses(self) -> list[ModelResponse]:
-        return [message for message in self.history if isinstance(message, ModelResponse)]
+        @tools.tool
+        async def launch_process(task: str, devices: list[str], plan: Plan | None = None) -> dict[str, Any]:
+            """Start a process; refuses a device another process holds."""
+            for device in devices:
+                if device in self.held:
+                    raise ToolError(f"{device} is held by process {self.held[device]}; wait for its callback")
+            self.launched.append((task, devices, plan))
+            return {"process_id": len(self.launched), "devices": devices, "state": "running"}
 
 
 @pytest.fixture(scope="module")
@@ -42,38 +44,26 @@ def model() -> LocalIntentModel:
 
 @pytest.fixture
 def kernel(model: LocalIntentModel) -> Kernel:
-    tools = FastMCP("kernel-tools")
-    kernel = Kernel(Agent(model, instructions="You are the kernel.", toolsets=[MCPToolset(tools)]))
-
-    @tools.tool
-    async def launch_process(task: str, devices: list[str]) -> dict[str, Any]:
-        """Start a process; refuses a device another process holds."""
-        for device in devices:
-            if device in kernel.held:
-                raise ToolError(f"{device} is held by process {kernel.held[device]}; wait for its callback")
-        kernel.launched.append((task, devices))
-        return {"process_id": len(kernel.launched), "devices": devices, "state": "running"}
-
-    return kernel
+    return Kernel(model)
 
 
 async def test_a_command_launches_a_process_with_the_plan_and_acknowledges(kernel: Kernel) -> None:
-    reply = await kernel.say("[User said] Turn on the kitchen light")
-    [(task, devices)] = kernel.launched
+    reply = await kernel.say("Turn on the kitchen light")
+    [(task, devices, plan)] = kernel.launched
     assert devices == ["kitchen_light"]
-    plan = decode_plan(task)
+    assert task == "Turn on the kitchen light."
     assert plan is not None
     assert [(step.device, step.tool) for step in plan.steps] == [("kitchen_light", "turn_on")]
     assert reply == "On it: turn on the kitchen light."
 
 
 async def test_all_the_lights_are_parallel_launches_in_one_response(kernel: Kernel) -> None:
-    reply = await kernel.say("[User typed] Turn off all the lights")
+    reply = await kernel.say("Turn off all the lights")
     first = kernel.responses()[0]
     assert [part.tool_name for part in first.parts if isinstance(part, ToolCallPart)] == [
         "launch_process"
     ] * 3
-    assert sorted(devices[0] for _, devices in kernel.launched) == [
+    assert sorted(devices[0] for _, devices, _ in kernel.launched) == [
         "bedroom_light",
         "kitchen_light",
         "living_room_lamp",
@@ -82,19 +72,19 @@ async def test_all_the_lights_are_parallel_launches_in_one_response(kernel: Kern
 
 
 async def test_two_commands_are_two_processes(kernel: Kernel) -> None:
-    await kernel.say("[User said] Turn on the kitchen light and play some jazz")
-    assert [devices for _, devices in kernel.launched] == [["kitchen_light"], ["speaker"]]
+    await kernel.say("Turn on the kitchen light and play some jazz")
+    assert [devices for _, devices, _ in kernel.launched] == [["kitchen_light"], ["speaker"]]
 
 
 @pytest.mark.parametrize(
     ("event", "reply"),
     [
         (
-            "[User said] Turn off the light",
+            "Turn off the light",
             "Which one do you mean: kitchen light, living room lamp or bedroom light?",
         ),
-        ("[User said] Turn on the garage light", 'I don\'t know "garage light".'),
-        ("[User said] Tell the drone to take off", "Sorry, I didn't understand"),
+        ("Turn on the garage light", 'I don\'t know "garage light".'),
+        ("Tell the drone to take off", "Sorry, I didn't understand"),
     ],
 )
 async def test_nothing_is_launched_on_a_guess(kernel: Kernel, event: str, reply: str) -> None:
@@ -104,15 +94,14 @@ async def test_nothing_is_launched_on_a_guess(kernel: Kernel, event: str, reply:
 
 async def test_a_refused_launch_is_relayed(kernel: Kernel) -> None:
     kernel.held["kitchen_light"] = 7
-    reply = await kernel.say("[User said] Turn on the kitchen light")
+    reply = await kernel.say("Turn on the kitchen light")
     assert reply == "I couldn't start that: kitchen_light is held by process 7; wait for its callback"
 
 
 async def test_the_answer_to_which_one_completes_the_command(kernel: Kernel) -> None:
-    await kernel.say("[User said] Turn off the light")
-    reply = await kernel.say("[User said] the bedroom light")
-    [(task, devices)] = kernel.launched
-    plan = decode_plan(task)
+    await kernel.say("Turn off the light")
+    reply = await kernel.say("the bedroom light")
+    [(_, devices, plan)] = kernel.launched
     assert devices == ["bedroom_light"]
     assert plan is not None
     assert plan.steps[0].tool == "turn_off"
@@ -120,60 +109,58 @@ async def test_the_answer_to_which_one_completes_the_command(kernel: Kernel) -> 
 
 
 async def test_a_question_launches_a_state_read(kernel: Kernel) -> None:
-    reply = await kernel.say("[User said] Is the kitchen light on?")
-    [(task, _)] = kernel.launched
-    plan = decode_plan(task)
+    reply = await kernel.say("Is the kitchen light on?")
+    [(_, _, plan)] = kernel.launched
     assert plan is not None
     assert plan.answer is not None
     assert reply == "Checking the kitchen light."
 
 
 async def test_a_callback_output_is_the_reply(kernel: Kernel) -> None:
-    event = "[Worker callback] worker=3 status=ok task='Is the kitchen light on?'\noutput: No, the kitchen light is off."
+    event = callback(3, task="Is the kitchen light on?", output="No, the kitchen light is off.")
     assert await kernel.say(event) == "No, the kitchen light is off."
     assert kernel.launched == []
 
 
 async def test_a_failed_callback_uses_the_plan_failure_text(kernel: Kernel, model: LocalIntentModel) -> None:
     [process] = model.match("Turn on the kitchen light").processes
-    event = f"[Worker callback] worker=4 status=error task={process.task!r}\nerror: the bulb is offline"
+    event = callback(4, status="error", task=process.summary, plan=process.plan, error="the bulb is offline")
     assert await kernel.say(event) == "Sorry, I couldn't turn on the kitchen light: the bulb is offline"
 
 
 async def test_a_failed_callback_without_a_plan_still_says_what_failed(kernel: Kernel) -> None:
-    event = "[Worker callback] worker=5 status=timeout task='Patrol the house'\nerror: ran past its timeout"
+    event = callback(5, status="timeout", task="Patrol the house", error="ran past its timeout")
     assert await kernel.say(event) == "Sorry, that didn't work (timeout): ran past its timeout"
 
 
 async def test_info_notices_are_quiet_and_errors_acknowledged_without_acting(kernel: Kernel) -> None:
     # A notice without importance=notify is not worth interrupting anyone (test_notice_plan.py).
-    assert (await kernel.say("[Device notice] device=turtlebot battery low")).strip() == ""
-    assert await kernel.say("[Error] the web page lost its connection") == (
+    assert (await kernel.say(notice("turtlebot", "battery low"))).strip() == ""
+    assert await kernel.say(error("the web page lost its connection")) == (
         "Something went wrong: the web page lost its connection"
     )
     assert kernel.launched == []
 
 
 async def test_without_a_launch_tool_it_says_so(model: LocalIntentModel) -> None:
-    result = await Agent(model).run("[User said] Turn on the kitchen light")
+    result = await Agent(model).run("Turn on the kitchen light")  # a bare prompt is typed text
     assert "no launch_process tool" in result.output
 
 
-def test_handles_text_is_true_only_for_what_it_answers_exactly(model: LocalIntentModel) -> None:
-    assert model.handles_text("[User said] Turn on the kitchen light")
-    assert not model.handles_text("[User said] Turn off the light")
-    assert not model.handles_text("[User said] What's the weather like?")
+def test_handles_event_is_true_only_for_what_it_answers_exactly(model: LocalIntentModel) -> None:
+    assert model.handles_event(said("Turn on the kitchen light"))
+    assert not model.handles_event(said("Turn off the light"))
+    assert not model.handles_event(said("What's the weather like?"))
     [process] = model.match("Turn on the kitchen light").processes
-    assert model.handles_text(f"[Worker callback] worker=1 status=ok task={process.task!r}\noutput: Done.")
-    assert not model.handles_text("[Worker callback] worker=1 status=ok task='free-form'\noutput: Done.")
+    assert model.handles_event(callback(1, task=process.summary, plan=process.plan, output="Done."))
+    assert not model.handles_event(callback(1, task="free-form", output="Done."))
 
 
 async def test_yes_to_did_you_mean_launches_the_suggested_command(kernel: Kernel) -> None:
-    asked = await kernel.say("[User said] could the kitchen light go off")
+    asked = await kernel.say("could the kitchen light go off")
     assert asked == "Did you mean: turn off the kitchen light?"
     assert kernel.launched == []
-    await kernel.say("[User said] yes")
-    [(task, devices)] = kernel.launched
-    plan = decode_plan(task)
+    await kernel.say("yes")
+    [(_, devices, plan)] = kernel.launched
     assert devices == ["kitchen_light"]
     assert plan is not None and plan.steps[0].tool == "turn_off"

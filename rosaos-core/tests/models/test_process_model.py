@@ -1,4 +1,4 @@
-"""LocalPlanModel as a process agent's model: runs the task's plan on real MCP device servers."""
+"""LocalPlanModel as a process agent's model: runs the job's typed plan on real MCP device servers."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ from pydantic_ai.mcp import MCPToolset
 from pydantic_ai.messages import ToolCallPart
 from pydantic_ai.toolsets import AbstractToolset
 
-from rosaos.intents.planning.plan import Plan, PlanAnswer, PlanStep, encode_task
+from rosaos.events.plan import Plan, PlanAnswer, PlanStep
 from rosaos.models.process_model import NO_PLAN_REPLY, LocalPlanModel, resolve_tool
 from rosaos.processes.jobs import GrantedDevice
 from rosaos.processes.prompts import DEFAULT_PROCESS_PROMPT, process_system_prompt
@@ -24,10 +24,15 @@ def granted(name: str, driver: str = "bulb") -> GrantedDevice:
     )
 
 
+Task = tuple[str, Plan | None]
+"""A job's task in words and its plan (a field of the job, as the kernel launched it)."""
+
+
 async def run_process(
-    task: str, devices: dict[str, tuple[str, Any]], prefix: str | None = "_"
+    task: Task, devices: dict[str, tuple[str, Any]], prefix: str | None = "_"
 ) -> tuple[str, list[ToolCallPart]]:
-    """Run ``task`` the way the worker does: system prompt with the task, one toolset per device.
+    """Run ``task`` the way the worker does: system prompt with the words, the plan to the model,
+    one toolset per device.
 
     ``devices`` maps names to ``(driver, server)``; with several, tools are prefixed
     ``<device><prefix><tool>`` (the worker uses ``_``).
@@ -36,20 +41,21 @@ async def run_process(
     for name, (_, server) in devices.items():
         toolset = MCPToolset(server)
         toolsets.append(toolset.prefixed(name + prefix[1:]) if len(devices) > 1 and prefix else toolset)
+    words, plan = task
     prompt = process_system_prompt(
-        DEFAULT_PROCESS_PROMPT, task, [granted(name, driver) for name, (driver, _) in devices.items()]
+        DEFAULT_PROCESS_PROMPT, words, [granted(name, driver) for name, (driver, _) in devices.items()]
     )
-    agent = Agent(LocalPlanModel(), system_prompt=prompt, toolsets=toolsets)
-    result = await agent.run(task)
+    agent = Agent(LocalPlanModel(plan=plan), system_prompt=prompt, toolsets=toolsets)
+    result = await agent.run(words)
     calls = [
         part for message in result.all_messages() for part in message.parts if isinstance(part, ToolCallPart)
     ]
     return result.output, calls
 
 
-def task_for(*steps: PlanStep, answer: PlanAnswer | None = None) -> str:
+def task_for(*steps: PlanStep, answer: PlanAnswer | None = None) -> Task:
     plan = Plan(steps=list(steps), reply="Done: {result}.", failure="Sorry: {error}", answer=answer)
-    return encode_task("Do the thing.", plan)
+    return "Do the thing.", plan
 
 
 async def test_a_plan_runs_in_order_and_ends_with_its_reply() -> None:
@@ -104,7 +110,7 @@ async def test_a_driver_question_fills_its_reply_from_the_state(state: dict[str,
         fills_state=True,
     )
     output, _ = await run_process(
-        encode_task("How bright?", plan), {"lamp": ("bulb", build_device_server("lamp", state))}
+        ("How bright?", plan), {"lamp": ("bulb", build_device_server("lamp", state))}
     )
     assert output == reply
 
@@ -113,7 +119,7 @@ async def test_a_reply_that_does_not_fill_state_keeps_its_braces() -> None:
     # A command's reply quotes the user ("Done: say {hi}."): only {result} is filled there.
     plan = Plan(steps=[PlanStep(device="lamp", tool="get_state")], reply="Done: say {hi}.")
     output, _ = await run_process(
-        encode_task("Say.", plan), {"lamp": ("bulb", build_device_server("lamp", {"on": True}))}
+        ("Say.", plan), {"lamp": ("bulb", build_device_server("lamp", {"on": True}))}
     )
     assert output == "Done: say {hi}."
 
@@ -166,14 +172,9 @@ async def test_a_plan_that_says_something_speaks_once() -> None:
 
 async def test_a_task_without_a_plan_says_how_to_configure_an_llm() -> None:
     output, calls = await run_process(
-        "Patrol the house.", {"lamp": ("bulb", build_device_server("lamp", {}))}
+        ("Patrol the house.", None), {"lamp": ("bulb", build_device_server("lamp", {}))}
     )
     assert (output, calls) == (NO_PLAN_REPLY, [])
-
-
-async def test_a_broken_plan_is_reported() -> None:
-    output, _ = await run_process("Do it.\n```rosaos-plan\n{oops\n```", {})
-    assert output.startswith("Sorry, I could not run this task: the rosaos-plan block is not a valid plan")
 
 
 def test_tool_resolution_prefers_the_device_prefix() -> None:
@@ -206,25 +207,27 @@ async def test_a_plan_from_the_matcher_changes_a_real_tapo_bulb(tmp_path: Path) 
         IntentMatcher(device_vocabularies(world)).match("Set the kitchen light to 30 percent").processes
     )
     async with open_device(world.get("kitchen_light"), tmp_path) as device:
-        output, calls = await run_process(process.task, {"kitchen_light": ("tapo", device.server)})
+        output, calls = await run_process(
+            (process.summary, process.plan), {"kitchen_light": ("tapo", device.server)}
+        )
         state = await device.backend.state()  # type: ignore[attr-defined]
     assert [call.tool_name for call in calls] == ["set_brightness"]
     assert (state.on, state.brightness) == (True, 30)
     assert output == "Done: set the kitchen light to 30 percent."
 
 
-async def test_the_plan_and_the_devices_are_read_from_instructions_too() -> None:
+async def test_the_devices_are_read_from_instructions_too() -> None:
     # The worker may pass the process prompt as instructions rather than a system prompt.
     lamp: dict[str, Any] = {"on": False}
     reachy: dict[str, Any] = {}
-    task = task_for(PlanStep(device="lamp", tool="turn_on"))
+    words, plan = task_for(PlanStep(device="lamp", tool="turn_on"))
     prompt = process_system_prompt(
-        DEFAULT_PROCESS_PROMPT, task, [granted("lamp"), granted("reachy", "reachy")]
+        DEFAULT_PROCESS_PROMPT, words, [granted("lamp"), granted("reachy", "reachy")]
     )
     toolsets = [
         MCPToolset(build_device_server("lamp", lamp)).prefixed("lamp"),
         MCPToolset(build_device_server("reachy", reachy)).prefixed("reachy"),
     ]
-    result = await Agent(LocalPlanModel(), instructions=prompt, toolsets=toolsets).run("Go.")
+    result = await Agent(LocalPlanModel(plan=plan), instructions=prompt, toolsets=toolsets).run("Go.")
     assert (lamp["on"], result.output) == (True, "Done: on: true.")
     assert "last_spoken" not in reachy

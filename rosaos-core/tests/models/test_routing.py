@@ -13,7 +13,7 @@ from pydantic_ai.mcp import MCPToolset
 from pydantic_ai.messages import ModelMessage, ModelResponse, TextPart
 from pydantic_ai.models.function import AgentInfo, FunctionModel
 
-from rosaos.kernel.events import Event, UserText
+from rosaos.events.types import Event, UserText
 from rosaos.models.kernel_model import LocalIntentModel
 from rosaos.models.process_model import LocalPlanModel
 from rosaos.models.routing import KernelRouter, RoutingModel, process_model_for
@@ -47,22 +47,21 @@ def test_exact_matches_stay_local_and_the_rest_goes_to_the_llm(local: LocalInten
 def test_prefer_local_false_sends_everything_to_the_llm(local: LocalIntentModel) -> None:
     llm = answering_llm()
     assert (
-        KernelRouter(local, llm, prefer_local=False).model_for_text("[User said] Turn on the kitchen light")
-        is llm
+        KernelRouter(local, llm, prefer_local=False).model_for_event(said("Turn on the kitchen light")) is llm
     )
 
 
 def test_without_an_llm_everything_is_local(local: LocalIntentModel) -> None:
-    assert KernelRouter(local, None).model_for_text("[User said] What's the weather like?") is local
+    assert KernelRouter(local, None).model_for_event(said("What's the weather like?")) is local
 
 
-def test_a_process_runs_locally_only_when_its_task_has_a_plan(local: LocalIntentModel) -> None:
+def test_a_process_runs_locally_only_when_its_job_has_a_plan(local: LocalIntentModel) -> None:
     llm = answering_llm()
     [process] = local.match("Turn on the kitchen light").processes
-    assert isinstance(process_model_for(process.task, llm), LocalPlanModel)
-    assert process_model_for(process.task, llm, prefer_local=False) is llm
-    assert process_model_for("Patrol the house.", llm) is llm
-    assert isinstance(process_model_for("Patrol the house.", None), LocalPlanModel)
+    assert isinstance(process_model_for(process.plan, llm), LocalPlanModel)
+    assert process_model_for(process.plan, llm, prefer_local=False) is llm
+    assert process_model_for(None, llm) is llm
+    assert isinstance(process_model_for(None, None), LocalPlanModel)
 
 
 async def test_a_routing_kernel_model_launches_locally_and_leaves_the_rest_to_the_llm(
@@ -72,16 +71,17 @@ async def test_a_routing_kernel_model_launches_locally_and_leaves_the_rest_to_th
     launched: list[list[str]] = []
 
     @tools.tool
-    async def launch_process(task: str, devices: list[str]) -> dict[str, Any]:
+    async def launch_process(
+        task: str, devices: list[str], plan: dict[str, Any] | None = None
+    ) -> dict[str, Any]:
         """Record the launch."""
         launched.append(devices)
         return {"process_id": len(launched)}
 
     agent = Agent(RoutingModel(local, answering_llm()), toolsets=[MCPToolset(tools)])
-    assert (
-        await agent.run("[User said] Turn on the kitchen light")
-    ).output == "On it: turn on the kitchen light."
-    assert (await agent.run("[User said] What's the weather like?")).output == "the LLM answered"
+    # A bare prompt is what the user typed.
+    assert (await agent.run("Turn on the kitchen light")).output == "On it: turn on the kitchen light."
+    assert (await agent.run("What's the weather like?")).output == "the LLM answered"
     assert launched == [["kitchen_light"]]
 
 
@@ -89,11 +89,11 @@ async def test_a_routing_process_model_runs_the_plan_locally(local: LocalIntentM
     state: dict[str, Any] = {"on": False}
     [process] = local.match("Turn on the kitchen light").processes
     agent = Agent(
-        RoutingModel(LocalPlanModel(), answering_llm()),
-        system_prompt=process.task,
+        RoutingModel(LocalPlanModel(plan=process.plan), answering_llm()),
+        system_prompt=process.summary,
         toolsets=[MCPToolset(build_device_server("kitchen_light", state))],
     )
-    assert (await agent.run(process.task)).output == "Done: turn on the kitchen light."
+    assert (await agent.run(process.summary)).output == "Done: turn on the kitchen light."
     assert state["on"] is True
     assert (
         await Agent(RoutingModel(LocalPlanModel(), answering_llm())).run("Patrol.")

@@ -22,8 +22,9 @@ from pydantic import Field
 
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.drivers import Concurrency
+from rosaos.events.callback import WorkerCallback
 from rosaos.models.select import ModelSpec
-from rosaos.processes.jobs import GrantedDevice, WorkerCallback, WorkerJob
+from rosaos.processes.jobs import GrantedDevice, WorkerJob
 
 HERE = Path(__file__).parent
 TOKEN = "device-token"

@@ -25,7 +25,7 @@ from processes_support import (
 )
 
 from rosaos.devices.endpoints import DeviceEndpoint
-from rosaos.processes.jobs import WorkerCallback
+from rosaos.events.callback import WorkerCallback
 from rosaos.processes.manager import EmergencyStop, LaunchRefused, ProcessManager
 from rosaos.processes.pool import WorkerPool
 

@@ -13,7 +13,7 @@ import pytest
 from processes_support import TOKEN, KernelStandIn, LoopbackDevice, build_test_device, make_job, model_spec
 
 from rosaos.devices.serve import serve_http
-from rosaos.intents.planning.plan import Plan, PlanStep, encode_task
+from rosaos.events.plan import Plan, PlanStep
 from rosaos.models.select import ModelSpec
 from rosaos.processes.worker import SESSIONS, run_job
 
@@ -247,7 +247,7 @@ def planned_job(
         failure="Sorry, that failed: {error}",
     )
     job = make_job(kernel, "unused", devices)
-    return job.model_copy(update={"model": ModelSpec(), "task": encode_task("Set the levels.", plan)})
+    return job.model_copy(update={"model": ModelSpec(), "task": "Set the levels.", "plan": plan})
 
 
 async def test_a_planned_task_calls_its_tools_directly_with_receipts(

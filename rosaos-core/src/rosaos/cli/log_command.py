@@ -21,7 +21,7 @@ from rosaos.cli.console import console as terminal
 from rosaos.config import ConfigError, load_config
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable, running_kernel_url
-from rosaos.kernel.events import Database
+from rosaos.kernel.database import Database
 
 EXIT_CONFIG = 2
 EVENTS_FILE = "kernel.sqlite3"

@@ -20,9 +20,10 @@ from rosaos.cli.console import console as terminal
 from rosaos.cli.log_command import EVENTS_FILE
 from rosaos.cli.up_command import EXIT_CONFIG
 from rosaos.config import ConfigError, load_config
+from rosaos.intents.grammar.timer_phrases import duration_text
 from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable, running_kernel_url
-from rosaos.kernel.events import EventStore
-from rosaos.kernel.timer_text import clock_text, duration_text
+from rosaos.kernel.event_store import EventStore
+from rosaos.kernel.timer_text import clock_text
 from rosaos.kernel.timers import TimerBook, TimerError
 
 

@@ -15,7 +15,7 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from rosaos.kernel.events import Database
+from rosaos.kernel.database import Database
 from rosaos.receipts import Receipt, SafetyDecision
 
 DEFAULT_LIMIT = 200

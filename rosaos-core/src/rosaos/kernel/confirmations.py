@@ -1,6 +1,7 @@
 """Confirmation before risky actuation: a process pauses until a person says yes.
 
-Config names what needs a yes (:func:`confirm_rule`): per device, ``confirm = ["drive",
+Config names what needs a yes (:func:`~rosaos.processes.confirming.confirm_rule`, beside the
+worker's toolset that applies it): per device, ``confirm = ["drive",
 "move_distance"]`` or ``confirm = "destructive"`` (every tool annotated ``destructiveHint``) or
 ``"off"``; globally, a top-level ``confirm``; by default, ``destructive`` for the ``real`` backend
 of a driver that asks for it (``DriverSpec.confirm_on_real``, the ROS driver) and off otherwise.
@@ -25,35 +26,11 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-ConfirmRule = list[str] | Literal["destructive"] | None
-"""What needs a yes on one device: these tool names, every destructive tool, or nothing."""
-ConfirmSetting = list[str] | Literal["destructive", "off"]
 ConfirmState = Literal["pending", "yes", "no", "expired"]
 
 KEEP_ANSWERED = 50
 _YES = re.compile(r"^(yes|yeah|yep|sure|ok(ay)?|go( ahead)?|do it|confirm(ed)?|oui)\b", re.IGNORECASE)
 _NO = re.compile(r"^(no|nope|don'?t|do not|stop|cancel|abort|non)\b", re.IGNORECASE)
-
-
-def confirm_rule(
-    device: ConfirmSetting | None, global_setting: ConfirmSetting | None, backend: str, on_real: bool
-) -> ConfirmRule:
-    """The effective rule of one device: its own setting, else the global one, else the default."""
-    setting = device if device is not None else global_setting
-    if setting is None:
-        return "destructive" if backend == "real" and on_real else None
-    if setting == "off" or setting == []:
-        return None
-    return setting
-
-
-def needs_confirmation(rule: ConfirmRule, tool: str, annotations: dict[str, Any] | None) -> bool:
-    """Whether a call of ``tool`` (with its MCP annotations) needs a yes under ``rule``."""
-    if rule is None:
-        return False
-    if rule == "destructive":
-        return bool((annotations or {}).get("destructiveHint"))
-    return tool in rule
 
 
 def question(device: str, tool: str, arguments: dict[str, Any]) -> str:

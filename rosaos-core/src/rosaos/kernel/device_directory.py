@@ -13,7 +13,7 @@ from rosaos.config import RosaosConfig
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.devices.hosting import DeviceHosting
 from rosaos.devices.world import World
-from rosaos.kernel.confirmations import ConfirmRule, confirm_rule
+from rosaos.processes.confirming import ConfirmRule, confirm_rule
 
 
 class DeviceDirectory:

@@ -17,7 +17,8 @@ from pydantic import ValidationError
 
 from rosaos.devices.supervisor import SafeStopOutcome
 from rosaos.kernel.api.schemas import DeviceSafeStop, EmergencyStopReport, EmergencyStopState
-from rosaos.kernel.events import EventStore, StoreClosedError
+from rosaos.kernel.database import StoreClosedError
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.host_latch import HostLatches
 from rosaos.kernel.pending_stops import PendingStops
 from rosaos.kernel.updates import UpdateStream

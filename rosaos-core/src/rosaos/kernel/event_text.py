@@ -18,7 +18,7 @@ import json
 from collections.abc import Sequence
 from typing import Any
 
-from rosaos.kernel.events import Event
+from rosaos.events.types import Event
 from rosaos.kernel.notice_text import render_notice
 from rosaos.kernel.timer_text import render_timer_fired
 from rosaos.receipts import receipts_text
@@ -31,19 +31,6 @@ def quoted(text: str) -> str:
     return json.dumps(text, ensure_ascii=False)
 
 
-def unquoted(text: str) -> str:
-    """The inverse of :func:`quoted` for a rendered value; text that is not a JSON string as it is."""
-    text = text.strip()
-    if text.startswith('"'):
-        try:
-            value = json.loads(text)
-        except ValueError:
-            return text
-        if isinstance(value, str):
-            return value
-    return text
-
-
 def render_event(event: Event) -> str:
     """The text the kernel model reads for an event, tagged by kind."""
     payload: Any = event.payload
@@ -53,9 +40,12 @@ def render_event(event: Event) -> str:
         case "user_typed":
             return f"[User typed] {payload.text}"
         case "worker_callback":
-            head = f"[Worker callback] worker={payload.process_id} status={payload.status}"
+            head = f"[Process callback] process={payload.process_id} status={payload.status}"
             if payload.task:
                 head += f" task={payload.task!r}"  # repr: one line, its quotes escaped
+            then = payload.then or (payload.plan.then.summary if payload.plan and payload.plan.then else None)
+            if then:  # the follow-up the kernel launches only on success
+                head += f" then={then!r}"
             body = (
                 f"error: {quoted(payload.error)}"
                 if payload.error

@@ -22,7 +22,8 @@ import logging
 from collections.abc import Awaitable, Callable
 from dataclasses import dataclass
 
-from rosaos.kernel.events import EventKind, EventStore, NewEvent
+from rosaos.events.types import EventKind, NewEvent
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.updates import UpdateStream
 
 log = logging.getLogger(__name__)

@@ -20,9 +20,10 @@ from pydantic_ai.models.wrapper import WrapperModel
 from pydantic_ai.toolsets import CombinedToolset
 from pydantic_ai.usage import UsageLimits
 
+from rosaos.events.types import Event
 from rosaos.kernel.agent import trim_history
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.event_text import render_event, render_events
-from rosaos.kernel.events import Event, EventStore
 from rosaos.kernel.launch_cause import CurrentEvent
 from rosaos.kernel.offline_turn import offline_turn
 from rosaos.kernel.short_turns import LaunchAckModel, relayable, relayed_messages
@@ -159,10 +160,12 @@ class KernelLoop:
                 return [("kernel_reply", report, {"relayed": True})]
         for attempt in range(1, MODEL_RETRIES + 1):
             try:
-                if isinstance(offline, LocalIntentModel):  # no agent run needed: see offline_turn
+                if engine:  # no agent run needed, and the engine reads the typed event: see offline_turn
+                    assert isinstance(offline, Model) and len(events) == 1
                     turn = await offline_turn(
                         offline,
                         self._toolset,
+                        events[0],
                         prompt,
                         history=self.history,
                         instructions=self.instructions(),
@@ -174,9 +177,7 @@ class KernelLoop:
                         prompt,
                         message_history=self.history,
                         instructions=self.instructions(),
-                        # The offline engine (wrapped, e.g. by the bench's request counter) answers
-                        # its own acknowledgements and follow-ups: the LLM's short turns are not for it.
-                        model=LaunchAckModel(offline) if offline is not None and not engine else offline,
+                        model=LaunchAckModel(offline) if offline is not None else offline,
                         usage_limits=UsageLimits(request_limit=self.request_limit),
                     )
                     new_messages, output = result.new_messages(), result.output

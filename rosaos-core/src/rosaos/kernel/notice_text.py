@@ -1,4 +1,4 @@
-"""How a ``[Device notice]`` reads to the kernel model, and how the offline engine reads it back.
+"""How a ``[Device notice]`` reads to an LLM kernel (the offline engine reads the typed notice).
 
 ::
 
@@ -14,16 +14,8 @@ shape: ``device=X importance=info "<message>"``.
 from __future__ import annotations
 
 import json
-import re
-from dataclasses import dataclass, field
-from typing import Any
 
-from rosaos.kernel.events import DeviceNotice
-
-_HEAD = re.compile(
-    r"^device=(?P<device>\S+)(?: name=(?P<name>\S+))?(?: importance=(?P<importance>info|notify))?"
-    r"(?: data=(?P<data>\{.*\}))?(?:\n|\s|$)"
-)
+from rosaos.events.types import DeviceNotice
 
 
 def render_notice(notice: DeviceNotice) -> str:
@@ -37,46 +29,3 @@ def render_notice(notice: DeviceNotice) -> str:
             head += f" data={json.dumps(notice.data, ensure_ascii=False, sort_keys=True)}"
         return f"{head}\n{json.dumps(notice.message, ensure_ascii=False)}"
     return f"{head} {json.dumps(notice.message, ensure_ascii=False)}"
-
-
-def _unquoted(text: str) -> str:
-    if text.startswith('"'):
-        try:
-            value = json.loads(text)
-        except ValueError:
-            return text
-        if isinstance(value, str):
-            return value
-    return text
-
-
-@dataclass(frozen=True)
-class ReadNotice:
-    """A ``[Device notice]`` body, read back (see :func:`read_notice`)."""
-
-    device: str
-    message: str
-    name: str | None = None
-    importance: str = "info"
-    data: dict[str, Any] = field(default_factory=dict)
-
-
-def read_notice(body: str) -> ReadNotice:
-    """The fields of a rendered notice body (the text after ``[Device notice]``)."""
-    match = _HEAD.match(body.strip())
-    if match is None:
-        return ReadNotice(device="", message=body.strip())
-    data: dict[str, Any] = {}
-    if match.group("data"):
-        try:
-            loaded = json.loads(match.group("data"))
-        except ValueError:
-            loaded = {}
-        data = loaded if isinstance(loaded, dict) else {}
-    return ReadNotice(
-        device=match.group("device"),
-        message=_unquoted(body.strip()[match.end() :].strip() or body.strip()),
-        name=match.group("name"),
-        importance=match.group("importance") or "info",
-        data=data,
-    )

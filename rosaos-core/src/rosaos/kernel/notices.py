@@ -28,7 +28,7 @@ from pydantic import ValidationError
 
 from rosaos.device_notices import MAX_WAIT, Notice, NoticeBatch
 from rosaos.devices.endpoints import DeviceEndpoint
-from rosaos.kernel.events import DeviceNotice, DeviceNoticeEvent
+from rosaos.events.types import DeviceNotice, DeviceNoticeEvent
 from rosaos.tls import shared_context
 
 log = logging.getLogger(__name__)

@@ -10,6 +10,11 @@ request with the rendered event, the engine's response, the tool results (a refu
 ``failed`` result, as ``tool_error_behavior="failed"`` makes it in an agent run), and so on until
 the engine answers in text. The kernel's history, its updates and what an LLM reads later are
 therefore the same whichever way the turn ran. Events for an LLM still run as agent runs.
+
+The request carries the typed event beside its rendered text
+(:func:`~rosaos.models.conversation.event_request`): the engine reads the event, an LLM that
+reads this history later reads the text. An engine inside a wrapper (the bench counts its
+requests) is asked through the wrapper's ``request``, so the wrapper sees every request.
 """
 
 from __future__ import annotations
@@ -26,11 +31,13 @@ from pydantic_ai.messages import (
     RetryPromptPart,
     ToolCallPart,
     ToolReturnPart,
-    UserPromptPart,
 )
+from pydantic_ai.models import Model, ModelRequestParameters
 from pydantic_ai.toolsets import AbstractToolset, ToolsetTool
 from pydantic_ai.usage import RunUsage
 
+from rosaos.events.types import Event
+from rosaos.models.conversation import event_request
 from rosaos.models.kernel_model import LocalIntentModel
 
 
@@ -43,15 +50,17 @@ class TurnResult:
 
 
 async def offline_turn(
-    model: LocalIntentModel,
+    model: Model,
     toolset: AbstractToolset[Any],
+    event: Event,
     prompt: str,
     *,
     history: list[ModelMessage],
     instructions: str,
     request_limit: int,
 ) -> TurnResult:
-    """Answer ``prompt`` (a rendered event) with ``model``, calling ``toolset``'s tools as it asks.
+    """Answer ``event`` with ``model`` (the engine, or a wrapper around it), calling ``toolset``'s
+    tools as it asks; ``prompt`` is the event as an LLM reads it, kept in the history.
 
     Raises :class:`UsageLimitExceeded` after ``request_limit`` responses without a final text,
     like an agent run with that request limit.
@@ -59,9 +68,15 @@ async def offline_turn(
     ctx: RunContext[Any] = RunContext(deps=None, model=model, usage=RunUsage(), prompt=prompt)
     tools = await toolset.get_tools(ctx)
     names = list(tools)
-    new: list[ModelMessage] = [ModelRequest(parts=[UserPromptPart(prompt)], instructions=instructions)]
+    parameters = ModelRequestParameters(function_tools=[tool.tool_def for tool in tools.values()])
+    new: list[ModelMessage] = [event_request(event, prompt, instructions)]
     for _ in range(request_limit):
-        response = ModelResponse(parts=model.respond([*history, *new], names), model_name=model.model_name)
+        if isinstance(model, LocalIntentModel):  # the bare engine: no request preparation needed
+            response = ModelResponse(
+                parts=model.respond([*history, *new], names), model_name=model.model_name
+            )
+        else:
+            response = await model.request([*history, *new], None, parameters)
         new.append(response)
         calls = [part for part in response.parts if isinstance(part, ToolCallPart)]
         if not calls:

@@ -23,10 +23,12 @@ from typing import Any
 from pydantic import BaseModel, ValidationError
 
 from rosaos.devices.supervisor import DirectoryEntry, SafeStopOutcome, safe_stop_entry
-from rosaos.kernel.events import EventStore, NewEvent, WorkerCallbackEvent
+from rosaos.events.callback import WorkerCallback, callback_idempotency_key
+from rosaos.events.plan import Plan
+from rosaos.events.types import NewEvent, WorkerCallbackEvent
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.intake import Queued
 from rosaos.kernel.launch_cause import LaunchCause
-from rosaos.processes.jobs import WorkerCallback, callback_idempotency_key
 from rosaos.processes.manager import ProcessInfo
 
 log = logging.getLogger("rosaos.kernel.orphans")
@@ -46,6 +48,8 @@ class LiveProcess(BaseModel):
     task: str
     devices: list[str]
     started_at: datetime
+    plan: Plan | None = None
+    then: str | None = None
     event_id: int | None = None
     """The event whose handling launched it (None: launched outside the loop)."""
     step: int | None = None
@@ -67,6 +71,8 @@ class LiveProcesses:
                 task=info.task,
                 devices=info.devices,
                 started_at=info.started_at,
+                plan=info.plan,
+                then=info.then,
                 event_id=cause.event_id if cause else None,
                 step=cause.step if cause else None,
             )
@@ -157,6 +163,8 @@ async def recover_orphans(
             error=f"{RESTART_ERROR}: the kernel stopped while this process ran"
             + (f"; {stopped}" if stopped else ""),
             task=process.task,
+            plan=process.plan,
+            then=None if process.plan is not None else process.then,
         )
         event = WorkerCallbackEvent(
             kind="worker_callback",

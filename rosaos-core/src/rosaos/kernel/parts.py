@@ -26,6 +26,7 @@ from rosaos.devices.hosting import DeviceHosting
 from rosaos.devices.state_cache import DeviceStateCache
 from rosaos.devices.supervisor import DeviceSupervisor
 from rosaos.devices.world import World
+from rosaos.events.plan import Plan
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
 from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people, record_confirmation
@@ -33,7 +34,7 @@ from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.device_directory import DeviceDirectory
 from rosaos.kernel.device_status import DeviceStatusUpdates
 from rosaos.kernel.emergency_stop import EmergencyStopControl, stored_emergency_stop
-from rosaos.kernel.events import EventStore
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.host_latch import HostLatches, keep_latch
 from rosaos.kernel.intake import Intake, Queued
 from rosaos.kernel.launch_cause import CurrentEvent, LaunchCause
@@ -234,9 +235,9 @@ async def build_parts(
     )
     add_timer_tools(tools, timers)
 
-    async def launch(task: str, names: list[str]) -> ProcessInfo:
+    async def launch(task: str, names: list[str], plan: Plan) -> ProcessInfo:
         """Launch a process as ``launch_process`` does (a memory tool's: drive to a place)."""
-        return await manager.launch(task, names, before_start=launches.before_uncaused)
+        return await manager.launch(task, names, before_start=launches.before_uncaused, plan=plan)
 
     add_memory_tools(tools, memory, endpoints, launch, sightings)
     if models.local is not None:

@@ -17,7 +17,7 @@ from datetime import UTC, datetime
 from typing import Any
 
 from rosaos.devices.directory import DirectoryEntry, SafeStopOutcome, safe_stop_entry
-from rosaos.kernel.events import EventStore
+from rosaos.kernel.event_store import EventStore
 
 log = logging.getLogger("rosaos.kernel.pending_stops")
 

@@ -9,8 +9,8 @@ so everything in it is idempotent.
 
 from __future__ import annotations
 
+from rosaos.events.types import WorkerCallbackEvent
 from rosaos.kernel.activity import ActivityLog
-from rosaos.kernel.events import WorkerCallbackEvent
 from rosaos.kernel.intake import Queued
 from rosaos.kernel.orphans import LiveProcesses
 from rosaos.kernel.updates import UpdateStream

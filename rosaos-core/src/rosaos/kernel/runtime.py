@@ -28,6 +28,7 @@ from rosaos.devices.run_files import write_atomic
 from rosaos.devices.serve import bind_socket
 from rosaos.devices.world import World
 from rosaos.drivers import DeviceError
+from rosaos.events.plan import Plan
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.app import create_app
 from rosaos.kernel.api.kernel_client import kernel_file, running_kernel_url
@@ -35,7 +36,7 @@ from rosaos.kernel.api.login_codes import LoginCodes, login_url
 from rosaos.kernel.api.schemas import DeviceView, EmergencyStopReport, EmergencyStopState, Understanding
 from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.emergency_stop import EMERGENCY_STOP_KEY as EMERGENCY_STOP_KEY
-from rosaos.kernel.events import EventStore
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.intake import Intake
 from rosaos.kernel.loop import KernelLoop
 from rosaos.kernel.notices import NoticeWatcher
@@ -169,9 +170,11 @@ class Kernel:
     async def terminate(self, process_id: int) -> ProcessInfo:
         return await self.manager.terminate(process_id)
 
-    async def launch(self, task: str, devices: list[str]) -> ProcessInfo:
+    async def launch(self, task: str, devices: list[str], plan: Plan | None = None) -> ProcessInfo:
         """A process the page launched (a card control), recorded and announced as the kernel's own are."""
-        info = await self.manager.launch(task, devices, before_start=self.parts.launches.before_uncaused)
+        info = await self.manager.launch(
+            task, devices, before_start=self.parts.launches.before_uncaused, plan=plan
+        )
         data = {"process_id": info.id, "devices": info.devices, "state": info.state}
         await self.updates.publish(
             "process_launched", f"process {info.id} launched with {', '.join(info.devices)}", data

@@ -19,9 +19,8 @@ from pydantic_ai.models import ModelRequestParameters
 from pydantic_ai.models.wrapper import WrapperModel
 from pydantic_ai.settings import ModelSettings
 
-from rosaos.intents.planning.plan import PlanError, decode_plan
-from rosaos.kernel.events import Event
-from rosaos.kernel.follow_ups import follow_up_of
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.types import Event
 from rosaos.models.conversation import report_with_accepted_calls
 
 LAUNCH_TOOL = "launch_process"
@@ -62,20 +61,15 @@ def relayable(event: Event) -> str | None:
     if event.kind != "worker_callback":
         return None
     payload = event.payload
-    task = getattr(payload, "task", None)
-    if getattr(payload, "status", None) != "ok" or follow_up_of(task) or _plans_a_follow_up(task):
+    if not isinstance(payload, WorkerCallback) or payload.status != "ok" or has_follow_up(payload):
         return None
-    output = (getattr(payload, "output", None) or "").strip()
+    output = (payload.output or "").strip()
     return output if output and output != NO_OUTPUT else None
 
 
-def _plans_a_follow_up(task: str | None) -> bool:
-    """Whether ``task`` carries an offline plan with a follow-up (``then``), launched on this callback."""
-    try:
-        plan = decode_plan(task or "")
-    except PlanError:
-        return False
-    return plan is not None and plan.then is not None
+def has_follow_up(callback: WorkerCallback) -> bool:
+    """Whether the kernel launches something on this callback: an LLM's ``then``, or the plan's."""
+    return bool(callback.then) or (callback.plan is not None and callback.plan.then is not None)
 
 
 def relayed_messages(prompt: str, report: str) -> list[ModelMessage]:

@@ -23,9 +23,9 @@ from collections.abc import Awaitable, Callable
 from typing import Any
 
 from rosaos.devices.world import World
+from rosaos.events.types import UserSaidEvent, UserTypedEvent
 from rosaos.intents.grammar.vocabulary import device_vocabularies
 from rosaos.intents.understanding.stop_words import DeviceRefs, read_stop
-from rosaos.kernel.events import UserSaidEvent, UserTypedEvent
 from rosaos.kernel.stopping import StopError, StoppedDevice, Stopper, StopReport
 from rosaos.kernel.updates import UpdateKind
 

@@ -20,7 +20,7 @@ from pydantic import Field
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.drivers import READ_ONLY, DeviceError
-from rosaos.kernel.state_words import describe
+from rosaos.intents.grammar.state_words import describe
 from rosaos.kernel.stopping import StopError, Stopper, StopReport, describe_task
 from rosaos.processes.manager import ProcessManager
 

@@ -12,7 +12,7 @@ Which devices, and in what order:
 - nothing named (a bare "stop", "stop everything"): everything that is busy, in the order of
   :data:`rosaos.drivers.Halt`: every robot in motion first, then what speaks, then what plays;
   then every other running process is terminated too. A device is busy when a process holds it
-  or its state says so (:func:`rosaos.kernel.state_words.doing`); an idle one is left alone, so a
+  or its state says so (:func:`rosaos.intents.grammar.state_words.doing`); an idle one is left alone, so a
   bare "stop" does not freeze a companion robot's idle motion nobody asked to stop.
 
 The always-attached device (the Reachy Mini) is held by every process, so holding it says
@@ -31,8 +31,7 @@ from pydantic import BaseModel
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.drivers import DeviceError, Halt
-from rosaos.intents.planning.plan import task_summary
-from rosaos.kernel.state_words import doing
+from rosaos.intents.grammar.state_words import doing
 from rosaos.processes.manager import ProcessInfo, ProcessManager
 
 HALT_ORDER: tuple[Halt, ...] = ("motion", "speech", "sound")
@@ -203,7 +202,7 @@ class Stopper:
 
 def describe_task(task: str) -> str:
     """A process's task in a few words: its readable summary's first line, shortened."""
-    first = task_summary(task).strip().splitlines()[0] if task.strip() else ""
+    first = task.strip().splitlines()[0] if task.strip() else ""
     first = first.strip().rstrip(".")
     if len(first) > TASK_WORDS:
         first = first[: TASK_WORDS - 1].rstrip() + "…"

@@ -9,10 +9,8 @@ from __future__ import annotations
 import re
 from datetime import datetime, timedelta
 
-from rosaos.kernel.events import TimerFired
-
-LATE_AFTER_SECONDS = 5.0
-"""A firing later than this is reported as late (the kernel was down, or busy starting)."""
+from rosaos.events.types import TimerFired
+from rosaos.intents.grammar.timer_phrases import duration_text
 
 _CLOCK = re.compile(r"^\s*(?P<hour>\d{1,2})(?::(?P<minute>\d{2}))?(?::(?P<second>\d{2}))?\s*$")
 
@@ -64,21 +62,6 @@ def clock_text(when: datetime, now: datetime) -> str:
     return text
 
 
-def duration_text(seconds: float) -> str:
-    """``45 seconds``, ``10 minutes``, ``2 h 5 min``, ``3 days 4 h``: coarse, for speech."""
-    seconds = round(abs(seconds))
-    if seconds < 60:
-        return f"{seconds} second{'s' if seconds != 1 else ''}"
-    minutes = round(seconds / 60)
-    if minutes < 60:
-        return f"{minutes} minute{'s' if minutes != 1 else ''}"
-    hours, minutes = divmod(minutes, 60)
-    if hours < 24:
-        return f"{hours} h {minutes} min" if minutes else f"{hours} hour{'s' if hours != 1 else ''}"
-    days, hours = divmod(hours, 24)
-    return f"{days} day{'s' if days != 1 else ''}" + (f" {hours} h" if hours else "")
-
-
 def due_text(when: datetime, now: datetime) -> str:
     """``at 22:10 (in 10 minutes)``."""
     return f"at {clock_text(when, now)} (in {duration_text((when - now).total_seconds())})"
@@ -89,7 +72,7 @@ def render_timer_fired(payload: TimerFired) -> str:
 
     A late firing adds ``(late by 2 h 5 min: …)`` to the first line, so the model can say so."""
     head = f"[Timer fired] timer={payload.timer_id} due={payload.due.astimezone().strftime('%H:%M:%S')}"
-    if payload.late_seconds >= LATE_AFTER_SECONDS:
+    if payload.late:
         head += f" (late by {duration_text(payload.late_seconds)}: the kernel was not running then)"
     action = " ".join(payload.action.splitlines())  # one line: it cannot start an event of its own
     return f"{head}\naction: {action}"

@@ -22,7 +22,8 @@ from typing import Any, Literal
 
 from pydantic import BaseModel, Field
 
-from rosaos.kernel.events import EventStore, NewEvent, TimerFired, TimerFiredEvent
+from rosaos.events.types import NewEvent, TimerFired, TimerFiredEvent
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.intake import Queued
 
 log = logging.getLogger(__name__)

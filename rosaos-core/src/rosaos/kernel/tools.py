@@ -15,7 +15,7 @@ from pydantic import Field
 
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.drivers import CHANGES, DELETES, READ_ONLY
-from rosaos.kernel.follow_ups import attach_follow_up
+from rosaos.events.plan import Plan
 from rosaos.kernel.launch_cause import CurrentEvent, LaunchCause
 from rosaos.processes.manager import LaunchRefused, ProcessInfo, ProcessManager
 
@@ -62,20 +62,23 @@ def build_kernel_tools(
                 description=(
                     "Optional follow-up: what to launch when this process succeeds (e.g. 'turn the lamp "
                     "green' after a search that finds someone). It is not done by this process; it comes "
-                    "back to you with the [Worker callback], so it survives a restart."
+                    "back to you with the [Process callback], so it survives a restart."
                 ),
             ),
+        ] = None,
+        plan: Annotated[
+            Plan | None,
+            Field(description="The offline engine's exact device calls; leave it out."),
         ] = None,
     ) -> dict[str, Any]:
         """Start a process agent on a task with the devices it needs; returns its id at once.
 
-        The result arrives later as a [Worker callback] event, with ``then`` (a follow-up to launch
-        only if this process succeeds) in its task. An exclusive device held by
+        The result arrives later as a [Process callback] event, with ``then`` (a follow-up to launch
+        only if this process succeeds) beside its task. An exclusive device held by
         another process is refused with the holder named: wait for its callback, ask the user,
         or terminate_process(holder). The always-attached device is granted automatically.
         """
-        if then is not None and then.strip():
-            task = attach_follow_up(task, then)
+        then = " ".join(then.split()) if then is not None and then.strip() else None
         cause = current.next_cause() if current is not None else None
         if cause is not None and launched_before is not None:
             earlier = await launched_before(cause)
@@ -92,7 +95,7 @@ def build_kernel_tools(
                 await hook(info, cause)
 
         try:
-            info = await manager.launch(task, list(devices), before_start=start_hook)
+            info = await manager.launch(task, list(devices), before_start=start_hook, plan=plan, then=then)
         except LaunchRefused as refusal:
             raise ToolError(str(refusal)) from None
         if on_launch is not None:

@@ -22,16 +22,10 @@ from typing import Any, Literal
 
 from pydantic import BaseModel
 
-from rosaos.kernel.events import (
-    Database,
-    DeviceNotice,
-    Event,
-    NewEvent,
-    TimerFired,
-    UserText,
-    WorkerCallback,
-    mark_handled_in,
-)
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.types import DeviceNotice, Event, NewEvent, TimerFired, UserText
+from rosaos.kernel.database import Database
+from rosaos.kernel.event_store import mark_handled_in
 
 UpdateKind = Literal[
     "event", "kernel_reply", "process_launched", "process_ended", "tool_call", "error", "notice"
@@ -77,12 +71,12 @@ def describe_event(event: Event | NewEvent) -> str:
         label = "User said" if event.kind == "user_said" else "User typed"
         return f"[{label}] {payload.text}"
     if isinstance(payload, WorkerCallback):
-        parts = [f"worker={payload.process_id}", f"status={payload.status}"]
+        parts = [f"process={payload.process_id}", f"status={payload.status}"]
         if payload.output:
             parts.append(f"output={payload.output}")
         if payload.error:
             parts.append(f"error={payload.error}")
-        return "[Worker callback] " + " ".join(parts)
+        return "[Process callback] " + " ".join(parts)
     if isinstance(payload, DeviceNotice):
         return f"[Device notice] {payload.device}: {payload.message}"
     if isinstance(payload, TimerFired):

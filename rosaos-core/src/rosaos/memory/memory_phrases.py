@@ -16,6 +16,20 @@ from dataclasses import dataclass
 
 from rosaos.memory.store import place_key
 
+# The memory tools of the kernel (rosaos.memory.memory_tools), named here, below the tools, so the
+# engine's memory turn (rosaos.models.memory_turn) knows their results without importing them.
+MEMORY_TOOL_NAMES = (
+    "remember_place",
+    "list_places",
+    "forget_place",
+    "go_to_place",
+    "remember",
+    "recall",
+    "forget",
+    "recall_sightings",
+    "forget_sightings",
+)
+
 _NUMBER = r"(?:minus |negative |-)?\d+(?:\.\d+)?"
 _SPOT = r"(?:this |the current |my current |your current )?(?:spot|place|position|location|point|pose)"
 _GO = r"(?:go|head|drive|walk|move|navigate|return|come back|come|get|run)(?: over| back| on over)?"

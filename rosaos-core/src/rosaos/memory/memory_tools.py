@@ -20,22 +20,14 @@ from fastmcp.exceptions import ToolError
 from pydantic import Field
 
 from rosaos.drivers import CHANGES, DELETES, READ_ONLY
+from rosaos.events.plan import Plan
+from rosaos.memory.memory_phrases import MEMORY_TOOL_NAMES
 from rosaos.memory.robots import Endpoints, choose_robot, frame_refusal, go_to_task, read_pose
 from rosaos.memory.sightings import SightingLog, ago
 from rosaos.memory.store import NAME_MAX, MemoryRequestError, MemoryStore, NoteKind, Place
 from rosaos.processes.manager import LaunchRefused, ProcessInfo
 
-MEMORY_TOOL_NAMES = (
-    "remember_place",
-    "list_places",
-    "forget_place",
-    "go_to_place",
-    "remember",
-    "recall",
-    "forget",
-    "recall_sightings",
-    "forget_sightings",
-)
+__all__ = ["MEMORY_TOOL_NAMES", "add_memory_tools"]
 
 PlaceName = Annotated[
     str, Field(min_length=1, max_length=NAME_MAX, description="The place's name, e.g. 'the kitchen'.")
@@ -47,7 +39,7 @@ Device = Annotated[
     ),
 ]
 Coordinate = Annotated[float | None, Field(ge=-1000, le=1000, allow_inf_nan=False)]
-Launch = Callable[[str, list[str]], Awaitable[ProcessInfo]]
+Launch = Callable[[str, list[str], Plan], Awaitable[ProcessInfo]]
 
 
 def place_data(place: Place) -> dict[str, Any]:
@@ -139,7 +131,7 @@ def add_memory_tools(
         """Send a robot to a named place (the one that saved it, by default); returns the process id.
 
         Refused at once when the robot is in another frame than the place (another map, or
-        odometry that restarted). The result arrives later as a [Worker callback].
+        odometry that restarted). The result arrives later as a [Process callback].
         """
         try:
             place = store.require_place(name)
@@ -150,7 +142,8 @@ def add_memory_tools(
         if refusal is not None:
             raise ToolError(refusal)
         try:
-            info = await launch(go_to_task(place, robot), [robot])
+            task, plan = go_to_task(place, robot)
+            info = await launch(task, [robot], plan)
         except LaunchRefused as refused:
             raise ToolError(str(refused)) from None
         return {"process_id": info.id, "devices": info.devices, "place": place_data(place)}

@@ -13,7 +13,7 @@ from typing import Any
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.drivers import DeviceError
-from rosaos.intents.planning.plan import Plan, PlanStep, encode_task
+from rosaos.events.plan import Plan, PlanStep
 from rosaos.memory.store import MemoryRequestError, Place
 
 POSE_TOOL, GO_TOOL = "get_pose", "go_to"
@@ -98,8 +98,8 @@ def frame_refusal(place: Place, pose: dict[str, Any], device: str) -> str | None
     )
 
 
-def go_to_task(place: Place, device: str) -> str:
-    """The ``launch_process`` task that drives ``device`` to ``place`` (a plan the offline engine runs)."""
+def go_to_task(place: Place, device: str) -> tuple[str, Plan]:
+    """The task and plan that drive ``device`` to ``place`` (a plan the offline engine runs)."""
     args: dict[str, Any] = {"x": place.x, "y": place.y, "frame_anchor": place.anchor}
     if place.yaw is not None:
         args["yaw"] = place.yaw
@@ -113,4 +113,4 @@ def go_to_task(place: Place, device: str) -> str:
         f"Drive {device} to the place called {place.name}: x {place.x:g}, y {place.y:g} in the "
         f"{place.frame} frame (go_to with frame_anchor {place.anchor!r}, so another frame is refused)."
     )
-    return encode_task(summary, plan)
+    return summary, plan

@@ -3,15 +3,18 @@
 The local models are stateless: every request carries the whole conversation, so what to do next
 is read off the last messages (the kernel event being handled, the tool calls already made and
 what they returned). This module holds that reading, shared by the kernel and process models.
+
+The event is typed: the kernel's request carries the :class:`~rosaos.events.types.Event` in its
+metadata (:func:`event_request`) beside the text an LLM reads, and the engine reads the event,
+never the text. A bare string prompt (an agent run in a test, a ``python:`` model spec) is what
+the user typed.
 """
 
 from __future__ import annotations
 
-import ast
-import json
-import re
 from collections.abc import Sequence
 from dataclasses import dataclass
+from datetime import UTC, datetime
 from typing import Any
 
 from pydantic_ai.messages import (
@@ -19,37 +22,18 @@ from pydantic_ai.messages import (
     ModelRequest,
     ModelResponse,
     RetryPromptPart,
-    SystemPromptPart,
     ToolCallPart,
     ToolReturnPart,
     UserPromptPart,
 )
 
-from rosaos.receipts import RECEIPTS_HEADING
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.types import Event, UserText
 
-EVENT_TAG = re.compile(r"^\[(?P<tag>[A-Za-z ]+)\]\s?(?P<body>.*)$", re.DOTALL)
-_TASK = re.compile(r"\stask=(?P<task>(?:'.*'|\".*\"))$")
-_STATUS = re.compile(r"\bstatus=(?P<status>\w+)")
-_WORKER = re.compile(r"\bworker=(?P<worker>\d+)")
+EVENT_METADATA = "rosaos_event"
+"""The key under which a kernel request carries its typed event (``ModelRequest.metadata``)."""
 
-
-@dataclass(frozen=True)
-class KernelEvent:
-    """A rendered kernel event: ``[User said] hello`` → tag ``User said``, body ``hello``."""
-
-    tag: str | None
-    body: str
-
-
-@dataclass(frozen=True)
-class WorkerCallbackEvent:
-    """The fields of a ``[Worker callback]`` event body."""
-
-    worker: int | None
-    status: str
-    task: str | None
-    output: str | None
-    error: str | None
+USER_KINDS = frozenset({"user_said", "user_typed"})
 
 
 @dataclass(frozen=True)
@@ -61,53 +45,54 @@ class ToolOutcome:
     content: Any
 
 
-def parse_event(text: str) -> KernelEvent:
-    """Split a rendered event into its tag and body; untagged text has tag None."""
-    match = EVENT_TAG.match(text.strip())
-    if match is None:
-        return KernelEvent(None, text.strip())
-    return KernelEvent(match.group("tag"), match.group("body").strip())
-
-
-def parse_callback(body: str) -> WorkerCallbackEvent:
-    """Read a ``[Worker callback]`` body as :func:`rosaos.kernel.loop.render_event` writes it."""
-    head, _, rest = body.partition("\n")
-    status = _STATUS.search(head)
-    worker = _WORKER.search(head)
-    task: str | None = None
-    if (found := _TASK.search(head)) is not None:
-        try:
-            task = str(ast.literal_eval(found.group("task")))
-        except (ValueError, SyntaxError):
-            task = None
-    output = error = None
-    rest = rest.split(f"\n{RECEIPTS_HEADING}", 1)[0]  # the receipts follow the output or error
-    rest, _, report = rest.partition("\nreport: ")  # a failure's report follows its error
-    if rest.startswith("error:"):
-        error = _unquoted(rest[len("error:") :])
-        output = _unquoted(report) if report else None
-    elif rest.startswith("output:"):
-        output = _unquoted(rest[len("output:") :])
-    return WorkerCallbackEvent(
-        worker=int(worker.group("worker")) if worker else None,
-        status=status.group("status") if status else "unknown",
-        task=task,
-        output=output,
-        error=error,
+def event_request(event: Event, prompt: str, instructions: str | None = None) -> ModelRequest:
+    """The kernel's request for ``event``: ``prompt`` is what an LLM reads, ``event`` what the
+    offline engine reads (the typed event, so nothing rendered is ever parsed back)."""
+    return ModelRequest(
+        parts=[UserPromptPart(prompt)], instructions=instructions, metadata={EVENT_METADATA: event}
     )
 
 
-def _unquoted(text: str) -> str:
-    """A rendered value: JSON strings (how event_text quotes data) decoded, other text as it is."""
-    text = text.strip()
-    if text.startswith('"'):
-        try:
-            value = json.loads(text)
-        except ValueError:
-            return text
-        if isinstance(value, str):
-            return value.strip()
-    return text
+def request_event(request: ModelRequest | None) -> Event | None:
+    """The typed event a request carries; a plain prompt (an agent run on a string) is typed text.
+
+    None when the request has neither (tool results only)."""
+    if request is None:
+        return None
+    event = (request.metadata or {}).get(EVENT_METADATA)
+    if isinstance(event, Event):
+        return event
+    text = user_text(request)
+    if text is None:
+        return None
+    return typed_text(text)
+
+
+def typed_text(text: str) -> Event:
+    """``text`` as a ``user_typed`` event (not stored: ``id`` 0), for a prompt given as a string."""
+    payload = UserText.model_construct(text=text.strip())
+    return Event.model_construct(
+        id=0, time=datetime.now(UTC), kind="user_typed", source="prompt", payload=payload
+    )
+
+
+def turn_event(messages: Sequence[ModelMessage]) -> Event | None:
+    """The event the current turn answers: the one on its first request."""
+    turn = current_turn(messages)
+    first = next((message for message in turn if isinstance(message, ModelRequest)), last_request(messages))
+    return request_event(first)
+
+
+def said(event: Event | None) -> str | None:
+    """What the user said or typed, when ``event`` is user text; None for any other event."""
+    if event is None or event.kind not in USER_KINDS or not isinstance(event.payload, UserText):
+        return None
+    return event.payload.text
+
+
+def callback_of(event: Event | None) -> WorkerCallback | None:
+    """The process's callback, when ``event`` is one."""
+    return event.payload if event is not None and isinstance(event.payload, WorkerCallback) else None
 
 
 def last_request(messages: Sequence[ModelMessage]) -> ModelRequest | None:
@@ -179,22 +164,6 @@ def responses_by(messages: Sequence[ModelMessage], model_name: str) -> bool:
     """Whether every model response in ``messages`` came from ``model_name`` (and there is one)."""
     responses = [message for message in messages if isinstance(message, ModelResponse)]
     return bool(responses) and all(response.model_name == model_name for response in responses)
-
-
-def prompt_texts(messages: Sequence[ModelMessage], instructions: str | None) -> list[str]:
-    """Every text the run was given: user prompts, system prompts and instructions."""
-    texts = [instructions] if instructions else []
-    for message in messages:
-        if not isinstance(message, ModelRequest):
-            continue
-        if message.instructions:
-            texts.append(message.instructions)
-        for part in message.parts:
-            if isinstance(part, SystemPromptPart):
-                texts.append(part.content)
-            elif isinstance(part, UserPromptPart):
-                texts.append(user_text(ModelRequest(parts=[part])) or "")
-    return texts
 
 
 def content_text(content: Any) -> str:

@@ -13,7 +13,7 @@ from rosaos.models.select import ModelSpec, build_model
 
 if TYPE_CHECKING:
     from rosaos.devices.world import World
-    from rosaos.kernel.events import Event
+    from rosaos.events.types import Event
     from rosaos.models.kernel_model import LocalIntentModel
 
 

@@ -23,29 +23,26 @@ import re
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from pydantic_ai.messages import ModelMessage, ModelRequest, ModelResponsePart, TextPart, ToolCallPart
+from pydantic_ai.messages import ModelMessage, ModelResponsePart, TextPart, ToolCallPart
 
+from rosaos.events.plan import result_data
+from rosaos.intents.grammar.state_words import battery, doing, people_seen, position
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.planning.notice_plan import SILENCE
-from rosaos.intents.planning.plan import result_data
 from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.intents.understanding.questions import Question, read_question
 from rosaos.intents.understanding.stop_words import DeviceRefs, read_stop
-from rosaos.kernel.state_words import battery, doing, people_seen, position
 from rosaos.models.conversation import (
     ToolOutcome,
+    callback_of,
     content_text,
     current_turn,
-    last_request,
-    parse_callback,
-    parse_event,
+    said,
     tool_outcomes,
-    user_text,
+    turn_event,
 )
 from rosaos.models.process_model import final_reply
 
-USER_TAGS = frozenset({"User said", "User typed"})
-CALLBACK_TAG = "Worker callback"
 STOP_TOOL = "stop"
 STATE_TOOL = "device_state"
 LAUNCH_TOOL = "launch_process"
@@ -69,20 +66,19 @@ def kernel_action_turn(
     stop_tool, state_tool = _tool(tools, STOP_TOOL), _tool(tools, STATE_TOOL)
     if stop_tool is None or state_tool is None:
         return None
-    turn = current_turn(messages)
-    first = next((message for message in turn if isinstance(message, ModelRequest)), last_request(messages))
-    event = parse_event(user_text(first) or "")
-    outcomes = tool_outcomes(turn)
-    if event.tag == CALLBACK_TAG:
-        callback = parse_callback(event.body)
-        stopped = callback.status == "terminated" and callback.worker in _stopped_processes(messages)
+    event = turn_event(messages)
+    outcomes = tool_outcomes(current_turn(messages))
+    callback = callback_of(event)
+    if callback is not None:
+        stopped = callback.status == "terminated" and callback.process_id in _stopped_processes(messages)
         return [TextPart(SILENCE)] if stopped and not outcomes else None
-    if event.tag not in USER_TAGS and event.tag is not None:
+    text = said(event)
+    if text is None:
         return None
-    stop = read_stop(event.body, refs)
-    question = None if stop is not None else read_question(event.body, refs)
+    stop = read_stop(text, refs)
+    question = None if stop is not None else read_question(text, refs)
     if stop is None and question is None:
-        return _template_question(match(event.body), outcomes, state_tool)
+        return _template_question(match(text), outcomes, state_tool)
     if outcomes:
         launched = [outcome for outcome in outcomes if outcome.call.tool_name == _tool(tools, LAUNCH_TOOL)]
         if stop is not None:
@@ -96,7 +92,7 @@ def kernel_action_turn(
         if launched:
             return [TextPart(acknowledge(launched))]
         assert question is not None
-        return _answer(question, outcomes, event.body, tools, command)
+        return _answer(question, outcomes, text, tools, command)
     if stop is not None:  # the stop first, then the sentence's other commands
         then = (
             [part for part in command(stop.rest, tools) if isinstance(part, ToolCallPart)]

@@ -1,33 +1,35 @@
 """The kernel agent's offline model: the local-intent engine as a pydantic-ai ``Model``.
 
 Plugged in where an LLM would be, so the kernel runs unchanged: same queue, same
-``launch_process``, same workers, leases and MCP tools. Per request it reads the event being
-handled (see :func:`rosaos.kernel.loop.render_event`) and answers:
+``launch_process``, same workers, leases and MCP tools. Per request it reads the typed event being
+handled (:func:`rosaos.models.conversation.turn_event`, never the text an LLM reads) and answers:
 
-- ``[User said]`` / ``[User typed]``: the sentence is matched (:class:`~rosaos.intents.understanding.matching.
+- what the user said or typed (:class:`~rosaos.events.types.UserText`): the sentence is matched (:class:`~rosaos.intents.understanding.matching.
   IntentMatcher`). An exact match becomes one ``launch_process`` call per process, all in one
   response (parallel tool calls). Anything else becomes a text reply: a clarifying question, a
   refusal naming what exists, or "not understood". Nothing is launched on a guess.
 - the ``launch_process`` results: a short acknowledgement from each plan ("On it: turn on the
   kitchen light."), or the refusal (an exclusive device held by another process) passed on.
-- ``[Worker callback]``: the process's output (its plan made it a user-facing sentence), or an
-  apology with the error. No new process.
-- ``[Device notice]``: ``notify`` ones are said through the Reachy Mini (one process that calls its
+- a :class:`~rosaos.events.callback.WorkerCallback`: the process's output (its plan made it a
+  user-facing sentence), or an apology with the error; its plan's follow-up, if it has one.
+- a :class:`~rosaos.events.types.DeviceNotice`: ``notify`` ones are said through the Reachy Mini (one process that calls its
   ``speak``); ``info`` ones get no reply (:mod:`rosaos.intents.planning.notice_plan`).
-- ``[Error]``: acknowledged in one sentence.
-- timers ("… in ten minutes", "what timers are set?", "cancel that timer") and ``[Timer fired]``:
-  :mod:`rosaos.intents.planning.timer_plan`, asked first;
+- an :class:`~rosaos.events.types.ErrorReport`: acknowledged in one sentence.
+- timers ("… in ten minutes", "what timers are set?", "cancel that timer") and a
+  :class:`~rosaos.events.types.TimerFired`:
+  :mod:`rosaos.models.timer_turn`, asked first;
 - "stop" however it is said, questions about a device's state and "what can you do?": the
   kernel's lease-free ``stop`` and ``device_state`` tools (:mod:`rosaos.models.kernel_actions`),
   asked next;
 - memory ("remember this spot as the kitchen", "go to the kitchen", "call the dog Rex"):
-  :mod:`rosaos.memory.turn`, asked after them; aliases people gave are resolved before any match.
+  :mod:`rosaos.models.memory_turn`, asked after them; aliases people gave are resolved before any match.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
+from pydantic import ValidationError
 from pydantic_ai.messages import (
     ModelMessage,
     ModelRequest,
@@ -39,33 +41,33 @@ from pydantic_ai.messages import (
 from pydantic_ai.models import Model, ModelRequestParameters
 from pydantic_ai.settings import ModelSettings
 
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.plan import Plan
+from rosaos.events.types import DeviceNotice, ErrorReport, Event
 from rosaos.intents.grammar.phrases import phrase
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
-from rosaos.intents.planning.followups import callback_response, plan_follow_up
+from rosaos.intents.planning.follow_ups import callback_response, plan_follow_up
 from rosaos.intents.planning.notice_plan import SILENCE, notice_response
-from rosaos.intents.planning.plan import PlanError, decode_plan, has_plan
-from rosaos.intents.planning.timer_plan import is_timer_sentence, timer_turn
 from rosaos.intents.understanding.matching import IntentMatcher, MatchResult
 from rosaos.intents.understanding.stop_words import DeviceRefs
 from rosaos.memory.memory_phrases import resolve_aliases
 from rosaos.memory.store import MemoryStore
-from rosaos.memory.turn import is_memory_sentence, memory_turn
 from rosaos.models import kernel_actions
 from rosaos.models.conversation import (
     ToolOutcome,
+    callback_of,
     content_text,
     current_turn,
-    last_request,
-    parse_callback,
-    parse_event,
+    request_event,
     responses_by,
+    said,
     tool_outcomes,
-    user_text,
+    turn_event,
 )
+from rosaos.models.memory_turn import is_memory_sentence, memory_turn
+from rosaos.models.timer_turn import is_timer_sentence, timer_turn
 
 LAUNCH_TOOL = "launch_process"
-USER_TAGS = frozenset({"User said", "User typed"})
-CALLBACK_TAG = "Worker callback"
 NO_OUTPUT = "(no output)"
 
 
@@ -106,34 +108,29 @@ class LocalIntentModel(Model):
             text = resolve_aliases(text, self.memory.aliases())
         return self.matcher.match(text)
 
-    def handles_text(self, rendered_event: str) -> bool:
-        """Whether this model answers ``rendered_event`` exactly, so an LLM is not needed.
+    def handles_event(self, event: Event) -> bool:
+        """Whether this model answers ``event`` exactly, so an LLM is not needed.
 
         True for user text that matches completely and for callbacks of processes it planned.
         A bare choice ("the kitchen light") is not: it may answer the LLM's "which light?".
         """
-        event = parse_event(rendered_event)
-        if (event.tag in USER_TAGS or event.tag is None) and (
-            is_timer_sentence(event.body, self.match)
-            or is_memory_sentence(event.body, self.memory, self.match)
-        ):
-            return True
-        if (event.tag in USER_TAGS or event.tag is None) and kernel_actions.handles(event.body, self.refs):
-            return True
-        if event.tag in USER_TAGS or event.tag is None:
-            return self.match(event.body).is_exact and not self.matcher.choice(event.body)
-        if event.tag == CALLBACK_TAG:
-            task = parse_callback(event.body).task
-            return task is not None and has_plan(task)
-        return False
+        text = said(event)
+        if text is not None:
+            if is_timer_sentence(text, self.match) or is_memory_sentence(text, self.memory, self.match):
+                return True
+            if kernel_actions.handles(text, self.refs):
+                return True
+            return self.match(text).is_exact and not self.matcher.choice(text)
+        callback = callback_of(event)
+        return callback is not None and callback.plan is not None
 
     def handles(self, messages: Sequence[ModelMessage]) -> bool:
         """Whether this model should answer the request at the end of ``messages``."""
         turn = current_turn(messages)
         if len(turn) > 1:  # a turn already under way stays with the model that started it
             return responses_by(turn, self.model_name)
-        text = user_text(last_request(messages))
-        return text is not None and self.handles_text(text)
+        event = turn_event(messages)
+        return event is not None and self.handles_event(event)
 
     async def request(
         self,
@@ -161,23 +158,25 @@ class LocalIntentModel(Model):
         memory = memory_turn(messages, tools, self.memory, self.match)
         if memory is not None:  # places, facts, aliases
             return memory
-        turn = current_turn(messages)
-        outcomes = tool_outcomes(turn)
+        event = turn_event(messages)
+        callback = callback_of(event)
+        outcomes = tool_outcomes(current_turn(messages))
         if outcomes:
             # A follow-up launched on a callback: say how the first process ended, then the ack.
-            started = parse_event(user_text(_first_request(turn)) or "")
-            before = self._callback_reply(started.body) + " " if started.tag == CALLBACK_TAG else ""
+            before = self._callback_reply(callback) + " " if callback is not None else ""
             return [TextPart(before + self._acknowledge(outcomes))]
-        event = parse_event(user_text(last_request(messages)) or "")
-        if event.tag in USER_TAGS or event.tag is None:
-            return self._command(event.body, tools, self._open_question(messages))
-        if event.tag == CALLBACK_TAG:
-            reply = self._callback_reply(event.body)
-            chained = callback_response(parse_callback(event.body), _launch_tool(tools), reply)
+        text = said(event)
+        if text is not None:
+            return self._command(text, tools, self._open_question(messages))
+        if callback is not None:
+            reply = self._callback_reply(callback)
+            chained = callback_response(callback, _launch_tool(tools), reply)
             return chained or [TextPart(reply)]
-        if event.tag == "Device notice":
-            return notice_response(event.body, self.speaker, _launch_tool(tools))
-        return [TextPart(phrase(self.language, "error", message=event.body))]
+        payload = event.payload if event is not None else None
+        if isinstance(payload, DeviceNotice):
+            return notice_response(payload, self.speaker, _launch_tool(tools))
+        message = payload.message if isinstance(payload, ErrorReport) else str(payload)
+        return [TextPart(phrase(self.language, "error", message=message))]
 
     def _open_question(self, messages: Sequence[ModelMessage]) -> str | None:
         """The user's previous sentence, if this model's last reply asked "which one?" about it."""
@@ -189,11 +188,11 @@ class LocalIntentModel(Model):
         ):
             return None
         reply = earlier[-1].text or ""
-        previous = parse_event(user_text(_first_request(current_turn(earlier))) or "")
-        if previous.tag not in USER_TAGS and previous.tag is not None:
+        previous = said(request_event(_first_request(current_turn(earlier))))
+        if previous is None:
             return None
-        asked = self.match(previous.body)
-        return previous.body if asked.kind == "clarify" and asked.reply == reply else None
+        asked = self.match(previous)
+        return previous if asked.kind == "clarify" and asked.reply == reply else None
 
     def _command(
         self, text: str, tools: Sequence[str], open_question: str | None = None
@@ -201,8 +200,11 @@ class LocalIntentModel(Model):
         # An answer to "which one?" ("the kitchen light") completes the question's sentence; on
         # its own it would read as "turn on the kitchen light".
         answered = self.matcher.follow_up(open_question, text) if open_question else None
-        literal = getattr(self.matcher, "_literal", None)  # the engine's reading as said, if it has one
-        result = answered or plan_follow_up(text, self.match, self.language, literal) or self.match(text)
+        result = (
+            answered
+            or plan_follow_up(text, self.match, self.language, self.matcher.literal)
+            or self.match(text)
+        )
         if not result.is_exact:
             return [TextPart(result.reply)]
         launch = _launch_tool(tools)
@@ -212,10 +214,7 @@ class LocalIntentModel(Model):
                     phrase(self.language, "launch_refused", reason=f"no {LAUNCH_TOOL} tool is available")
                 )
             ]
-        return [
-            ToolCallPart(launch, {"task": process.task, "devices": list(process.devices)})
-            for process in result.processes
-        ]
+        return [ToolCallPart(launch, process.launch_args) for process in result.processes]
 
     def _acknowledge(self, outcomes: list[ToolOutcome]) -> str:
         replies: list[str] = []
@@ -223,41 +222,32 @@ class LocalIntentModel(Model):
             if not outcome.ok:
                 replies.append(phrase(self.language, "launch_refused", reason=content_text(outcome.content)))
                 continue
-            task = str(outcome.call.args_as_dict().get("task", ""))
-            try:
-                plan = decode_plan(task)
-            except PlanError:
-                plan = None
+            plan = _launched_plan(outcome.call)
             replies.append(
                 plan.ack if plan is not None and plan.ack else phrase(self.language, "callback_done")
             )
         # "Turn off all the lights" launches one process per light, all with the same ack.
         return " ".join(dict.fromkeys(replies))
 
-    def _callback_reply(self, body: str) -> str:
-        callback = parse_callback(body)
+    def _callback_reply(self, callback: WorkerCallback) -> str:
+        plan = callback.plan
         if callback.status == "ok":
-            if _quiet(callback.task):
+            if plan is not None and plan.quiet:  # it only told the user something
                 return SILENCE
             output = (callback.output or "").strip()
             return output if output and output != NO_OUTPUT else phrase(self.language, "callback_done")
         error = callback.error or callback.output or callback.status
-        try:
-            plan = decode_plan(callback.task or "")
-        except PlanError:
-            plan = None
         if plan is not None:
             return plan.failure.replace("{error}", error)
         return phrase(self.language, "callback_failed", status=callback.status, error=error)
 
 
-def _quiet(task: str | None) -> bool:
-    """Whether the callback's plan asks for no reply (it only told the user something)."""
+def _launched_plan(call: ToolCallPart) -> Plan | None:
+    """The plan this engine gave a ``launch_process`` call (JSON data in its arguments), if any."""
     try:
-        plan = decode_plan(task or "")
-    except PlanError:
-        return False
-    return plan is not None and plan.quiet
+        return Plan.model_validate(call.args_as_dict().get("plan"))
+    except ValidationError:  # none (an LLM's launch in the same history), or not a plan
+        return None
 
 
 def _launch_tool(tools: Sequence[str]) -> str | None:

@@ -1,8 +1,8 @@
-"""The process agent's offline model: runs the ``rosaos-plan`` of its task, step by step.
+"""The process agent's offline model: runs the plan of its job, step by step.
 
-The worker puts the kernel's task in the process agent's system prompt (and sends it as the user
-prompt), so the plan block written by the kernel's local-intent engine is there. Per request this
-model looks at what has been done so far and:
+The worker gives it the job's typed :class:`~rosaos.events.plan.Plan` (written by the
+kernel's local-intent engine, carried on the job). Per request this model looks at what has been
+done so far and:
 
 1. calls the next plan step's tool, resolved against the tools the agent really has
    (``turn_on``, ``kitchen_light_turn_on`` or ``kitchen_light__turn_on``: device + tool, either way);
@@ -28,22 +28,21 @@ from pydantic_ai.models import Model, ModelRequestParameters
 from pydantic_ai.settings import ModelSettings
 from pydantic_ai.tools import ToolDefinition
 
+from rosaos.events.plan import Plan, fill_state, render_result, result_data
 from rosaos.intents.grammar.phrases import phrase
-from rosaos.intents.planning.followups import unmet_output
-from rosaos.intents.planning.plan import Plan, PlanError, decode_plan, fill_state, render_result, result_data
+from rosaos.intents.planning.follow_ups import unmet_output
 from rosaos.models.conversation import (
     ToolOutcome,
     content_text,
     current_turn,
-    prompt_texts,
     responses_by,
     tool_outcomes,
 )
 
 # The worker heads each granted device's prompt section "## <instance> (<driver>)".
 NO_PLAN_REPLY = (
-    "The offline engine only runs planned tasks: a ```rosaos-plan``` block, as the kernel's "
-    "local-intent engine writes them. This task has none. For free-form tasks configure an LLM: "
+    "The offline engine only runs planned tasks, as the kernel's local-intent engine plans "
+    "them. This task has none. For free-form tasks configure an LLM: "
     "set [models] process in rosaos.toml (for example 'openai:gpt-5.2', or 'openai-compatible' "
     "with base_url and model_name)."
 )
@@ -59,15 +58,17 @@ def resolve_tool(device: str, tool: str, tools: Sequence[str]) -> str | None:
 
 
 class LocalPlanModel(Model):
-    """The offline process model: executes the task's ``rosaos-plan``; no LLM involved.
+    """The offline process model: executes the job's :class:`Plan`; no LLM involved.
 
+    ``plan`` is the job's typed plan (None: a task without one, which this model declines).
     ``language`` is only used for the few messages the engine writes itself; the replies of a
     plan were written by the kernel, in its language.
     """
 
-    def __init__(self, language: str = "en") -> None:
+    def __init__(self, language: str = "en", plan: Plan | None = None) -> None:
         super().__init__()
         self.language = language
+        self.plan = plan
 
     @property
     def model_name(self) -> str:
@@ -80,11 +81,11 @@ class LocalPlanModel(Model):
         return "rosaos"
 
     def handles(self, messages: Sequence[ModelMessage]) -> bool:
-        """Whether this model should answer: the task carries a plan, and no other model began."""
+        """Whether this model should answer: the job has a plan, and no other model began."""
         turn = current_turn(messages)
         if len(turn) > 1 and not responses_by(turn, self.model_name):
             return False
-        return any("```rosaos-plan" in text for text in prompt_texts(messages, None))
+        return self.plan is not None
 
     async def request(
         self,
@@ -103,10 +104,9 @@ class LocalPlanModel(Model):
         self, messages: Sequence[ModelMessage], tools: Sequence[ToolDefinition]
     ) -> list[ModelResponsePart]:
         """The response parts for ``messages`` with ``tools`` available."""
-        texts = prompt_texts(messages, None)
-        plan, problem = _find_plan(texts)
+        plan = self.plan
         if plan is None:
-            return [TextPart(problem or NO_PLAN_REPLY)]
+            return [TextPart(NO_PLAN_REPLY)]
         definitions = {tool.name: tool for tool in tools}
         names = list(definitions)
         outcomes = tool_outcomes(messages)
@@ -126,19 +126,6 @@ class LocalPlanModel(Model):
             results = [outcome.content for outcome in outcomes[: len(plan.steps)]]
             reply = unmet_output(plan, results) or final_reply(plan, results[-1])
         return [TextPart(reply)]
-
-
-def _find_plan(texts: list[str]) -> tuple[Plan | None, str | None]:
-    problem = None
-    for text in texts:
-        try:
-            plan = decode_plan(text)
-        except PlanError as error:
-            problem = f"Sorry, I could not run this task: {error}"
-            continue
-        if plan is not None:
-            return plan, None
-    return None, problem
 
 
 def _progress(plan: Plan, outcomes: list[ToolOutcome]) -> tuple[int, ToolOutcome | None]:

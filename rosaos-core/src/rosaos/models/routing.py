@@ -4,14 +4,14 @@ With no LLM configured the local models do everything. With one configured:
 
 - ``prefer_local = true`` (default): sentences the local-intent engine matches exactly skip the
   LLM (fast, free, deterministic); everything else goes to the LLM. Callbacks of processes the
-  engine planned, and processes whose task carries a ``rosaos-plan``, stay local too.
+  engine planned, and processes whose job carries a plan, stay local too.
 - ``prefer_local = false``: everything goes to the LLM.
 
 Two ways to plug this in, pick whichever fits the call site:
 
 - functions: :meth:`KernelRouter.model_for_event` is a ``KernelLoop(model=...)`` callback (a
   model per event, None = the agent's own model), and :func:`process_model_for` picks a worker's
-  model from its task;
+  model from its job's plan;
 - :class:`RoutingModel`: one ``Model`` object that decides per request, for places that take a
   single model (e.g. a ``python:`` model spec).
 """
@@ -28,9 +28,8 @@ from pydantic_ai.models import Model, ModelRequestParameters, StreamedResponse
 from pydantic_ai.models.wrapper import WrapperModel
 from pydantic_ai.settings import ModelSettings
 
-from rosaos.intents.planning.plan import has_plan
-from rosaos.kernel.events import Event
-from rosaos.kernel.loop import render_event
+from rosaos.events.plan import Plan
+from rosaos.events.types import Event
 from rosaos.models.kernel_model import LocalIntentModel
 from rosaos.models.process_model import LocalPlanModel
 
@@ -49,24 +48,23 @@ class KernelRouter:
         self.llm = llm
         self.prefer_local = prefer_local
 
-    def model_for_text(self, rendered_event: str) -> Model:
-        """The model that should handle ``rendered_event`` (``[User said] ...``)."""
+    def model_for_event(self, event: Event) -> Model:
+        """``KernelLoop(model=router.model_for_event)``: the model for one kernel event, chosen
+        from the typed event (nothing is rendered to choose)."""
         if self.llm is None:
             return self.local
-        if self.prefer_local and self.local.handles_text(rendered_event):
+        if self.prefer_local and self.local.handles_event(event):
             return self.local
         return self.llm
 
-    def model_for_event(self, event: Event) -> Model:
-        """``KernelLoop(model=router.model_for_event)``: the model for one kernel event."""
-        return self.model_for_text(render_event(event))
 
-
-def process_model_for(task: str, llm: Model | None, prefer_local: bool = True, language: str = "en") -> Model:
-    """A worker's model for ``task``: the plan runner when the task has a plan (and local is
-    preferred, or there is no LLM), else the LLM."""
-    if llm is None or (prefer_local and has_plan(task)):
-        return LocalPlanModel(language)
+def process_model_for(
+    plan: Plan | None, llm: Model | None, prefer_local: bool = True, language: str = "en"
+) -> Model:
+    """A worker's model for a job with ``plan``: the plan runner when there is a plan (and local
+    is preferred, or there is no LLM), else the LLM."""
+    if llm is None or (prefer_local and plan is not None):
+        return LocalPlanModel(language, plan)
     return llm
 
 

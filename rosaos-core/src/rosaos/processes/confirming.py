@@ -10,17 +10,41 @@ process: the kernel then releases its leases.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Literal
 
 import httpx
 from pydantic_ai import RunContext
 from pydantic_ai.toolsets import ToolsetTool, WrapperToolset
 
-from rosaos.kernel.confirmations import ConfirmRule, needs_confirmation
 from rosaos.receipts import redact, secret_args_of
 from rosaos.tls import shared_context
 
 POLL_SECONDS = 25.0
+
+ConfirmRule = list[str] | Literal["destructive"] | None
+"""What needs a yes on one device: these tool names, every destructive tool, or nothing."""
+ConfirmSetting = list[str] | Literal["destructive", "off"]
+
+
+def confirm_rule(
+    device: ConfirmSetting | None, global_setting: ConfirmSetting | None, backend: str, on_real: bool
+) -> ConfirmRule:
+    """The effective rule of one device: its own setting, else the global one, else the default."""
+    setting = device if device is not None else global_setting
+    if setting is None:
+        return "destructive" if backend == "real" and on_real else None
+    if setting == "off" or setting == []:
+        return None
+    return setting
+
+
+def needs_confirmation(rule: ConfirmRule, tool: str, annotations: dict[str, Any] | None) -> bool:
+    """Whether a call of ``tool`` (with its MCP annotations) needs a yes under ``rule``."""
+    if rule is None:
+        return False
+    if rule == "destructive":
+        return bool((annotations or {}).get("destructiveHint"))
+    return tool in rule
 
 
 class ConfirmationDeclined(Exception):

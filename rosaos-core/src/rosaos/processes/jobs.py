@@ -1,23 +1,28 @@
 """The messages that cross process boundaries: a job sent to a worker, and the callback it ends with.
 
 Both are pydantic models because they travel as JSON over the worker's pipes: a job on its stdin,
-the callback inside the ``done`` message on its stdout (:mod:`rosaos.processes.protocol`).
+the callback inside the ``done`` message on its stdout (:mod:`rosaos.processes.protocol`). The
+callback's type lives in the low layer (:mod:`rosaos.events.callback`), as an event payload; it is
+re-exported here beside the job.
 """
 
 from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import AliasChoices, BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field
 
+from rosaos.events.callback import ProcessStatus, WorkerCallback, callback_idempotency_key
+from rosaos.events.plan import Plan
 from rosaos.models.select import ModelSpec
-from rosaos.receipts import Receipt
 
-ProcessStatus = Literal["ok", "error", "crashed", "timeout", "terminated", "unverified"]
-"""How a process ended: ``ok`` (the agent finished, and a device call shows it), ``error`` (it
-raised, or a device call failed and was not made good), ``crashed`` (the worker died), ``timeout``
-(killed at the job timeout), ``terminated`` (killed on request), ``unverified`` (the model said it
-was done but no device call of the process succeeded, so nothing shows it happened)."""
+__all__ = [
+    "GrantedDevice",
+    "ProcessStatus",
+    "WorkerCallback",
+    "WorkerJob",
+    "callback_idempotency_key",
+]
 
 
 class GrantedDevice(BaseModel):
@@ -45,6 +50,11 @@ class WorkerJob(BaseModel):
 
     process_id: int = Field(ge=1)
     task: str = Field(min_length=1)
+    plan: Plan | None = None
+    """The offline engine's exact tool calls, when it planned the task: the worker runs them
+    without a model (an LLM running the process reads them rendered, in its prompt)."""
+    then: str | None = None
+    """An LLM kernel's follow-up (``launch_process(..., then=...)``): not this process's to do."""
     devices: list[GrantedDevice]
     model: ModelSpec
     base_prompt: str
@@ -55,35 +65,3 @@ class WorkerJob(BaseModel):
     kernel_token: str
     world_devices: list[str] = Field(default_factory=list)
     """Every device of the world, so a call to one the process was not granted can be named."""
-
-
-class WorkerCallback(BaseModel):
-    """What a process reports when it ends; the payload of a ``worker_callback`` event."""
-
-    model_config = ConfigDict(extra="forbid")
-
-    process_id: int = Field(
-        ge=1,
-        description="The process id that launch_process returned.",
-        # ``worker_id`` was this field's old name (it always held a process id): a stored event
-        # that still has it is understood. Events are stored and shown with ``process_id``.
-        validation_alias=AliasChoices("process_id", "worker_id"),
-    )
-    status: ProcessStatus
-    output: str | None = None
-    error: str | None = None
-    task: str | None = None
-    model_requests: int = Field(default=0, ge=0)
-    tool_calls: int = Field(default=0, ge=0)
-    receipts: list[Receipt] = Field(
-        default_factory=list, description="Every tool call the process made (the activity log)."
-    )
-
-
-def callback_idempotency_key(process_id: int) -> str:
-    """The idempotency key of a process's ``worker_callback`` event.
-
-    The kernel enqueues a process's end with this key, both from the pool and from orphan recovery
-    after a restart, so an end is queued once even when both report it.
-    """
-    return f"process-{process_id}"

@@ -17,12 +17,14 @@ from collections.abc import Awaitable, Callable, Mapping
 from datetime import UTC, datetime
 from typing import Literal
 
-from pydantic import BaseModel
+from pydantic import BaseModel, Field
 
 from rosaos.devices.endpoints import DeviceEndpoint
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.plan import Plan
 from rosaos.models.select import ModelSpec
 from rosaos.processes.forking import preload_modules
-from rosaos.processes.jobs import GrantedDevice, WorkerCallback, WorkerJob
+from rosaos.processes.jobs import GrantedDevice, WorkerJob
 from rosaos.processes.leases import LeaseRefused, LeaseTable
 from rosaos.processes.pool import PoolError, WorkerPool
 from rosaos.processes.protocol import Progress
@@ -59,6 +61,10 @@ class ProcessInfo(BaseModel):
     task: str
     devices: list[str]
     state: ProcessState
+    then: str | None = None
+    """What the kernel launches when this process succeeds, in words (its plan's or an LLM's)."""
+    plan: Plan | None = Field(default=None, exclude=True)
+    """The offline engine's plan, kept for a callback the kernel writes itself; not listed."""
     started_at: datetime
     ended_at: datetime | None = None
     worker_pid: int | None = None
@@ -178,10 +184,14 @@ class ProcessManager:
         task: str,
         devices: builtins.list[str],
         before_start: Callable[[ProcessInfo], Awaitable[None]] | None = None,
+        *,
+        plan: Plan | None = None,
+        then: str | None = None,
     ) -> ProcessInfo:
         """Start a process for ``task`` holding ``devices`` (plus the always-attached ones).
 
-        ``before_start(info)`` runs once the leases are granted and before any worker has the job
+        ``plan`` is the offline engine's plan, ``then`` an LLM kernel's follow-up: both ride on the
+        job and come back on its callback. ``before_start(info)`` runs once the leases are granted and before any worker has the job
         (the kernel records the launch durably there); if it fails, nothing is started.
         Returns as soon as a worker has the job, or the job waits in the pool's queue because
         ``max_workers`` processes run already (it starts, in order, when one ends). Raises
@@ -206,6 +216,8 @@ class ProcessManager:
         job = WorkerJob(
             process_id=process_id,
             task=task,
+            plan=plan,
+            then=then,
             devices=[_granted(endpoints[name], asked=name in devices) for name in granted],
             model=self._model,
             base_prompt=self._base_prompt,
@@ -215,7 +227,15 @@ class ProcessManager:
             kernel_token=self._kernel_token,
             world_devices=sorted(endpoints),
         )
-        info = ProcessInfo(id=process_id, task=task, devices=granted, state="running", started_at=_now())
+        info = ProcessInfo(
+            id=process_id,
+            task=task,
+            devices=granted,
+            state="running",
+            started_at=_now(),
+            then=plan.then.summary if plan is not None and plan.then is not None else then,
+            plan=plan,
+        )
         self._processes[process_id] = info
         if before_start is not None:
             try:

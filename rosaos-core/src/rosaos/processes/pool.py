@@ -35,9 +35,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
+from rosaos.events.callback import WorkerCallback
 from rosaos.processes.capacity import default_max_workers
 from rosaos.processes.forking import ForkServer, ForkServerError
-from rosaos.processes.jobs import WorkerCallback, WorkerJob
+from rosaos.processes.jobs import WorkerJob
 from rosaos.processes.protocol import Progress
 from rosaos.processes.watcher import OnEnded, Watcher, Worker, WorkerProcess, describe_exit, ended
 

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 
-from rosaos.processes.jobs import GrantedDevice
+from rosaos.events.plan import plan_text
+from rosaos.processes.jobs import GrantedDevice, WorkerJob
 from rosaos.processes.tool_list import DeviceTools
 
 DEFAULT_PROCESS_PROMPT = """\
@@ -43,6 +44,24 @@ def base_process_prompt(configured: str | None) -> str:
 def tool_prefix(device: str) -> str:
     """The prefix a device's tool names get when a process holds more than one device."""
     return device
+
+
+FOLLOW_UP_HEADING = (
+    "Kernel follow-up (not for this process; the kernel launches it only if this task succeeds):"
+)
+
+
+def job_text(job: WorkerJob) -> str:
+    """The task as a process model reads it: the kernel's words, then the plan and the follow-up.
+
+    The plan and the follow-up travel as fields of the job (and come back on the callback); this
+    text is only for a model to read, never parsed."""
+    parts = [job.task.strip()]
+    if job.plan is not None:
+        parts.append(plan_text(job.plan))
+    if job.then:
+        parts.append(f"{FOLLOW_UP_HEADING} {' '.join(job.then.split())}")
+    return "\n\n".join(parts)
 
 
 def process_system_prompt(

@@ -25,7 +25,8 @@ from typing import Any, Protocol
 
 from pydantic import ValidationError
 
-from rosaos.processes.jobs import ProcessStatus, WorkerCallback, WorkerJob
+from rosaos.events.callback import ProcessStatus, WorkerCallback
+from rosaos.processes.jobs import WorkerJob
 from rosaos.processes.protocol import WORKER_MESSAGE, Done, Progress, Ready, Rejected
 
 log = logging.getLogger(__name__)
@@ -230,4 +231,6 @@ def describe_exit(returncode: int) -> str:
 
 
 def ended(job: WorkerJob, status: ProcessStatus, error: str) -> WorkerCallback:
-    return WorkerCallback(process_id=job.process_id, status=status, error=error, task=job.task)
+    return WorkerCallback(
+        process_id=job.process_id, status=status, error=error, task=job.task, plan=job.plan, then=job.then
+    )

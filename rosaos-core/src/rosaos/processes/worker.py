@@ -37,17 +37,17 @@ from pydantic_ai.models import Model
 from pydantic_ai.toolsets import AbstractToolset
 from pydantic_ai.usage import UsageLimits
 
-from rosaos.intents.planning.plan import Plan, PlanError, decode_plan
+from rosaos.events.callback import ProcessStatus, WorkerCallback
 from rosaos.models.process_model import LocalPlanModel
 from rosaos.models.select import ModelError, build_model
 from rosaos.processes.confirming import ConfirmationDeclined, ConfirmingToolset, KernelAsker
 from rosaos.processes.final_call import FINAL_CALL_MODEL, FinalCallModel
-from rosaos.processes.jobs import GrantedDevice, ProcessStatus, WorkerCallback, WorkerJob
+from rosaos.processes.jobs import GrantedDevice, WorkerJob
 from rosaos.processes.keepalive import DeadlineToolset, DeviceLink, keepalives, owner_headers
 from rosaos.processes.lease_guard import LeaseGuardModel
 from rosaos.processes.outcome import judge
 from rosaos.processes.plan_runner import run_plan
-from rosaos.processes.prompts import process_system_prompt, tool_prefix
+from rosaos.processes.prompts import job_text, process_system_prompt, tool_prefix
 from rosaos.processes.protocol import Done, Progress, Ready, Rejected, encode
 from rosaos.processes.recording import RecordingToolset
 from rosaos.processes.tool_calls import ToolCallLog, observed
@@ -81,7 +81,7 @@ def process_model(job: WorkerJob) -> Model:
 
     spec = job.model
     llm = None if spec.model is None else build_model(spec)
-    return process_model_for(job.task, llm, spec.prefer_local, spec.language)
+    return process_model_for(job.plan, llm, spec.prefer_local, spec.language)
 
 
 async def run_job(job: WorkerJob) -> WorkerCallback:
@@ -126,6 +126,8 @@ async def run_job(job: WorkerJob) -> WorkerCallback:
         output=output,
         error=error,
         task=job.task,
+        plan=job.plan,
+        then=job.then,
         model_requests=requests,
         tool_calls=tool_calls,
         receipts=receipts,
@@ -257,8 +259,8 @@ async def _run_agent_linked(
                 RecordingToolset(guarded, device=device.name, receipts=recorded), device.name, calls
             )
             toolsets.append(toolset.prefixed(tool_prefix(device.name)) if prefixed else toolset)
-        if isinstance(model, LocalPlanModel) and (plan := plan_of(job.task)) is not None:
-            return await run_plan(plan, toolsets, model, model.language)
+        if isinstance(model, LocalPlanModel) and job.plan is not None:
+            return await run_plan(job.plan, toolsets, model, model.language)
         if not isinstance(model, LocalPlanModel):
             granted = [device.name for device in job.devices]
             model = FinalCallModel(
@@ -269,11 +271,11 @@ async def _run_agent_linked(
         listed = {device.name: await SESSIONS.tools(device) for device in job.devices}
         agent = Agent(
             model,
-            instructions=process_system_prompt(job.base_prompt, job.task, job.devices, listed),
+            instructions=process_system_prompt(job.base_prompt, job_text(job), job.devices, listed),
             toolsets=toolsets,
             name=f"process-{job.process_id}",
         )
-        result = await agent.run(job.task, usage_limits=UsageLimits(request_limit=job.request_limit))
+        result = await agent.run(job_text(job), usage_limits=UsageLimits(request_limit=job.request_limit))
     except BaseException:
         await SESSIONS.forget(job.devices)
         raise
@@ -286,14 +288,6 @@ def offered_tools(session: AbstractToolset[Any], tools: Sequence[str] | None) ->
         return session
     allowed = frozenset(tools)
     return session.filtered(lambda ctx, tool: tool.name in allowed)
-
-
-def plan_of(task: str) -> Plan | None:
-    """The offline plan in ``task``, if it has a valid one (an invalid one is the agent's to report)."""
-    try:
-        return decode_plan(task)
-    except PlanError:
-        return None
 
 
 async def _connect(device: GrantedDevice, images: int | None = None) -> MCPToolset[Any]:

@@ -4,7 +4,7 @@
 "at half past seven turn on the lamp", "set a timer for 20 minutes to turn off the fan",
 "what timers are set?", "cancel that timer", "cancel the light timer", "cancel timer 3".
 Numbers come in digits or words. The action is checked by the caller against the intent
-templates (:mod:`rosaos.intents.planning.timer_plan`): a timer is only set for a command the engine
+templates (:mod:`rosaos.models.timer_turn`): a timer is only set for a command the engine
 understands now. Clock times are local and resolved by the kernel (:mod:`rosaos.kernel.timer_text`).
 """
 
@@ -379,3 +379,18 @@ def _whole(words: list[str]) -> int | None:
     if number is None or number[1] != len(words) or number[0] != int(number[0]):
         return None
     return int(number[0])
+
+
+def duration_text(seconds: float) -> str:
+    """``45 seconds``, ``10 minutes``, ``2 h 5 min``, ``3 days 4 h``: coarse, for speech."""
+    seconds = round(abs(seconds))
+    if seconds < 60:
+        return f"{seconds} second{'s' if seconds != 1 else ''}"
+    minutes = round(seconds / 60)
+    if minutes < 60:
+        return f"{minutes} minute{'s' if minutes != 1 else ''}"
+    hours, minutes = divmod(minutes, 60)
+    if hours < 24:
+        return f"{hours} h {minutes} min" if minutes else f"{hours} hour{'s' if hours != 1 else ''}"
+    days, hours = divmod(hours, 24)
+    return f"{days} day{'s' if days != 1 else ''}" + (f" {hours} h" if hours else "")

@@ -1,8 +1,6 @@
-"""What to do about a sentence: the plan a task carries, follow-ups, notices, timer turns.
+"""What to do about a sentence: follow-ups, notices, timer turns (the plan is :mod:`rosaos.events.plan`).
 
-- ``plan``: the ``rosaos-plan`` block (:class:`Plan`), shared by the kernel's and the process's
-  offline models;
-- ``followups``: "X, then Y" and "X, and when you find someone, Y";
-- ``notice_plan``: the answer to a ``[Device notice]``;
+- ``follow_ups``: "X, then Y" and "X, and when you find someone, Y";
+- ``notice_plan``: the answer to a device notice;
 - ``timer_plan``: set, list and cancel timers; carry out a fired one.
 """

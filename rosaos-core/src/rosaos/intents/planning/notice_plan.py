@@ -1,4 +1,4 @@
-"""How the offline engine answers a ``[Device notice]``: tell the user when it matters, else nothing.
+"""How the offline engine answers a :class:`~rosaos.events.types.DeviceNotice`: tell the user when it matters, else nothing.
 
 A ``notify`` notice becomes one process on the user-interface device (the Reachy Mini) that says
 the driver's sentence with its ``speak`` tool. An ``info`` notice gets no reply at all: the web
@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from pydantic_ai.messages import ModelResponsePart, TextPart, ToolCallPart
 
-from rosaos.intents.planning.plan import Plan, PlanStep, encode_task
-from rosaos.kernel.notice_text import read_notice
+from rosaos.events.plan import Plan, PlanStep, launch_args
+from rosaos.events.types import DeviceNotice
 
 SPEAK_TOOL = "speak"
 SILENCE = " "
@@ -20,9 +20,8 @@ SILENCE = " "
 ask an empty response again."""
 
 
-def notice_response(body: str, speaker: str | None, launch: str | None) -> list[ModelResponsePart]:
-    """The kernel's response to a notice ``body``; ``speaker`` is the always-attached device."""
-    notice = read_notice(body)
+def notice_response(notice: DeviceNotice, speaker: str | None, launch: str | None) -> list[ModelResponsePart]:
+    """The kernel's response to ``notice``; ``speaker`` is the always-attached device."""
     if notice.importance != "notify":
         return [TextPart(SILENCE)]
     if speaker is None or launch is None:  # nothing to speak with: the updates stream still shows it
@@ -34,4 +33,4 @@ def notice_response(body: str, speaker: str | None, launch: str | None) -> list[
         quiet=True,
     )
     summary = f"Tell the user: {notice.message}"
-    return [ToolCallPart(launch, {"task": encode_task(summary, plan), "devices": [speaker]})]
+    return [ToolCallPart(launch, launch_args(summary, [speaker], plan))]

@@ -8,10 +8,10 @@ calls from every clause in order, with the replies the process and the kernel wi
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Literal
+from typing import Any, Literal
 
+from rosaos.events.plan import Plan, PlanStep, launch_args
 from rosaos.intents.grammar.phrases import join_options, phrase
-from rosaos.intents.planning.plan import Plan, PlanStep, encode_task
 from rosaos.intents.understanding.readings import Reading, ReadingContext, readout_reply
 
 MatchKind = Literal["plans", "clarify", "no_match"]
@@ -26,9 +26,9 @@ class ProcessPlan:
     plan: Plan
 
     @property
-    def task(self) -> str:
-        """The ``launch_process`` task: the summary and the ``rosaos-plan`` block."""
-        return encode_task(self.summary, self.plan)
+    def launch_args(self) -> dict[str, Any]:
+        """The ``launch_process`` arguments: the summary as the task, the devices, the plan."""
+        return launch_args(self.summary, self.devices, self.plan)
 
 
 @dataclass(frozen=True)

@@ -188,7 +188,7 @@ class IntentMatcher:
         return understand(
             text,
             focus,
-            self._literal,
+            self.literal,
             self.context.names,
             self._fuzzy,
             self.language,
@@ -225,7 +225,7 @@ class IntentMatcher:
                 return composed
         return build_result(self.context, text, [whole], focus is not None)
 
-    def _literal(self, text: str, focus: Focus = None) -> MatchResult:
+    def literal(self, text: str, focus: Focus = None) -> MatchResult:
         """``text`` read against the templates as said: whole, split at conjunctions, or elided."""
         template = self._template(text, focus)
         if template.is_exact:

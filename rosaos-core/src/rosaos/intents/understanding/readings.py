@@ -15,12 +15,12 @@ from typing import Any, TypeAlias
 
 from hassil import RecognizeResult
 
+from rosaos.events.plan import RESULT_PLACEHOLDER, PlanAnswer, PlanStep
 from rosaos.intents.grammar.ha_intents import NO_AREA, state_word
 from rosaos.intents.grammar.ha_mapping import HomeAssistantMapping
 from rosaos.intents.grammar.intents_file import IntentAction
 from rosaos.intents.grammar.phrases import join_options, phrase, says_all
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
-from rosaos.intents.planning.plan import RESULT_PLACEHOLDER, PlanAnswer, PlanStep
 
 Focus: TypeAlias = frozenset[str] | None
 """The devices a sentence may target: those the user picked when asked "which one?", or None

@@ -1,7 +1,7 @@
 """The card controls' route: a person presses a control on a device card, a process makes the call.
 
 ``POST /devices/{name}/controls/{index}`` turns the card's control (:mod:`rosaos.card_controls`)
-and the person's value into one tool call, and launches a process whose ``rosaos-plan`` is that
+and the person's value into one tool call, and launches a process whose plan is that
 call. So a control is no back door: it takes the device's lease (a device another process holds
 exclusively is refused with the holder named), it is refused while the emergency stop is latched,
 its receipt lands in the activity log (``rosaos log``, the page's Activity), and the kernel says
@@ -20,7 +20,7 @@ from fastapi import Path as FastPath
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from rosaos.card_controls import CardControl, ControlValueError
-from rosaos.intents.planning.plan import Plan, PlanStep, encode_task
+from rosaos.events.plan import Plan, PlanStep
 from rosaos.kernel.api.routes import Runtime, protected
 from rosaos.processes.manager import LaunchRefused
 
@@ -84,7 +84,7 @@ async def press_control(
         quiet=True,
     )
     try:
-        info = await runtime.launch(encode_task(summary, plan), [name])
+        info = await runtime.launch(summary, [name], plan)
     except LaunchRefused as refusal:
         raise HTTPException(409, str(refusal)) from None
     return ControlStarted(process_id=info.id, task=summary, tool=tool, arguments=arguments)

@@ -22,6 +22,7 @@ from fastapi.security import HTTPBearer
 from sse_starlette import EventSourceResponse, ServerSentEvent
 
 import rosaos
+from rosaos.events.types import Event, NewEvent, UserSaidEvent, UserText, UserTypedEvent
 from rosaos.kernel.activity import DEFAULT_LIMIT as DEFAULT_ACTIVITY
 from rosaos.kernel.activity import MAX_LIMIT as MAX_ACTIVITY
 from rosaos.kernel.activity import ActivityPage
@@ -45,7 +46,6 @@ from rosaos.kernel.api.schemas import (
     UnderstandRequest,
     UpdatesPage,
 )
-from rosaos.kernel.events import Event, NewEvent, UserSaidEvent, UserText, UserTypedEvent
 from rosaos.kernel.updates import UpdateStream
 
 log = logging.getLogger(__name__)

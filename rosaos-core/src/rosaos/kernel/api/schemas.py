@@ -14,11 +14,12 @@ from typing import Any, Literal, Protocol
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from rosaos.config import MapOrigin
+from rosaos.events.plan import Plan
+from rosaos.events.types import IdempotencyKey, Source
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.login_codes import LoginCodes
-from rosaos.kernel.api.task_words import task_words
 from rosaos.kernel.confirmations import ConfirmationDesk
-from rosaos.kernel.events import EventStore, IdempotencyKey, Source
+from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.intake import Intake
 from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import Update, UpdateStream
@@ -84,7 +85,7 @@ class KernelRuntime(Protocol):
     async def terminate(self, process_id: int) -> ProcessInfo:
         """Terminate a process and return it; raise ``KeyError`` for an unknown id."""
 
-    async def launch(self, task: str, devices: list[str]) -> ProcessInfo:
+    async def launch(self, task: str, devices: list[str], plan: Plan | None = None) -> ProcessInfo:
         """Launch a process outside the kernel agent (a card control); raise ``LaunchRefused``."""
 
     async def devices(self) -> Sequence[DeviceView]:
@@ -175,13 +176,13 @@ class ProcessView(BaseModel):
     progress: ProgressView | None = None
     """The latest progress of a long task (a robot's search), while it runs."""
     summary: str = ""
-    """The task in words, without the plan block or the kernel's notes (filled from ``task``)."""
+    """The task in words (filled from ``task``: the plan and the follow-up are fields of their own)."""
     then: str | None = None
     """What the kernel does when this process succeeds ("turn the lamp green"), if anything."""
 
     @model_validator(mode="after")
     def _words(self) -> ProcessView:
-        self.summary, self.then = task_words(self.task)
+        self.summary = self.summary or self.task.strip()
         return self
 
 

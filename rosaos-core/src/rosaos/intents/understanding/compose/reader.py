@@ -25,9 +25,9 @@ import re
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+from rosaos.events.plan import PlanStep
 from rosaos.intents.grammar.capabilities import Capabilities, Capability
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
-from rosaos.intents.planning.plan import PlanStep
 from rosaos.intents.understanding.compose.actions import Said, read_action, restate
 from rosaos.intents.understanding.compose.references import Reference, References
 from rosaos.intents.understanding.compose.speech import asks, clauses, negated, normalise, says_stop

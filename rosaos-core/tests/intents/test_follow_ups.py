@@ -5,14 +5,15 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
+from engine_turns import EngineKernel, callback
 from fastmcp import FastMCP
 from intents_support import home_world
 from pydantic_ai import Agent
 from pydantic_ai.mcp import MCPToolset
-from pydantic_ai.messages import ModelMessage
 
-from rosaos.intents.planning.followups import plan_follow_up, unmet_output
-from rosaos.intents.planning.plan import decode_plan
+from rosaos.events.plan import Plan
+from rosaos.events.types import Event
+from rosaos.intents.planning.follow_ups import plan_follow_up, unmet_output
 from rosaos.models.kernel_model import LocalIntentModel
 
 WHEN_FOUND = "Turn on the kitchen light, and when you find someone turn off the bedroom light"
@@ -23,31 +24,24 @@ def model() -> LocalIntentModel:
     return LocalIntentModel(home_world(), language="en")
 
 
-class Kernel:
-    """A kernel agent on the offline model whose launch_process records what it launches."""
+class Kernel(EngineKernel):
+    """The offline engine whose launch_process records what it launches (task, devices, plan)."""
 
     def __init__(self, model: LocalIntentModel) -> None:
         tools = FastMCP("kernel-tools")
-        self.launched: list[tuple[str, list[str]]] = []
-        self.history: list[ModelMessage] = []
+        super().__init__(model, tools)
+        self.launched: list[tuple[str, list[str], Plan | None]] = []
 
         @tools.tool
-        async def launch_process(task: str, devices: list[str]) -> dict[str, Any]:
+        async def launch_process(task: str, devices: list[str], plan: Plan | None = None) -> dict[str, Any]:
             """Start a process."""
-            self.launched.append((task, devices))
+            self.launched.append((task, devices, plan))
             return {"process_id": len(self.launched), "devices": devices, "state": "running"}
 
-        self.agent = Agent(model, toolsets=[MCPToolset(tools)])
-
-    async def say(self, event: str) -> str:
-        result = await self.agent.run(event, message_history=self.history)
-        self.history = result.all_messages()
-        return result.output
-
-
-def callback(process: int, task: str, status: str = "ok", output: str = "", error: str = "") -> str:
-    body = f"error: {error}" if error else f"output: {output or '(no output)'}"
-    return f"[Worker callback] worker={process} status={status} task={task!r}\n{body}"
+    def first_callback(self, **fields: Any) -> Event:
+        """The callback of the first process launched, carrying its task and plan."""
+        task, _, plan = self.launched[0]
+        return callback(1, task=task, plan=plan, **fields)
 
 
 def test_then_plans_one_process_that_carries_the_next(model: LocalIntentModel) -> None:
@@ -64,7 +58,7 @@ def test_then_plans_one_process_that_carries_the_next(model: LocalIntentModel) -
 
 
 def test_a_condition_about_finding_waits_for_found(model: LocalIntentModel) -> None:
-    result = plan_follow_up(WHEN_FOUND, model.match, literal=model.matcher._literal)
+    result = plan_follow_up(WHEN_FOUND, model.match, literal=model.matcher.literal)
     assert result is not None
     follow_up = result.processes[0].plan.then
     assert follow_up is not None
@@ -103,21 +97,19 @@ def test_the_condition_is_judged_on_the_newest_result_that_has_the_key(model: Lo
 
 async def test_the_kernel_launches_the_first_step_only(model: LocalIntentModel) -> None:
     kernel = Kernel(model)
-    reply = await kernel.say(f"[User said] {WHEN_FOUND}")
-    [(task, devices)] = kernel.launched
+    reply = await kernel.say(WHEN_FOUND)
+    [(_, devices, plan)] = kernel.launched
     assert devices == ["kitchen_light"]
     assert "When I find someone, I'll turn off the bedroom light." in reply
-    plan = decode_plan(task)
     assert plan is not None and plan.then is not None
 
 
 async def test_a_successful_callback_launches_the_follow_up_and_says_both(model: LocalIntentModel) -> None:
     kernel = Kernel(model)
-    await kernel.say(f"[User said] {WHEN_FOUND}")
-    first_task = kernel.launched[0][0]
-    reply = await kernel.say(callback(1, first_task, output="Found a person at (-2.5, 0.5)."))
-    assert [devices for _, devices in kernel.launched] == [["kitchen_light"], ["bedroom_light"]]
-    follow_up = decode_plan(kernel.launched[1][0])
+    await kernel.say(WHEN_FOUND)
+    reply = await kernel.say(kernel.first_callback(output="Found a person at (-2.5, 0.5)."))
+    assert [devices for _, devices, _ in kernel.launched] == [["kitchen_light"], ["bedroom_light"]]
+    follow_up = kernel.launched[1][2]
     assert follow_up is not None and [s.tool for s in follow_up.steps] == ["turn_off"]
     assert reply.startswith("Found a person at (-2.5, 0.5).")
     assert "turn off the bedroom light" in reply.lower()
@@ -125,10 +117,8 @@ async def test_a_successful_callback_launches_the_follow_up_and_says_both(model:
 
 async def test_a_failed_callback_launches_nothing_and_says_so(model: LocalIntentModel) -> None:
     kernel = Kernel(model)
-    await kernel.say(f"[User said] {WHEN_FOUND}")
-    reply = await kernel.say(
-        callback(1, kernel.launched[0][0], status="error", error="kitchen_light: offline")
-    )
+    await kernel.say(WHEN_FOUND)
+    reply = await kernel.say(kernel.first_callback(status="error", error="kitchen_light: offline"))
     assert len(kernel.launched) == 1
     assert "offline" in reply
     assert reply.endswith("offline. So I did not turn off the bedroom light.")
@@ -136,19 +126,17 @@ async def test_a_failed_callback_launches_nothing_and_says_so(model: LocalIntent
 
 async def test_an_unmet_condition_launches_nothing(model: LocalIntentModel) -> None:
     kernel = Kernel(model)
-    await kernel.say(f"[User said] {WHEN_FOUND}")
+    await kernel.say(WHEN_FOUND)
     unmet = "I did not find anyone, so I did not turn off the bedroom light."
-    reply = await kernel.say(callback(1, kernel.launched[0][0], output=unmet))
+    reply = await kernel.say(kernel.first_callback(output=unmet))
     assert len(kernel.launched) == 1
     assert reply == unmet
 
 
 async def test_a_terminated_first_step_cancels_the_follow_up(model: LocalIntentModel) -> None:
     kernel = Kernel(model)
-    await kernel.say("[User said] Turn on the kitchen light, then play some jazz")
-    reply = await kernel.say(
-        callback(1, kernel.launched[0][0], status="terminated", error="stopped by the user")
-    )
+    await kernel.say("Turn on the kitchen light, then play some jazz")
+    reply = await kernel.say(kernel.first_callback(status="terminated", error="stopped by the user"))
     assert len(kernel.launched) == 1
     assert reply.endswith("So I did not play some jazz.")
 
@@ -157,7 +145,7 @@ async def test_a_terminated_first_step_cancels_the_follow_up(model: LocalIntentM
     ("found", "expected"), [(True, "Done: search."), (False, "I did not find anyone, so I did not x.")]
 )
 async def test_the_process_reports_an_unmet_condition_as_its_output(found: bool, expected: str) -> None:
-    from rosaos.intents.planning.plan import FollowUp, FollowUpLaunch, Plan, PlanStep, encode_task
+    from rosaos.events.plan import FollowUp, FollowUpLaunch, PlanStep
     from rosaos.models.process_model import LocalPlanModel
 
     device = FastMCP("turtlebot")
@@ -175,6 +163,5 @@ async def test_the_process_reports_an_unmet_condition_as_its_output(found: bool,
         unmet="I did not find anyone, so I did not x.",
     )
     plan = Plan(steps=[PlanStep(device="turtlebot", tool="search")], reply="Done: search.", then=follow_up)
-    task = encode_task("Search.", plan)
-    agent = Agent(LocalPlanModel(), instructions=task, toolsets=[MCPToolset(device)])
-    assert (await agent.run(task)).output == expected
+    agent = Agent(LocalPlanModel(plan=plan), toolsets=[MCPToolset(device)])
+    assert (await agent.run("Search.")).output == expected

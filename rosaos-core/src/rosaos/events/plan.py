@@ -1,38 +1,26 @@
-"""The plan a kernel task carries: exact tool calls, for the offline process engine and for people.
+"""The plan a process carries: exact tool calls, for the offline process engine and for people.
 
-A task the local-intent engine launches is a readable sentence followed by a fenced block::
-
-    Turn on the kitchen light.
-
-    Planned device calls (rosaOS offline engine; an LLM may follow them too):
-    ```rosaos-plan
-    {"version": 1, "steps": [{"device": "kitchen_light", "tool": "turn_on", "args": {}}],
-     "reply": "Done: turn on the kitchen light.", ...}
-    ```
-
-The process agent's system prompt contains the task, so :class:`~rosaos.models.process_model.
-LocalPlanModel` finds the block there and runs the steps in order; an LLM reading the same task
-sees plain instructions plus the exact calls.
+A process the local-intent engine launches has a readable task ("Turn on the kitchen light.")
+and a typed :class:`Plan` beside it: ``launch_process(task, devices, plan=...)`` puts it on the
+:class:`~rosaos.processes.jobs.WorkerJob`, the worker runs its steps without a model, and the
+:class:`~rosaos.processes.jobs.WorkerCallback` brings it back to the kernel, where the offline
+engine reads its reply, failure sentence and follow-up as fields. The plan is never written into
+text to be parsed again; :func:`plan_text` renders it only for an LLM that runs the process.
 """
 
 from __future__ import annotations
 
 import json
 import re
+from collections.abc import Sequence
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field
 
-PLAN_FENCE = "rosaos-plan"
-PLAN_INTRO = "Planned device calls (rosaOS offline engine; an LLM may follow them too):"
-_BLOCK = re.compile(r"```" + PLAN_FENCE + r"[ \t]*\n(?P<body>.*?)\n?```", re.DOTALL)
+PLAN_INTRO = "Planned device calls (rosaOS offline engine; you may follow them too):"
 RESULT_PLACEHOLDER = "{result}"
 _STATE_FIELD = re.compile(r"\{(\w+)(?::([^{}]*))?\}")
 ERROR_PLACEHOLDER = "{error}"
-
-
-class PlanError(ValueError):
-    """A ``rosaos-plan`` block that is not valid JSON or not a valid :class:`Plan`."""
 
 
 class PlanStep(BaseModel):
@@ -87,7 +75,7 @@ class Plan(BaseModel):
 
 
 class FollowUpLaunch(BaseModel):
-    """One process of a follow-up: launched as ``encode_task(summary, plan)`` on ``devices``."""
+    """One process of a follow-up: launched with task ``summary`` and ``plan`` on ``devices``."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -97,7 +85,7 @@ class FollowUpLaunch(BaseModel):
 
 
 class FollowUp(BaseModel):
-    """The next step of a plan, launched by the kernel on the callback (see :mod:`rosaos.intents.planning.followups`)."""
+    """The next step of a plan, launched by the kernel on the callback (see :mod:`rosaos.intents.planning.follow_ups`)."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -114,32 +102,24 @@ class FollowUp(BaseModel):
 Plan.model_rebuild()
 
 
-def encode_task(summary: str, plan: Plan) -> str:
-    """The ``launch_process`` task: the readable ``summary``, then the plan block."""
+def launch_args(summary: str, devices: Sequence[str], plan: Plan) -> dict[str, Any]:
+    """The offline engine's ``launch_process`` arguments: the task in words, the devices, the plan.
+
+    The plan travels as JSON data in the tool call (the kernel's history may go to an LLM later),
+    and the tool validates it back into a :class:`Plan`: a typed argument, not text in the task."""
+    return {
+        "task": summary.strip(),
+        "devices": list(devices),
+        "plan": plan.model_dump(mode="json", exclude_none=True),
+    }
+
+
+def plan_text(plan: Plan) -> str:
+    """The plan as an LLM running the process reads it: an intro line and the plan's JSON.
+
+    Written for a model to read, never parsed back: the worker has the plan itself."""
     body = json.dumps(plan.model_dump(mode="json", exclude_none=True), ensure_ascii=False)
-    return f"{summary.strip()}\n\n{PLAN_INTRO}\n```{PLAN_FENCE}\n{body}\n```"
-
-
-def has_plan(text: str) -> bool:
-    """Whether ``text`` contains a ``rosaos-plan`` block (valid or not)."""
-    return _BLOCK.search(text) is not None
-
-
-def decode_plan(text: str) -> Plan | None:
-    """The plan in ``text``, or None when there is no block. Raises :class:`PlanError` if it is broken."""
-    match = _BLOCK.search(text)
-    if match is None:
-        return None
-    try:
-        return Plan.model_validate(json.loads(match.group("body")))
-    except (json.JSONDecodeError, ValidationError) as error:
-        raise PlanError(f"the {PLAN_FENCE} block is not a valid plan: {error}") from None
-
-
-def task_summary(text: str) -> str:
-    """The readable part of a task: everything before the plan block and its intro line."""
-    head = text.split(f"```{PLAN_FENCE}", 1)[0]
-    return head.replace(PLAN_INTRO, "").strip()
+    return f"{PLAN_INTRO}\n{body}"
 
 
 def result_data(content: Any) -> Any:

@@ -1,9 +1,9 @@
 """Follow-ups in the offline engine: "X, then Y", "X, and when you find someone, Y", "X; if you see …, Y".
 
-One sentence becomes one process for X whose plan carries Y as :class:`~rosaos.intents.planning.plan.FollowUp`.
+One sentence becomes one process for X whose plan carries Y as :class:`~rosaos.events.plan.FollowUp`.
 Nothing holds Y's devices while X runs: the kernel launches Y when X's callback arrives, and only
-when X succeeded. The follow-up travels in X's task, which is in X's ``worker_callback`` event,
-so it survives a kernel restart (the event store has it).
+when X succeeded. The follow-up travels in X's plan, a field of X's job and of its
+``worker_callback`` event, so it survives a kernel restart (the event store has it).
 
 - Planning (:func:`plan_follow_up`): split the sentence at "then" or at a condition ("when",
   "once", "as soon as", "if", "after"); X and Y must each match exactly, X as one process.
@@ -25,17 +25,9 @@ from typing import Any
 
 from pydantic_ai.messages import ModelResponsePart, TextPart, ToolCallPart
 
-from rosaos.intents.planning.plan import (
-    FollowUp,
-    FollowUpLaunch,
-    Plan,
-    PlanError,
-    decode_plan,
-    encode_task,
-    result_data,
-)
+from rosaos.events.callback import WorkerCallback
+from rosaos.events.plan import FollowUp, FollowUpLaunch, Plan, launch_args, result_data
 from rosaos.intents.understanding.match_result import MatchResult, ProcessPlan
-from rosaos.models.conversation import WorkerCallbackEvent
 
 # Where a follow-up starts: "…, then Y", "… and then Y"; "…, and when/once/if … Y".
 _THEN = re.compile(r"(?:\s*[,;]\s*|\s+)(?:and\s+)?(?:then|after that|afterwards)\s*,?\s+", re.IGNORECASE)
@@ -141,16 +133,13 @@ def unmet_output(plan: Plan, results: Sequence[Any]) -> str | None:
 
 
 def callback_response(
-    callback: WorkerCallbackEvent, launch: str | None, failure_reply: str
+    callback: WorkerCallback, launch: str | None, failure_reply: str
 ) -> list[ModelResponsePart] | None:
     """The kernel's response to the callback of a process with a follow-up; None when it has none.
 
     ``failure_reply`` is what the kernel would say about a failed callback without a follow-up.
     """
-    try:
-        plan = decode_plan(callback.task or "")
-    except PlanError:
-        return None
+    plan = callback.plan
     if plan is None or plan.then is None:
         return None
     follow_up = plan.then
@@ -164,7 +153,7 @@ def callback_response(
     if launch is None:
         return [TextPart(f"{output} I could not {follow_up.summary}: no launch_process tool.")]
     return [
-        ToolCallPart(launch, {"task": encode_task(item.summary, item.plan), "devices": item.devices})
+        ToolCallPart(launch, launch_args(item.summary, item.devices, item.plan))
         for item in follow_up.launches
     ]
 

@@ -7,7 +7,7 @@
   now (a timer is never set for something it could not do when it fires);
 - those tools' results with one sentence ("Timer 2 set: turn off the kitchen light at 22:10
   (in 10 minutes).");
-- a ``[Timer fired]`` event with the action's ``launch_process`` calls, as if just asked, and
+- a :class:`~rosaos.events.types.TimerFired` event with the action's ``launch_process`` calls, as if just asked, and
   their results with the acknowledgement, saying which timer it was and how late.
 
 Anything else is left to the model (None).
@@ -15,28 +15,29 @@ Anything else is left to the model (None).
 
 from __future__ import annotations
 
-import re
 from collections.abc import Callable, Sequence
 from datetime import datetime
 from typing import Any
 
-from pydantic_ai.messages import ModelMessage, ModelRequest, ModelResponsePart, TextPart, ToolCallPart
+from pydantic_ai.messages import ModelMessage, ModelResponsePart, TextPart, ToolCallPart
 
-from rosaos.intents.grammar.timer_phrases import CancelTimer, ListTimers, SetTimer, read_timer_request
+from rosaos.events.types import TimerFired
+from rosaos.intents.grammar.timer_phrases import (
+    CancelTimer,
+    ListTimers,
+    SetTimer,
+    duration_text,
+    read_timer_request,
+)
 from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.models.conversation import (
     ToolOutcome,
     content_text,
     current_turn,
-    last_request,
-    parse_event,
+    said,
     tool_outcomes,
-    user_text,
+    turn_event,
 )
-
-TIMER_TAG = "Timer fired"
-USER_TAGS = frozenset({"User said", "User typed"})
-_FIRED_HEAD = re.compile(r"timer=(?P<id>\d+)(?:.*?\(late by (?P<late>[^:)]+))?")
 
 Match = Callable[[str], MatchResult]
 Command = Callable[[str, Sequence[str]], list[ModelResponsePart]]
@@ -52,12 +53,10 @@ def timer_turn(
     now: datetime | None = None,
 ) -> list[ModelResponsePart] | None:
     """The response parts when this turn is about timers, else None (see the module docstring)."""
-    turn = current_turn(messages)
-    first = next((message for message in turn if isinstance(message, ModelRequest)), last_request(messages))
-    event = parse_event(user_text(first) or "")
-    outcomes = tool_outcomes(turn)
-    if event.tag == TIMER_TAG:
-        action, head = _fired(event.body)
+    event = turn_event(messages)
+    outcomes = tool_outcomes(current_turn(messages))
+    if event is not None and isinstance(event.payload, TimerFired):
+        action, head = event.payload.action, _fired_name(event.payload)
         if outcomes:
             return [TextPart(f"{head}: {acknowledge(outcomes)}")]
         parts = command(action, tools)
@@ -69,9 +68,10 @@ def timer_turn(
         timer_outcomes = [outcome for outcome in outcomes if outcome.call.tool_name.endswith("_timer")
                           or outcome.call.tool_name.endswith("list_timers")]  # fmt: skip
         return [TextPart(_reply(timer_outcomes))] if timer_outcomes else None
-    if event.tag not in USER_TAGS and event.tag is not None:
+    text = said(event)
+    if text is None:
         return None
-    request = read_timer_request(event.body, (now or datetime.now()).astimezone())
+    request = read_timer_request(text, (now or datetime.now()).astimezone())
     if request is None:
         return None
     if isinstance(request, ListTimers):
@@ -79,7 +79,7 @@ def timer_turn(
     if isinstance(request, CancelTimer):
         args = {"timer_id": request.timer_id, "matching": request.matching, "cancel_all": request.cancel_all}
         return _call(tools, "cancel_timer", {key: value for key, value in args.items() if value})
-    return _set(request, event.body, tools, match)
+    return _set(request, text, tools, match)
 
 
 def is_timer_sentence(text: str, match: Match) -> bool:
@@ -119,15 +119,12 @@ def _call(tools: Sequence[str], name: str, args: dict[str, Any]) -> list[ModelRe
     return [ToolCallPart(tool, args)]
 
 
-def _fired(body: str) -> tuple[str, str]:
-    """The action of a ``[Timer fired]`` body, and how to name the timer ("Timer 3 (2 h late)")."""
-    head, _, rest = body.partition("\n")
-    action = rest.strip().removeprefix("action:").strip()
-    found = _FIRED_HEAD.search(head)
-    name = f"Timer {found['id']}" if found else "A timer"
-    if found and found["late"]:
-        name += f" ({found['late'].strip()} late: the kernel was not running when it was due)"
-    return action, name
+def _fired_name(fired: TimerFired) -> str:
+    """How to name a fired timer to the user: "Timer 3", or "Timer 3 (2 h late: …)"."""
+    name = f"Timer {fired.timer_id}"
+    if fired.late:
+        name += f" ({duration_text(fired.late_seconds)} late: the kernel was not running when it was due)"
+    return name
 
 
 def _reply(outcomes: list[ToolOutcome]) -> str:

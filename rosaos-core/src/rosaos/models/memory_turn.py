@@ -12,11 +12,12 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from pydantic_ai.messages import ModelMessage, ModelRequest, ModelResponsePart, TextPart, ToolCallPart
+from pydantic_ai.messages import ModelMessage, ModelResponsePart, TextPart, ToolCallPart
 
-from rosaos.intents.planning.plan import result_data
+from rosaos.events.plan import result_data
 from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.memory.memory_phrases import (
+    MEMORY_TOOL_NAMES,
     Forget,
     ForgetPlace,
     ForgetSightings,
@@ -31,19 +32,16 @@ from rosaos.memory.memory_phrases import (
     read_memory_request,
     resolve_aliases,
 )
-from rosaos.memory.memory_tools import MEMORY_TOOL_NAMES
 from rosaos.memory.store import MemoryStore
 from rosaos.models.conversation import (
     ToolOutcome,
     content_text,
     current_turn,
-    last_request,
-    parse_event,
+    said,
     tool_outcomes,
-    user_text,
+    turn_event,
 )
 
-USER_TAGS = frozenset({"User said", "User typed"})
 Match = Callable[[str], MatchResult]
 
 
@@ -70,14 +68,13 @@ def memory_turn(
     if outcomes:
         mine = [o for o in outcomes if _base(o.call.tool_name) in MEMORY_TOOL_NAMES]
         return [TextPart(" ".join(_reply(o) for o in mine))] if mine else None
-    first = next((message for message in turn if isinstance(message, ModelRequest)), last_request(messages))
-    event = parse_event(user_text(first) or "")
-    if event.tag not in USER_TAGS and event.tag is not None:
+    text = said(turn_event(messages))
+    if text is None:
         return None
-    request = memory_request(event.body, store, match)
+    request = memory_request(text, store, match)
     if request is None:
         return None
-    return _calls(request, event.body, tools, store)
+    return _calls(request, text, tools, store)
 
 
 def _calls(
