@@ -109,12 +109,29 @@ async def _run(
     return output, state
 
 
+_MATCHERS: dict[tuple[Any, ...], IntentMatcher] = {}
+
+
+def _matcher(devices: dict[str, DeviceConfig]) -> IntentMatcher:
+    """The matcher of a world, built once per vocabulary (building compiles grammars: seconds).
+
+    A matcher reads names, descriptions, aliases, areas and the drivers' intents, never the sim
+    state a task sets up, and it keeps no state between sentences (only a memo of its readings),
+    so tasks of one world share it as the kernel shares one across commands.
+    """
+    sources = sources_from_config(devices, REGISTRY)
+    key = tuple((s.name, s.driver, s.description, s.aliases, s.area) for s in sources)
+    if key not in _MATCHERS:
+        _MATCHERS[key] = IntentMatcher(sources)
+    return _MATCHERS[key]
+
+
 def _match(world: TaskFile, task: BenchTask) -> Any:
     """Skip an uncovered task; otherwise match its sentence in its world and check the plan's shape."""
     if (reason := _covered(world, task, REGISTRY)) is not None:
         pytest.skip(reason)
     devices, initial = _devices(world, task)
-    result = IntentMatcher(sources_from_config(devices, REGISTRY)).match(task.said)
+    result = _matcher(devices).match(task.said)
     planned = {step.tool for process in result.processes for step in process.plan.steps}
     if not task.expect and result.is_exact:
         assert planned <= READ_ONLY_TOOLS, f"{task.said!r} must change nothing, but plans {sorted(planned)}"
