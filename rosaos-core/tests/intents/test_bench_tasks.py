@@ -52,12 +52,14 @@ TASK_FILE_ISSUES: dict[str, str] = {}
 REGISTRY = load_drivers()
 
 
-def _tasks() -> list[Any]:
+def _tasks(conversations: tuple[pytest.MarkDecorator, ...] = ()) -> list[Any]:
+    """Every task as a test parameter; ``conversations`` marks the ones of several sentences."""
     params = []
     for path in [*sorted(BENCH_TASKS.glob("*.yaml")), *sorted(OWN_TASKS.glob("*.yaml"))]:
         task_file = load_task_file(path)
         for task in task_file.tasks:
-            params.append(pytest.param(task_file, task, id=task.id))
+            marks = conversations if len(task.utterances) > 1 else ()
+            params.append(pytest.param(task_file, task, id=task.id, marks=marks))
     return params
 
 
@@ -166,7 +168,8 @@ def test_bench_sentence_plans_the_expected_devices(world: TaskFile, task: BenchT
     _match(world, task)
 
 
-@pytest.mark.parametrize(("world", "task"), _tasks())
+# A conversation runs on a real kernel with worker processes: seconds each, so the slow tier.
+@pytest.mark.parametrize(("world", "task"), _tasks(conversations=(pytest.mark.slow,)))
 async def test_bench_task_runs_on_simulators(world: TaskFile, task: BenchTask, tmp_path: Path) -> None:
     if task.id in TASK_FILE_ISSUES:
         pytest.xfail(TASK_FILE_ISSUES[task.id])

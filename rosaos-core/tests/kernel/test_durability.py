@@ -7,7 +7,11 @@ import signal
 import sys
 from pathlib import Path
 
+import pytest
+
 from rosaos.kernel.events import EventStore, UserText, UserTypedEvent
+
+pytestmark = pytest.mark.slow
 
 APPENDER = Path(__file__).parent / "append_until_killed.py"
 ACKNOWLEDGED_BEFORE_KILL = 150
