@@ -8,7 +8,8 @@ anyone remembering to mark it:
 - ``browser``: every test in a module that drives headless Chromium through Playwright.
 - ``slow``: marked by hand, in the test module (``pytestmark``) or on the test: tests that start OS
   processes (device hosts, worker pools and fork servers, the CLI, a kernel restarted), a physics
-  simulator (the Reachy daemon), or build wheels, venvs, the copier template.
+  simulator (the Reachy daemon), a speech model over many recordings, or build wheels, venvs,
+  the copier template.
 
 ``./scripts/test --quick`` runs ``-m "not e2e and not browser and not slow"``; CI runs everything.
 """
