@@ -1,4 +1,5 @@
-"""The time that timers, health checks and the device state cache wait on, passed in.
+"""The time a waiting loop waits on, passed in (the device state cache today; the timer clock and
+the health checks are the next candidates).
 
 Production code uses :data:`LOOP_CLOCK`: the event loop's monotonic time and ``asyncio.sleep``,
 exactly what the code called before the clock was injectable. Tests pass a
