@@ -52,13 +52,19 @@ TASK_FILE_ISSUES: dict[str, str] = {}
 REGISTRY = load_drivers()
 
 
-def _tasks(conversations: tuple[pytest.MarkDecorator, ...] = ()) -> list[Any]:
-    """Every task as a test parameter; ``conversations`` marks the ones of several sentences."""
+ROBOT_DRIVERS = {"ros", "reachy"}
+"""Drivers whose simulators are physics run in real time (a drive, the Reachy daemon)."""
+
+
+def _tasks(slow: tuple[pytest.MarkDecorator, ...] = ()) -> list[Any]:
+    """Every task as a test parameter; ``slow`` marks the conversations (they need a kernel) and
+    the tasks that move a robot (its simulator runs in real time): seconds each."""
     params = []
     for path in [*sorted(BENCH_TASKS.glob("*.yaml")), *sorted(OWN_TASKS.glob("*.yaml"))]:
         task_file = load_task_file(path)
         for task in task_file.tasks:
-            marks = conversations if len(task.utterances) > 1 else ()
+            robots = {task_file.world[device].driver for device in task.expect} & ROBOT_DRIVERS
+            marks = slow if len(task.utterances) > 1 or robots else ()
             params.append(pytest.param(task_file, task, id=task.id, marks=marks))
     return params
 
@@ -168,8 +174,7 @@ def test_bench_sentence_plans_the_expected_devices(world: TaskFile, task: BenchT
     _match(world, task)
 
 
-# A conversation runs on a real kernel with worker processes: seconds each, so the slow tier.
-@pytest.mark.parametrize(("world", "task"), _tasks(conversations=(pytest.mark.slow,)))
+@pytest.mark.parametrize(("world", "task"), _tasks(slow=(pytest.mark.slow,)))
 async def test_bench_task_runs_on_simulators(world: TaskFile, task: BenchTask, tmp_path: Path) -> None:
     if task.id in TASK_FILE_ISSUES:
         pytest.xfail(TASK_FILE_ISSUES[task.id])
