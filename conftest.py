@@ -6,7 +6,10 @@ anyone remembering to mark it:
 - ``e2e``: every test in the top-level ``tests/`` folder. They start ``rosaos up`` or the CLI as
   subprocesses and cross packages; they are the slowest third of the suite.
 - ``browser``: every test in a module that drives headless Chromium through Playwright.
-- ``slow``: marked by hand (building wheels, venvs, the copier template).
+- ``slow``: marked by hand, in the test module (``pytestmark``) or on the test: tests that start OS
+  processes (device hosts, worker pools and fork servers, the CLI, a kernel restarted), a physics
+  simulator (the Reachy daemon), a speech model over many recordings, or build wheels, venvs,
+  the copier template.
 
 ``./scripts/test --quick`` runs ``-m "not e2e and not browser and not slow"``; CI runs everything.
 """

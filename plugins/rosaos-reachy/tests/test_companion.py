@@ -18,7 +18,7 @@ from reachy_support import BENCH_STATE, FACE_PHOTO, Robot, running_robot, sim_co
 
 from rosaos_reachy.companion import STILL, companion_mode, pattern
 
-pytestmark = pytest.mark.asyncio(loop_scope="module")
+pytestmark = [pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]
 
 LONG_SENTENCE = (
     "Here is a long answer about the weather this week, with the temperatures for every day, "

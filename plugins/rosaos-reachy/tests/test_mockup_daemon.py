@@ -17,6 +17,8 @@ from rosaos.drivers import DeviceError
 from rosaos_reachy import daemon as daemon_module
 from rosaos_reachy.daemon import SimDaemon, daemon_command
 
+pytestmark = pytest.mark.slow
+
 
 def alive(pid: int) -> bool:
     try:

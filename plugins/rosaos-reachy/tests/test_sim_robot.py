@@ -17,7 +17,7 @@ import pytest
 import pytest_asyncio
 from reachy_support import BENCH_STATE, FACE_PHOTO, Robot, running_robot, sim_context
 
-pytestmark = pytest.mark.asyncio(loop_scope="module")
+pytestmark = [pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]
 
 
 @pytest_asyncio.fixture(scope="module", loop_scope="module")

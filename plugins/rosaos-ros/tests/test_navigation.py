@@ -10,6 +10,8 @@ import pytest
 
 from rosaos_ros.sim.navigation import Obstacles
 
+pytestmark = pytest.mark.slow
+
 
 async def test_go_to_on_the_map_arrives_around_the_red_pillar(open_robot: Any) -> None:
     async with open_robot() as robot:

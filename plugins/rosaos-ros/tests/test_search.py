@@ -9,6 +9,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 from rosaos.devices.serve import serve_http
 from rosaos.drivers import DeviceContext
 from rosaos_ros.plugin import sim_backend
@@ -19,6 +21,7 @@ from rosaos_ros.settings import RosSettings
 DEMO_PERSON = {"x": -2.5, "y": 0.5}
 
 
+@pytest.mark.slow  # the simulated robot drives the whole search in real time
 async def test_search_finds_the_person_behind_the_robot_and_says_where(open_robot: Any) -> None:
     messages: list[str] = []
 
@@ -37,6 +40,7 @@ async def test_search_finds_the_person_behind_the_robot_and_says_where(open_robo
     assert state["people_seen"][-1]["x"] == result["x"]
 
 
+@pytest.mark.slow  # the simulated robot drives the whole search in real time
 async def test_search_with_nobody_ends_in_time_within_its_distance_and_the_limits(open_robot: Any) -> None:
     async with open_robot(sim={"docked": False, "people": []}) as robot:
         started = time.monotonic()
@@ -109,6 +113,7 @@ with httpx.Client(timeout=60) as http:
 """
 
 
+@pytest.mark.slow  # a search in a worker subprocess, killed mid-way
 async def test_a_search_stops_when_its_caller_is_killed(tmp_path: Path, eventually: Any) -> None:
     """terminate_process kills the worker: the search must not go on driving for its remaining minutes."""
     ctx = DeviceContext(

@@ -24,6 +24,8 @@ from rosaos.bench.report import print_report
 from rosaos.bench.results import BenchResult, Summary
 from rosaos.cli import app, bench_command
 
+pytestmark = pytest.mark.slow
+
 DESK = """\
 name: desk
 world:

@@ -24,7 +24,7 @@ from rosaos.auth import token_path
 from rosaos.cli.device_commands import check_device, list_devices, serve_device_command
 from rosaos.plugins import load_drivers
 
-pytestmark = requires_tapo
+pytestmark = [pytest.mark.slow, requires_tapo]
 
 KITCHEN = """
 [devices.kitchen_light]

@@ -203,6 +203,7 @@ async def test_check_answers_once_rosaos_up_has_started_it(
     assert slow_sim_driver.STARTED == ["lamp"]  # only the copy "rosaos up" serves
 
 
+@pytest.mark.slow  # starts device hosts (or the CLI on a terminal) as OS processes
 async def test_list_while_rosaos_up_starts_waits_for_its_hosts_instead_of_starting_copies(
     tmp_path: Path,
     data_dir: Path,
@@ -273,6 +274,7 @@ def run_on_a_terminal(*args: str, env: dict[str, str], within: float = 60) -> st
     return output.decode(errors="replace")
 
 
+@pytest.mark.slow  # starts device hosts (or the CLI on a terminal) as OS processes
 def test_on_a_terminal_the_list_shows_progress_while_devices_start(
     tmp_path: Path, data_dir: Path, slowsim: Path
 ) -> None:

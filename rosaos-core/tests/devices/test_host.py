@@ -18,6 +18,8 @@ from rosaos.devices.client import DeviceClient
 from rosaos.devices.host import HostJob
 from rosaos.drivers import DeviceError
 
+pytestmark = pytest.mark.slow
+
 
 def tapo_job(data_dir: Path, **changes: Any) -> HostJob:
     load_or_create_token(data_dir)

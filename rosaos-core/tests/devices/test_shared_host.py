@@ -20,7 +20,7 @@ from rosaos.plugins import load_drivers
 TOKEN = "shared-host-test-token"
 FAST: dict[str, Any] = {"health_interval": 0.2, "health_timeout": 2.0, "backoff_base": 0.1, "stop_grace": 2.0}
 
-pytestmark = [pytest.mark.asyncio, requires_tapo]
+pytestmark = [pytest.mark.slow, pytest.mark.asyncio, requires_tapo]
 
 
 def pids(data_dir: Path) -> dict[str, int | None]:

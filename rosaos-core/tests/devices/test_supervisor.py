@@ -28,7 +28,7 @@ from rosaos.devices.world import World
 from rosaos.drivers import DeviceError
 
 # One event loop for the module, so one supervisor can serve every test that only looks.
-pytestmark = pytest.mark.asyncio(loop_scope="module")
+pytestmark = [pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]
 
 TOKEN = "supervisor-test-token"
 FAST: dict[str, Any] = {"health_interval": 0.2, "health_timeout": 2.0, "backoff_base": 0.1, "stop_grace": 2.0}

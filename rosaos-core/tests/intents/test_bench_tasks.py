@@ -53,12 +53,20 @@ TASK_FILE_ISSUES: dict[str, str] = {}
 REGISTRY = load_drivers()
 
 
-def _tasks() -> list[Any]:
+ROBOT_DRIVERS = {"ros", "reachy"}
+"""Drivers whose simulators are physics run in real time (a drive, the Reachy daemon)."""
+
+
+def _tasks(slow: tuple[pytest.MarkDecorator, ...] = ()) -> list[Any]:
+    """Every task as a test parameter; ``slow`` marks the conversations (they need a kernel) and
+    the tasks that move a robot (its simulator runs in real time): seconds each."""
     params = []
     for path in [*sorted(BENCH_TASKS.glob("*.yaml")), *sorted(OWN_TASKS.glob("*.yaml"))]:
         task_file = load_task_file(path)
         for task in task_file.tasks:
-            params.append(pytest.param(task_file, task, id=task.id))
+            robots = {task_file.world[device].driver for device in task.expect} & ROBOT_DRIVERS
+            marks = slow if len(task.utterances) > 1 or robots else ()
+            params.append(pytest.param(task_file, task, id=task.id, marks=marks))
     return params
 
 
@@ -111,12 +119,29 @@ async def _run(
     return output, state
 
 
+_MATCHERS: dict[tuple[Any, ...], IntentMatcher] = {}
+
+
+def _matcher(devices: dict[str, DeviceConfig]) -> IntentMatcher:
+    """The matcher of a world, built once per vocabulary (building compiles grammars: seconds).
+
+    A matcher reads names, descriptions, aliases, areas and the drivers' intents, never the sim
+    state a task sets up, and it keeps no state between sentences (only a memo of its readings),
+    so tasks of one world share it as the kernel shares one across commands.
+    """
+    sources = sources_from_config(devices, REGISTRY)
+    key = tuple((s.name, s.driver, s.description, s.aliases, s.area) for s in sources)
+    if key not in _MATCHERS:
+        _MATCHERS[key] = IntentMatcher(sources)
+    return _MATCHERS[key]
+
+
 def _match(world: TaskFile, task: BenchTask) -> Any:
     """Skip an uncovered task; otherwise match its sentence in its world and check the plan's shape."""
     if (reason := _covered(world, task, REGISTRY)) is not None:
         pytest.skip(reason)
     devices, initial = _devices(world, task)
-    result = IntentMatcher(sources_from_config(devices, REGISTRY)).match(task.said)
+    result = _matcher(devices).match(task.said)
     planned = {step.tool for process in result.processes for step in process.plan.steps}
     if not task.expect and result.is_exact:
         assert planned <= READ_ONLY_TOOLS, f"{task.said!r} must change nothing, but plans {sorted(planned)}"
@@ -151,7 +176,7 @@ def test_bench_sentence_plans_the_expected_devices(world: TaskFile, task: BenchT
     _match(world, task)
 
 
-@pytest.mark.parametrize(("world", "task"), _tasks())
+@pytest.mark.parametrize(("world", "task"), _tasks(slow=(pytest.mark.slow,)))
 async def test_bench_task_runs_on_simulators(world: TaskFile, task: BenchTask, tmp_path: Path) -> None:
     if task.id in TASK_FILE_ISSUES:
         pytest.xfail(TASK_FILE_ISSUES[task.id])

@@ -7,8 +7,12 @@ import signal
 import sys
 from pathlib import Path
 
+import pytest
+
 from rosaos.events.types import UserText, UserTypedEvent
 from rosaos.kernel.event_store import EventStore
+
+pytestmark = pytest.mark.slow
 
 APPENDER = Path(__file__).parent / "append_until_killed.py"
 ACKNOWLEDGED_BEFORE_KILL = 150

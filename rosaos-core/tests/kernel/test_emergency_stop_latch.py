@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 import httpx
+import pytest
 from kernel_support import eventually
 from pydantic_ai.messages import (
     ModelMessage,
@@ -32,6 +33,8 @@ from rosaos.config import load_config
 from rosaos.devices.world import World
 from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.runtime import EMERGENCY_STOP_KEY, Kernel, events_path
+
+pytestmark = pytest.mark.slow
 
 
 def launching_kernel() -> FunctionModel:

@@ -34,7 +34,7 @@ from rosaos.processes.forking import ForkServer, preload_modules
 from rosaos.processes.manager import ProcessManager
 from rosaos.processes.pool import WorkerPool
 
-pytestmark = pytest.mark.asyncio(loop_scope="module")
+pytestmark = [pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]
 
 
 @pytest_asyncio.fixture(scope="module", loop_scope="module")

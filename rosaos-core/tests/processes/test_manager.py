@@ -29,7 +29,7 @@ from rosaos.events.callback import WorkerCallback
 from rosaos.processes.manager import EmergencyStop, LaunchRefused, ProcessManager
 from rosaos.processes.pool import WorkerPool
 
-pytestmark = pytest.mark.asyncio(loop_scope="module")
+pytestmark = [pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]
 
 FIRST_ID = 100
 

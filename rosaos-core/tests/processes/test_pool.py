@@ -24,7 +24,7 @@ from processes_support import (
 
 from rosaos.processes.pool import PoolError, WorkerPool
 
-pytestmark = pytest.mark.asyncio(loop_scope="module")
+pytestmark = [pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]
 
 POOL_SIZE = 1
 

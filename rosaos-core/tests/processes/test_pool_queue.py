@@ -11,7 +11,7 @@ from processes_support import Endings, KernelStandIn, LoopbackDevice, make_job, 
 from rosaos.processes.capacity import LEAST, default_max_workers
 from rosaos.processes.pool import WorkerPool
 
-pytestmark = pytest.mark.asyncio(loop_scope="module")
+pytestmark = [pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]
 
 
 @pytest_asyncio.fixture(loop_scope="module")

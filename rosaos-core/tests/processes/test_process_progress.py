@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 
+import pytest
 from fastmcp import Context, FastMCP
 from processes_support import (
     KERNEL_TOKEN,
@@ -20,6 +21,8 @@ from rosaos.cli.process_commands import progress_text
 from rosaos.devices.serve import serve_http
 from rosaos.processes.manager import ProcessManager
 from rosaos.processes.pool import WorkerPool
+
+pytestmark = pytest.mark.slow
 
 
 def ramp_device() -> FastMCP:

@@ -219,8 +219,9 @@ class MotionController:
     def _goto(self, target: Posture, duration: float, body: bool) -> None:
         if not body and self.commanded is not None:
             target = Posture(target.head, target.antennas, self.commanded.body_yaw)
+        cancel = self._cancel  # this motion's flag: _begin gives the next motion a new one
         self.commanded = target
-        self.robot.goto(target, duration, body=body)
+        self.robot.goto(target, duration, body=body, cancel=cancel)
 
     def _stream(self, move: Move, end: Posture) -> None:
         finished = self.robot.stream(move, self._cancel)

@@ -25,7 +25,7 @@ from typing import Any
 
 import numpy as np
 from reachy_mini import ReachyMini
-from reachy_mini.io.protocol import SetFullTargetCmd, SetSpeechOffsetsCmd, StopMoveCmd
+from reachy_mini.io.protocol import GotoTaskRequest, SetFullTargetCmd, SetSpeechOffsetsCmd, StopMoveCmd
 from reachy_mini.motion.move import Move
 from reachy_mini.reachy_mini import (
     INIT_ANTENNAS_JOINT_POSITIONS,
@@ -33,6 +33,7 @@ from reachy_mini.reachy_mini import (
     SLEEP_HEAD_POSE,
 )
 from reachy_mini.utils import create_head_pose
+from reachy_mini.utils.interpolation import InterpolationTechnique
 from reachy_mini.utils.rotation import Rotation
 
 from rosaos.drivers import DeviceError
@@ -41,6 +42,9 @@ log = logging.getLogger(__name__)
 
 LOCAL_HOSTS = {"localhost", "127.0.0.1", "::1"}
 STREAM_HZ = 50.0
+DAEMON_OVERRUN = "time value is out of range"
+"""The daemon's error when its goto loop read the clock past the move's end (see :meth:`RobotLink.goto`)."""
+GOTO_ATTEMPTS = 3
 
 
 @dataclass(frozen=True)
@@ -121,6 +125,8 @@ class RobotLink:
         self.mini: ReachyMini | None = None
         self.media_problem: str | None = None
         """Why the robot's camera and speaker are not used, when media was wanted but failed."""
+        self._sending = threading.Lock()
+        """Held to send a goto or a stop, so a goto never goes out after a stop it should obey."""
 
     @property
     def where(self) -> str:
@@ -177,15 +183,39 @@ class RobotLink:
 
     # --- moving -------------------------------------------------------------------------------
 
-    def goto(self, target: Posture, duration: float, *, body: bool = True) -> None:
+    def goto(
+        self, target: Posture, duration: float, *, body: bool = True, cancel: threading.Event | None = None
+    ) -> None:
         """Move smoothly (minimum jerk) to ``target`` in ``duration`` seconds; returns on arrival
-        or when :meth:`stop_move` interrupts it."""
-        self.sdk.goto_target(
-            head=target.head.matrix(),
+        or when :meth:`stop_move` interrupts it.
+
+        The daemon's playback loop (reachy-mini 1.12) checks ``now - t0 < duration`` and then
+        reads the clock again to interpolate; when the daemon is descheduled between the two
+        reads (a busy computer), the second read lies past the end and the move fails with
+        "time value is out of range [0,1]" before its last targets were sent. The driver then
+        goes on from where the head is, with a new goto to the same target, unless ``cancel``
+        was set meanwhile: a stopped motion stays stopped (the check and the send hold the lock
+        :meth:`stop_move` sends under, so a stop cannot slip in between).
+        """
+        request = GotoTaskRequest(
+            head=target.head.matrix().flatten().tolist(),
             antennas=antennas_to_sdk(*target.antennas),
             duration=duration,
+            method=InterpolationTechnique.MIN_JERK,
             body_yaw=math.radians(target.body_yaw) if body else None,
         )
+        for attempt in range(1, GOTO_ATTEMPTS + 1):
+            with self._sending:
+                if cancel is not None and cancel.is_set():
+                    return
+                task = self.sdk.client.send_task_request(request)
+            try:
+                self.sdk.client.wait_for_task_completion(task, timeout=duration + 1.0)
+                return
+            except Exception as error:
+                if DAEMON_OVERRUN not in str(error) or attempt == GOTO_ATTEMPTS:
+                    raise
+                log.info("reachy goto overran its clock in the daemon (%s); going on to the target", error)
 
     def stream(self, move: Move, cancel: threading.Event) -> bool:
         """Play an SDK :class:`Move` by streaming its targets at 50 Hz; False if cancelled."""
@@ -220,7 +250,8 @@ class RobotLink:
 
     def stop_move(self) -> None:
         """Interrupt whatever move the daemon is playing (the SDK's ``stop_move`` command)."""
-        self.sdk.client.send_command(StopMoveCmd())
+        with self._sending:
+            self.sdk.client.send_command(StopMoveCmd())
 
     def set_motors(self, on: bool) -> None:
         if on:

@@ -19,6 +19,7 @@ import logging
 from collections.abc import Callable, Mapping
 from typing import Any
 
+from rosaos.clock import LOOP_CLOCK, Clock
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.drivers import DeviceError
@@ -36,8 +37,10 @@ class DeviceStateCache:
         timeout: float = 3.0,
         watch: float = 10.0,
         concurrency: int = 8,
+        clock: Clock = LOOP_CLOCK,
     ) -> None:
         self._endpoints = endpoints
+        self._clock = clock
         self.interval = interval
         self.timeout = timeout
         self.watch = watch
@@ -59,10 +62,9 @@ class DeviceStateCache:
     async def wanted(self) -> None:
         """Someone is looking: poll for the next ``watch`` seconds. Returns once the states are
         no older than two intervals (at once while polling; after one read after a quiet spell)."""
-        loop = asyncio.get_running_loop()
-        self._wanted_until = loop.time() + self.watch
+        self._wanted_until = self._clock.now() + self.watch
         self._wake.set()
-        if loop.time() - self._refreshed_at > 2 * self.interval:
+        if self._clock.now() - self._refreshed_at > 2 * self.interval:
             await self.refresh()
 
     async def refresh(self) -> None:
@@ -72,21 +74,20 @@ class DeviceStateCache:
             await asyncio.gather(*(self._read(endpoint) for endpoint in endpoints.values()))
             for gone in set(self._states) - set(endpoints):
                 self._states.pop(gone, None)
-            self._refreshed_at = asyncio.get_running_loop().time()
+            self._refreshed_at = self._clock.now()
             self.refreshes += 1
 
     async def run(self) -> None:
         """Refresh while wanted, sleep while not, until cancelled; then close the sessions."""
-        loop = asyncio.get_running_loop()
         try:
             await self.refresh()  # one read at start, so the first page load is instant
             while True:
                 self._wake.clear()
-                if loop.time() < self._wanted_until:
-                    await asyncio.sleep(self.interval)
+                if self._clock.now() < self._wanted_until:
+                    await self._clock.sleep(self.interval)
                 else:
                     await self._wake.wait()
-                if loop.time() - self._refreshed_at >= self.interval / 2:
+                if self._clock.now() - self._refreshed_at >= self.interval / 2:
                     await self.refresh()
         finally:
             for _, client in self._clients.values():

@@ -88,6 +88,7 @@ async def test_switched_off_it_transcribes_only_the_final() -> None:
     assert not (await early.transcribe(final)).early and stt.sizes == [final.samples.size]
 
 
+@pytest.mark.slow  # loads the speech model and transcribes each growing draft
 async def test_moonshine_on_the_draft_hears_the_whole_command(spoken_command: Samples) -> None:
     """The draft keeps the post-roll Moonshine needs: the transcript is the same as the final's."""
     segmenter = Segmenter(SileroClassifier(), drafts=True)

@@ -83,6 +83,7 @@ PUBLIC_COMMANDS = (
 )
 
 
+@pytest.mark.slow  # the speech model over every spoken command: tens of seconds of inference
 @needs_espeak
 def test_moonshine_keeps_its_accuracy_on_spoken_commands(moonshine: MoonshineSTT, tmp_path: Path) -> None:
     """Word error rate over the sentences, as moonshine-cpp's own engine scored on the same audio.
