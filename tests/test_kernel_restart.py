@@ -133,6 +133,10 @@ def test_an_emergency_stop_latched_before_a_sigkill_holds_after_restart_until_re
     first, url, _ = start_kernel(config)
     headers = {"Authorization": f"Bearer {(config.parent / 'data' / 'token').read_text().strip()}"}
     try:
+        # The banner comes before the devices are up (issue 27): latch once the lamp serves, so
+        # its safe_stop is what the report shows (a lamp still starting starts latched instead).
+        with httpx.Client(base_url=url, headers=headers, timeout=30) as api:
+            wait_for(lambda: all(d["status"] == "healthy" for d in api.get("/devices").json()))
         # Latched the way a person would, with the CLI.
         latch = subprocess.run(
             [

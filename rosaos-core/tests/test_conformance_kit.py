@@ -219,7 +219,9 @@ INTENTS_SKIPPED = {"test_intents_file_parses": "skipped", "test_intents_name_exi
 
 
 def test_a_good_driver_passes_every_check_that_applies(report: Report) -> None:
-    assert len(report["TestGood"]) == 23  # every check of the kit, card controls and odd numbers included
+    assert (
+        len(report["TestGood"]) == 24
+    )  # every check of the kit, card controls, odd numbers and the prompt's tool names included
     assert not_passed(report, "TestGood") == INTENTS_SKIPPED
     assert "the driver ships no intents file" in report["TestGood"]["test_intents_file_parses"].message
 

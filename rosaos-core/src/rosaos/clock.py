@@ -3,7 +3,7 @@ the health checks are the next candidates).
 
 Production code uses :data:`LOOP_CLOCK`: the event loop's monotonic time and ``asyncio.sleep``,
 exactly what the code called before the clock was injectable. Tests pass a
-:class:`rosaos.testing.clock.ManualClock` instead and move time themselves: a test of a 10-second
+:class:`rosaos.testing.manual_clock.ManualClock` instead and move time themselves: a test of a 10-second
 watch window then takes no seconds, and it cannot fail because a busy computer was slow to wake
 a sleeper, only because the code did the wrong thing.
 """

@@ -1,6 +1,6 @@
 """The device state poller reads devices only while someone looks, and never serves a stale state.
 
-The poller runs on a clock the test moves (:class:`rosaos.testing.clock.ManualClock`), so the
+The poller runs on a clock the test moves (:class:`rosaos.testing.manual_clock.ManualClock`), so the
 watch window and the intervals are the production ones and no test sleeps through them."""
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from fastmcp import FastMCP
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.devices.serve import serve_http
 from rosaos.devices.state_cache import DeviceStateCache
-from rosaos.testing.clock import ManualClock
+from rosaos.testing.manual_clock import ManualClock
 
 TOKEN = "state-cache-token"
 

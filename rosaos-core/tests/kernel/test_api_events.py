@@ -137,8 +137,12 @@ async def test_an_accepted_event_is_announced_on_the_updates_stream(client: http
         ("/event", {"kind": "telepathy", "payload": {}}, "does not match any of the expected tags"),
         ("/event", {"payload": {"text": "hi"}}, "Unable to extract tag using discriminator 'kind'"),
         ("/event", {"kind": "user_typed", "payload": {"text": ""}}, "body.user_typed.payload.text"),
-        ("/event", {"kind": "worker_callback", "payload": {"process_id": 0, "status": "ok"}}, "process_id"),
-        ("/event", {"kind": "worker_callback", "payload": {"process_id": 1, "status": "meh"}}, "status"),
+        ("/event", {"kind": "device_notice", "payload": {"device": "dog", "message": ""}}, "payload.message"),
+        (
+            "/event",
+            {"kind": "device_notice", "payload": {"device": "dog", "message": "hi", "importance": "loud"}},
+            "payload.importance",
+        ),
         ("/event", {"kind": "device_notice", "payload": {"message": "hi"}}, "device: Field required"),
     ],
 )

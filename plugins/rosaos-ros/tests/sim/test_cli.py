@@ -32,12 +32,14 @@ async def test_the_command_serves_rosbridge_until_stopped() -> None:
         "puppypi",
         "--port",
         str(port),
+        "--token",
+        "cli-test-token",
         stdout=asyncio.subprocess.PIPE,
     )
     try:
         assert process.stdout is not None
         banner = await asyncio.wait_for(process.stdout.readline(), 30)
-        async with connect(f"ws://127.0.0.1:{port}") as connection:
+        async with connect(f"ws://127.0.0.1:{port}?token=cli-test-token") as connection:
             await connection.send(
                 json.dumps({"op": "call_service", "id": "1", "service": "/rosapi/get_param_names"})
             )

@@ -153,9 +153,16 @@ NewEvent = Annotated[
     UserSaidEvent | UserTypedEvent | WorkerCallbackEvent | DeviceNoticeEvent | ErrorEvent | TimerFiredEvent,
     Field(discriminator="kind"),
 ]
-"""The body of ``POST /event``, told apart by ``kind``."""
+"""Any event the queue takes, told apart by ``kind`` (``POST /event`` takes :data:`ExternalEvent`)."""
 
 NEW_EVENT: TypeAdapter[NewEvent] = TypeAdapter(NewEvent)
+
+ExternalEvent = Annotated[
+    UserSaidEvent | UserTypedEvent | DeviceNoticeEvent | ErrorEvent,
+    Field(discriminator="kind"),
+]
+"""What ``POST /event`` takes: the kinds that come from outside the kernel. A process's end and a
+timer's firing are queued only by the kernel itself (its pool's pipe, its timer table)."""
 
 
 class Event(BaseModel):

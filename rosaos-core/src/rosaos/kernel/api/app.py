@@ -33,7 +33,7 @@ from rosaos.kernel.api import (
     memory_routes,  # noqa: F401  (adds its routes to protected)
     timer_routes,  # noqa: F401  (adds its routes to protected)
 )
-from rosaos.kernel.api.routes import WEB_DIR, protected, public
+from rosaos.kernel.api.routes import KERNEL_ONLY, WEB_DIR, protected, public
 from rosaos.kernel.api.schemas import KernelRuntime
 
 MAX_BODY_BYTES = 1_000_000
@@ -55,6 +55,9 @@ def _problem(problem: Mapping[str, Any]) -> dict[str, Any]:
         reason = problem.get("ctx", {}).get("error", "")
         message = f"not valid JSON: {reason} (at character {loc[1]})" if len(loc) > 1 else message
         loc = loc[:1]
+    tag = problem.get("ctx", {}).get("tag") if problem["type"] == "union_tag_invalid" else None
+    if tag in KERNEL_ONLY:  # a kind only the kernel queues (POST /event): say why, not just "invalid"
+        message = f"{tag} events are not accepted here: {KERNEL_ONLY[tag]}"
     return {"loc": loc, "msg": message, "type": problem["type"]}
 
 

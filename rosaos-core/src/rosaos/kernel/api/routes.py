@@ -22,7 +22,7 @@ from fastapi.security import HTTPBearer
 from sse_starlette import EventSourceResponse, ServerSentEvent
 
 import rosaos
-from rosaos.events.types import Event, NewEvent, UserSaidEvent, UserText, UserTypedEvent
+from rosaos.events.types import Event, ExternalEvent, NewEvent, UserSaidEvent, UserText, UserTypedEvent
 from rosaos.kernel.activity import DEFAULT_LIMIT as DEFAULT_ACTIVITY
 from rosaos.kernel.activity import MAX_LIMIT as MAX_ACTIVITY
 from rosaos.kernel.activity import ActivityPage
@@ -157,12 +157,11 @@ KERNEL_ONLY = {
 
 @protected.post("/event", status_code=202)
 async def post_event(
-    event: NewEvent, runtime: Runtime, idempotency_key: IdempotencyHeader = None
+    event: ExternalEvent, runtime: Runtime, idempotency_key: IdempotencyHeader = None
 ) -> Accepted:
     """Enqueue an event from outside the kernel (a script, a home-automation hook), told apart by
-    ``kind``: ``user_said``, ``user_typed``, ``device_notice`` or ``error``."""
-    if event.kind in KERNEL_ONLY:
-        raise HTTPException(422, f"{event.kind} events are not accepted here: {KERNEL_ONLY[event.kind]}")
+    ``kind``: ``user_said``, ``user_typed``, ``device_notice`` or ``error``. The published schema
+    lists only these; a ``KERNEL_ONLY`` kind is refused with its reason (``app._problem``)."""
     key = _key(event.idempotency_key, idempotency_key)
     return await _accept(runtime, event.model_copy(update={"idempotency_key": key}))
 
