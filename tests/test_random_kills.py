@@ -82,7 +82,16 @@ def test_random_kernel_kills_run_no_command_twice_and_lose_no_run(
                     assert done, "the last kernel did not handle the whole stream within 120 s"
                     updates = api.get("/updates", params={"after": 0, "limit": 1000}).json()["updates"]
                     break
-                time.sleep(chance.uniform(0.0, 2.0))  # somewhere in the stream of launches
+                # Kill somewhere in the stream of launches, once this kernel has run one (or has
+                # nothing left to run): the banner comes before the devices and the pool are up
+                # (issue 27), and a kill before any command ran would test nothing.
+                ran = sum(rack.counts.values())
+                deadline = time.monotonic() + 60
+                while sum(rack.counts.values()) == ran and time.monotonic() < deadline:
+                    if settled(api, event_ids):
+                        break
+                    time.sleep(0.05)
+                time.sleep(chance.uniform(0.0, 1.0))
             finally:
                 api.close()
                 if kills == KILLS:
