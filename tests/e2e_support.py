@@ -1,16 +1,23 @@
-"""Helpers the cross-package kernel tests share: a kernel on loopback, its API, polling, device state."""
+"""Helpers the cross-package kernel tests share: a kernel on loopback (in this process, or ``rosaos up``
+as a subprocess to kill), device hosts served on their own, the kernel's API, polling, device state."""
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import os
+import signal
+import subprocess
 import time
-from collections.abc import AsyncIterator, Awaitable, Callable
+from collections.abc import AsyncIterator, Awaitable, Callable, Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import httpx
+from cli_process import ROSAOS, line_matching
 
+from rosaos.auth import load_or_create_token
 from rosaos.config import load_config
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.world import build_world
@@ -91,3 +98,96 @@ async def device_state(kernel: Kernel, name: str) -> dict[str, Any]:
     endpoint = kernel.endpoints()[name]
     assert endpoint.url is not None
     return await DeviceClient(endpoint.url, endpoint.token, 10, name).get_state()
+
+
+# --- rosaos up and rosaos serve-device as subprocesses, killed as a crash would kill them ----------
+
+
+def rosaos(*args: str) -> subprocess.Popen[str]:
+    """``rosaos ARGS`` as a subprocess, its stderr on its stdout (read it with ``line_matching``)."""
+    return subprocess.Popen(
+        [str(ROSAOS), *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env={**os.environ, "COLUMNS": "200"},
+    )
+
+
+def end(process: subprocess.Popen[str], how: signal.Signals = signal.SIGINT, timeout: float = 60) -> None:
+    """Send ``how`` (SIGKILL: a crash; SIGINT: Ctrl-C) and wait; SIGKILL if it outlives ``timeout``."""
+    process.send_signal(how)
+    try:
+        process.wait(timeout)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        process.wait()
+
+
+READY_WAIT = 120.0
+"""How long a kernel may take to be ready after its banner on a busy two-core machine: the first
+start imports the fork server's modules (seconds of CPU); a restart adopts the parked one."""
+
+
+@dataclass
+class KernelProcess:
+    """A ``rosaos up`` subprocess: its URL, its token and an API client to reach it."""
+
+    process: subprocess.Popen[str]
+    url: str
+    token: str
+
+    def api(self, timeout: float = 10) -> httpx.Client:
+        return httpx.Client(
+            base_url=self.url, headers={"Authorization": f"Bearer {self.token}"}, timeout=timeout
+        )
+
+    def wait_ready(self, timeout: float = READY_WAIT) -> dict[str, Any]:
+        """Wait until ``GET /health`` says ready (devices started, workers warm); return it."""
+        health: dict[str, Any] = {}
+        deadline = time.monotonic() + timeout
+        with self.api() as api:
+            while time.monotonic() < deadline:
+                health = api.get("/health").json()
+                if health["ready"] or health["pool"] == "failed":
+                    break
+                time.sleep(0.05)
+        assert health.get("ready"), f"the kernel was not ready within {timeout} s: {health}"
+        return health
+
+    def kill(self) -> None:
+        """SIGKILL: the kernel dies as in a crash, with no shutdown at all."""
+        end(self.process, signal.SIGKILL)
+
+    def stop(self) -> None:
+        """Ctrl-C: the kernel's own shutdown."""
+        end(self.process, signal.SIGINT)
+
+
+def start_kernel(config: Path, *, ready: bool = True) -> KernelProcess:
+    """``rosaos up --config CONFIG --port 0``, once its banner is out (and, with ``ready``, once
+    ``GET /health`` says ready). The caller ends it with :meth:`KernelProcess.kill` or ``stop``."""
+    process = rosaos("up", "--config", str(config), "--port", "0")
+    url = line_matching(process, r"rosaOS is up at (http://\S+?)/?$").group(1)
+    kernel = KernelProcess(process, url, load_or_create_token(load_config(config).data_dir))
+    if ready:
+        try:
+            kernel.wait_ready()
+        except BaseException:
+            kernel.kill()
+            raise
+    return kernel
+
+
+@contextlib.contextmanager
+def served_device(home: Path, name: str, table: str) -> Iterator[tuple[str, str]]:
+    """``rosaos serve-device NAME`` with ``[devices.NAME]`` = ``table``, its data in ``home/NAME-data``,
+    as on a robot's own computer (it outlives any kernel); yields its MCP URL and token."""
+    config = home / f"{name}.toml"
+    config.write_text(f'data_dir = "{home / f"{name}-data"}"\n[devices.{name}]\n{table}')
+    served = rosaos("serve-device", name, "--config", str(config), "--port", "0")
+    try:
+        url = line_matching(served, r"(http://127\.0\.0\.1:\d+/mcp)").group(1)
+        yield url, (home / f"{name}-data" / "token").read_text().strip()
+    finally:
+        end(served, signal.SIGINT, timeout=30)

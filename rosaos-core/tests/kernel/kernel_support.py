@@ -15,7 +15,13 @@ from typing import Any
 from rosaos.events.plan import Plan
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.login_codes import LoginCodes
-from rosaos.kernel.api.schemas import DeviceView, EmergencyStopReport, EmergencyStopState, Understanding
+from rosaos.kernel.api.schemas import (
+    DeviceView,
+    EmergencyStopReport,
+    EmergencyStopState,
+    Readiness,
+    Understanding,
+)
 from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.intake import Intake
@@ -70,6 +76,10 @@ class TestRuntime:
     memory: MemoryStore | None = None
     sightings: SightingLog | None = None
     """Both set by the ``runtime`` fixture, on a memory.db of the test's own."""
+    ready_now: Readiness = field(
+        default_factory=lambda: Readiness(ready=True, pool="warm", devices_starting=0, starting=[])
+    )
+    """What ``readiness()`` answers (``GET /health``)."""
     intake: Intake = field(init=False)
     """The kernel's own intake on this store: the routes queue through it as in ``rosaos up``."""
 
@@ -116,6 +126,9 @@ class TestRuntime:
 
     async def understand(self, text: str) -> Understanding:
         return Understanding(text=text, complete=False, kind="no_engine")  # no engine here
+
+    def readiness(self) -> Readiness:
+        return self.ready_now
 
 
 def kitchen_light(on: bool = False) -> dict[str, Any]:

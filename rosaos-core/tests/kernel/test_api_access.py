@@ -6,6 +6,8 @@ import httpx
 import pytest
 from kernel_support import AUTH, ORIGIN, TOKEN, TestRuntime
 
+from rosaos.kernel.api.schemas import Readiness
+
 PROTECTED = [
     ("GET", "/processes"),
     ("POST", "/processes/1/terminate"),
@@ -60,12 +62,29 @@ async def test_health_is_open_and_tells_nothing_secret(
     response = await client.get("/health")
     assert response.status_code == 200
     health = response.json()
-    assert set(health) == {"status", "version", "model", "model_notice", "uptime_seconds", "pending_events"}
+    assert set(health) == {
+        *("status", "version", "model", "model_notice", "uptime_seconds", "pending_events"),
+        *("ready", "pool", "devices_starting", "starting"),
+    }
     assert health["status"] == "ok"
     assert health["model"] == "offline default"
     assert health["model_notice"] == runtime.model_notice
     assert health["pending_events"] == 1
     assert TOKEN not in response.text
+
+
+async def test_health_says_what_still_starts_and_names_it_only_to_the_token_holder(
+    client: httpx.AsyncClient, runtime: TestRuntime
+) -> None:
+    runtime.ready_now = Readiness(ready=False, pool="warming", devices_starting=1, starting=["reachy"])
+    public = (await client.get("/health")).json()
+    assert (public["ready"], public["pool"], public["devices_starting"]) == (False, "warming", 1)
+    assert public["starting"] is None, "device names are not public"
+    assert "reachy" not in str(public)
+    wrong = (await client.get("/health", headers={"Authorization": "Bearer not-the-token"})).json()
+    assert wrong["starting"] is None
+    owner = (await client.get("/health", headers=AUTH)).json()
+    assert owner["starting"] == ["reachy"]
 
 
 async def test_the_api_description_is_published(client: httpx.AsyncClient) -> None:

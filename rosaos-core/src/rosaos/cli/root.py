@@ -221,6 +221,24 @@ def ps(
     raise typer.Exit(ps_command(config, url, json_output, all_processes))
 
 
+@app.command("ready")
+def ready(
+    config: ConfigOption = None,
+    url: UrlOption = None,
+    json_output: JsonOption = False,
+    timeout: Annotated[
+        float, typer.Option("--timeout", metavar="SECONDS", min=0, help="Give up after this long.")
+    ] = 120.0,
+) -> None:
+    """Wait until the running kernel's devices have started and its workers are warm (for scripts).
+
+    Exits 0 once ready, 1 if not within --timeout (it says what still starts), 2 for a bad config.
+    """
+    from rosaos.cli.ready_command import ready_command
+
+    raise typer.Exit(ready_command(config, url, timeout, json_output))
+
+
 @app.command("log")
 def log(
     config: ConfigOption = None,

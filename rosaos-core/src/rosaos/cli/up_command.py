@@ -103,19 +103,32 @@ async def _serve(kernel: Kernel, console: Console, err: Console) -> int:
         err.print(f"rosaos up: {error}", markup=False)
         return 1
     progress: asyncio.Task[None] | None = None
+    ready: asyncio.Task[None] | None = None
     try:
         _print_banner(kernel, url, console)
         progress = asyncio.create_task(report_devices(kernel.supervisor.directory, console, started))
+        ready = asyncio.create_task(_say_when_ready(kernel, console, started))
         if await _stopped_or_pool_failed(stop, kernel.manager.warming):
             console.print("Stopping rosaOS…", markup=False)
         else:
             return 1
     finally:
-        if progress is not None:
-            progress.cancel()
+        for task in (progress, ready):
+            if task is not None:
+                task.cancel()
         await kernel.stop()
     console.print("Stopped. Unhandled events stay queued for the next start.", markup=False)
     return 0
+
+
+async def _say_when_ready(kernel: Kernel, console: Console, started: float) -> None:
+    """One line once every device has had its first start and the workers are warm (the banner
+    comes before both); `rosaos ready` and ``GET /health`` tell scripts the same."""
+    while not (readiness := kernel.readiness()).ready:
+        if readiness.pool == "failed":
+            return
+        await asyncio.sleep(0.1)
+    console.print(f"rosaOS is ready ({time.monotonic() - started:.1f} s after start).", markup=False)
 
 
 async def _stopped_or_pool_failed(stop: asyncio.Event, warming: asyncio.Task[None] | None) -> bool:

@@ -55,6 +55,7 @@ from rosaos.memory.sightings import SightingLog
 from rosaos.memory.store import MemoryStore
 from rosaos.models.defaults import KernelModels
 from rosaos.models.select import ModelSpec
+from rosaos.processes.fork_parking import park_name
 from rosaos.processes.jobs import WorkerCallback
 from rosaos.processes.manager import LaunchRefused, ProcessInfo, ProcessManager
 from rosaos.processes.pool import WorkerPool
@@ -169,7 +170,11 @@ async def build_parts(
         await intake.submit(end_event(callback))
 
     pool = WorkerPool(
-        size=kernel.pool_size, env=worker_env, fork_server=kernel.fork_server, max_workers=kernel.max_workers
+        size=kernel.pool_size,
+        env=worker_env,
+        fork_server=kernel.fork_server,
+        max_workers=kernel.max_workers,
+        park=park_name(data_dir),  # a kernel restarted after a crash adopts its fork server, warm
     )
     manager = ProcessManager(
         devices=endpoints,

@@ -14,7 +14,7 @@ import os
 import socket
 from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import httpx
 import uvicorn
@@ -33,7 +33,13 @@ from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.app import create_app
 from rosaos.kernel.api.kernel_client import kernel_file, running_kernel_url
 from rosaos.kernel.api.login_codes import LoginCodes, login_url
-from rosaos.kernel.api.schemas import DeviceView, EmergencyStopReport, EmergencyStopState, Understanding
+from rosaos.kernel.api.schemas import (
+    DeviceView,
+    EmergencyStopReport,
+    EmergencyStopState,
+    Readiness,
+    Understanding,
+)
 from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.emergency_stop import EMERGENCY_STOP_KEY as EMERGENCY_STOP_KEY
 from rosaos.kernel.event_store import EventStore
@@ -163,6 +169,24 @@ class Kernel:
         # Matching a sentence that does not fit takes up to a few hundred ms: not on the loop.
         result = await asyncio.to_thread(local.match, text)
         return Understanding(text=text, complete=result.is_exact, kind=result.kind)
+
+    def readiness(self) -> Readiness:
+        """Devices still starting and the pool's warm-up: what "ready" after the banner waits for."""
+        starting = sorted(
+            name for name, entry in self.supervisor.directory().items() if entry.status == "starting"
+        )
+        warming = self.manager.warming
+        pool: Literal["warming", "warm", "failed"] = "warm"
+        if warming is not None and not warming.done():
+            pool = "warming"
+        elif warming is not None and (warming.cancelled() or warming.exception() is not None):
+            pool = "failed"
+        return Readiness(
+            ready=pool == "warm" and not starting,
+            pool=pool,
+            devices_starting=len(starting),
+            starting=starting,
+        )
 
     async def processes(self, include_ended: bool = False) -> Sequence[ProcessInfo]:
         return self.manager.list(include_ended=include_ended)

@@ -10,6 +10,9 @@ The fork server is the forked workers' parent: only it can see how they exit. If
 some still run, the pool kills them (each reported crashed, killed by SIGKILL), since their ends
 could not be reported otherwise. It is then restarted, after a delay that doubles while it keeps
 dying before it is ready.
+
+With ``park`` (per data directory; the kernel gives one), a server whose kernel died waits to be
+adopted by the next kernel instead of exiting (:mod:`rosaos.processes.fork_parking`).
 """
 
 from __future__ import annotations
@@ -27,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from rosaos.models.select import OPENAI_COMPATIBLE, PYTHON_PREFIX, ModelSpec
+from rosaos.processes.fork_parking import adopt_parked, park_key
 
 log = logging.getLogger(__name__)
 
@@ -81,10 +85,16 @@ class ForkedWorker:
 class ForkServer:
     """Runs the fork server for a pool: ``python`` with ``env``, importing ``preload`` modules ahead."""
 
-    def __init__(self, python: str, env: Mapping[str, str], preload: Sequence[str] = ()) -> None:
+    def __init__(
+        self, python: str, env: Mapping[str, str], preload: Sequence[str] = (), park: str | None = None
+    ) -> None:
         self.python = python
         self.env = dict(env)
         self.preload = list(preload)
+        self.park = park
+        """The name to park under when the kernel dies, and to adopt a parked server by."""
+        self.adopted = False
+        """Whether the running server was adopted from a kernel that died, rather than started."""
         self.pid: int | None = None
         self.unusable: str | None = None
         """Why the fork server refused to serve (it is then not restarted)."""
@@ -183,7 +193,14 @@ class ForkServer:
                 await asyncio.wait_for(self._stop_requested.wait(), delay)
 
     async def _run_once(self) -> tuple[bool, int | None]:
-        """Run one fork server until it exits; return whether it became ready, and its exit code."""
+        """Run one fork server until it exits; return whether it became ready, and its exit code.
+
+        The first one is adopted, when a parked server of the same data directory fits."""
+        adopted = await self._adopt() if self.park is not None and not self.adopted else None
+        self.adopted = adopted is not None
+        if adopted is not None:
+            ours, pid = adopted
+            return await self._watch(ours, pid, None)
         try:
             ours, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         except OSError as failure:  # not on Linux
@@ -191,6 +208,7 @@ class ForkServer:
             log.warning("one-off workers start without the fork server: %s", self.unusable)
             self._settled.set()
             return False, None
+        park = ["--park", self.park, self._key()] if self.park is not None else []
         try:
             process = await asyncio.create_subprocess_exec(
                 self.python,
@@ -198,6 +216,7 @@ class ForkServer:
                 "-m",
                 "rosaos.processes.forkserver",
                 str(theirs.fileno()),
+                *park,
                 *self.preload,
                 stdin=asyncio.subprocess.DEVNULL,
                 stdout=asyncio.subprocess.DEVNULL,
@@ -212,9 +231,16 @@ class ForkServer:
             return False, None
         finally:
             theirs.close()
-        self.pid = process.pid
         if self._stopping:  # stop() ran while the process was being started
             _killpg(process.pid)
+        return await self._watch(ours, process.pid, process)
+
+    async def _watch(
+        self, ours: socket.socket, pid: int, process: asyncio.subprocess.Process | None
+    ) -> tuple[bool, int | None]:
+        """Serve the pool with the server ``pid`` on ``ours`` until it exits (or its socket closes:
+        an adopted server is not this process's child, and its exit code is not known)."""
+        self.pid = pid
         loop = asyncio.get_running_loop()
         closed = loop.create_future()
         ours.setblocking(False)
@@ -222,8 +248,8 @@ class ForkServer:
         loop.add_reader(ours.fileno(), self._read, ours, closed)
         was_ready = False
         try:
-            exited = asyncio.ensure_future(process.wait())
-            await asyncio.wait([closed, exited], return_when=asyncio.FIRST_COMPLETED)
+            exited = asyncio.ensure_future(process.wait()) if process is not None else None
+            await asyncio.wait([closed, *([exited] if exited else [])], return_when=asyncio.FIRST_COMPLETED)
             was_ready = self._ready
         finally:
             self._read(ours, closed)  # the exits it sent before it died
@@ -231,12 +257,23 @@ class ForkServer:
             ours.close()
             self._sock = None
             self._ready = False
-            _killpg(process.pid)
-            returncode = await process.wait()
+            _killpg(pid)
+            returncode = await process.wait() if process is not None else None
             self.pid = None
             await self._lost()
             self._settled.set()
         return was_ready, returncode
+
+    def _key(self) -> str:
+        return park_key(self.python, self.env, self.preload)
+
+    async def _adopt(self) -> tuple[socket.socket, int] | None:
+        """A parked fork server of this data directory, adopted: its socket and pid; or None."""
+        assert self.park is not None
+        adopted = await adopt_parked(self.park, self._key())
+        if adopted is not None:
+            self._on_message({"event": "ready"})
+        return adopted
 
     def _read(self, sock: socket.socket, closed: asyncio.Future[None]) -> None:
         while True:

@@ -1,4 +1,4 @@
-"""The fork server, ``python -m rosaos.processes.forkserver FD [MODULE ...]``: forks one-off workers.
+"""The fork server, ``python -m rosaos.processes.forkserver FD [--park NAME KEY] [MODULE ...]``: forks workers.
 
 A one-off worker started as ``python -m rosaos.processes.worker`` spends seconds starting Python
 and importing pydantic-ai and FastMCP. The fork server does that once: it imports the worker's
@@ -15,6 +15,17 @@ Protocol: one JSON object per message on the UNIX ``SOCK_SEQPACKET`` socket ``FD
   session, or ``{"event": "failed", "spawn": N, "error": ...}``.
 - server to pool: ``{"event": "exited", "pid": C, "returncode": R}`` when a worker ends (the server
   is its parent and reaps it); ``R`` follows asyncio's convention: negative is the killing signal.
+
+Parking (``--park NAME KEY``, what ``rosaos up`` asks for): when the socket closes, the kernel died
+(a kernel that stops kills the server first). Instead of exiting, the server waits up to
+``PARK_SECONDS`` on the abstract UNIX socket ``NAME`` for the next kernel of the same data
+directory. That kernel connects and sends ``{"adopt": KEY}`` with its stderr as one file
+descriptor; the server answers ``{"event": "ready", "pid": P}`` and serves it from then on, so a
+restart after a crash has warm workers at once instead of after seconds of imports. It refuses
+(``{"event": "refused", "error": ...}``, then exits) a peer of another user, another key (the key
+digests the Python, the environment, the preloaded modules and the rosaOS version: a worker forked
+from it must be what a new server would fork), or when a module file it imported has changed
+since. While parked its stderr is ``/dev/null``, so it holds no dead kernel's terminal or pipe.
 
 A forked worker is what ``python -m rosaos.processes.worker`` would be: its own session and
 process group, the pipes as stdin and stdout, stderr shared with the server (the kernel's, as a
@@ -36,8 +47,10 @@ import runpy
 import select
 import signal
 import socket
+import struct
 import sys
 import threading
+import time
 from typing import Any, NoReturn
 
 WORKER = "rosaos.processes.worker"
@@ -50,12 +63,21 @@ library version no longer has is skipped."""
 MESSAGE_LIMIT = 64 * 1024
 SETUP_DONE = b"+"
 """What a new worker writes to the server once it has its own session and its pipes."""
+PARK_SECONDS = 60.0
+"""How long a server whose kernel died waits for the next kernel to adopt it (see the docstring)."""
+ADOPT_TIMEOUT = 5.0
+"""Seconds a connected peer has to send its adopt request."""
 
 
 def main() -> None:
     """Entry point: import the worker's modules, then serve spawn requests until the socket closes."""
+    since = time.time()  # a module file changed after this makes the server unfit for adoption
     sock = socket.socket(fileno=int(sys.argv[1]))
-    for module in (*PRELOAD, *FIRST_JOB, *sys.argv[2:]):
+    extra = sys.argv[2:]
+    park: tuple[str, str] | None = None
+    if extra[:1] == ["--park"]:
+        park, extra = (extra[1], extra[2]), extra[3:]
+    for module in (*PRELOAD, *FIRST_JOB, *extra):
         # Extra modules are a best guess (a model's module): one that fails is imported, and its
         # error reported, by the worker that needs it.
         with contextlib.suppress(Exception):
@@ -78,10 +100,10 @@ def main() -> None:
         # instead of each copying them when the collector walks them.
         gc.collect()
         gc.freeze()
-        _serve(sock)
+        _serve(sock, park, since)
 
 
-def _serve(sock: socket.socket) -> None:
+def _serve(sock: socket.socket, park: tuple[str, str] | None, since: float) -> None:
     wake_r, wake_w = os.pipe()
     os.set_blocking(wake_w, False)
     os.set_blocking(wake_r, False)
@@ -89,18 +111,110 @@ def _serve(sock: socket.socket) -> None:
     signal.set_wakeup_fd(wake_w)
     signal.signal(signal.SIGCHLD, _ignore)
     _send(sock, {"event": "ready", "pid": os.getpid()})
+    current: socket.socket | None = sock
+    while current is not None:
+        with contextlib.suppress(OSError), current:
+            _serve_pool(current, wake_r, wake_w)
+        # The pool's end closed without a kill: its kernel died. Wait for the next one, if asked to.
+        current = _park(park[0], park[1], since, wake_r) if park is not None else None
+
+
+def _serve_pool(sock: socket.socket, wake_r: int, wake_w: int) -> None:
+    """Serve one pool until it closes its end."""
     while True:
         readable, _, _ = select.select([sock.fileno(), wake_r], [], [])
         if wake_r in readable:
-            with contextlib.suppress(BlockingIOError):
-                while os.read(wake_r, 512):
-                    pass
+            _drain(wake_r)
             _reap(sock)
         if sock.fileno() in readable:
             message, fds, _, _ = socket.recv_fds(sock, MESSAGE_LIMIT, 2)
             if not message:  # the pool closed its end
                 return
             _spawn(sock, message, fds, keep_out=(wake_r, wake_w))
+
+
+def _park(name: str, key: str, since: float, wake_r: int) -> socket.socket | None:
+    """Wait for the next kernel to adopt this server; its socket, or None (then the server exits)."""
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, 2)  # the dead kernel's terminal or pipe is not held open
+    os.close(devnull)
+    listener = socket.socket(socket.AF_UNIX, socket.SOCK_SEQPACKET)
+    with listener:
+        try:
+            listener.bind("\0" + name)  # abstract: nothing on disk to leave behind
+        except OSError:  # another parked server of this data directory has the name
+            return None
+        listener.listen(4)
+        deadline = time.monotonic() + PARK_SECONDS
+        while (left := deadline - time.monotonic()) > 0:
+            readable, _, _ = select.select([listener.fileno(), wake_r], [], [], left)
+            if wake_r in readable:
+                _drain(wake_r)
+                _reap(None)  # the dead kernel's workers, ending as their stdin closed
+            if listener.fileno() in readable:
+                conn, _ = listener.accept()
+                adopted, settled = _adopt(conn, key, since)
+                if adopted:
+                    return conn
+                conn.close()
+                if settled:  # a kernel of this data directory that cannot use this server
+                    return None
+    return None
+
+
+def _adopt(conn: socket.socket, key: str, since: float) -> tuple[bool, bool]:
+    """Answer one adopt request: (adopted, whether a kernel came that this server does not fit)."""
+    peer_uid = struct.unpack("3i", conn.getsockopt(socket.SOL_SOCKET, socket.SO_PEERCRED, 12))[1]
+    if peer_uid != os.getuid():
+        return False, False
+    conn.settimeout(ADOPT_TIMEOUT)
+    try:
+        message, fds, _, _ = socket.recv_fds(conn, MESSAGE_LIMIT, 1)
+    except OSError:
+        return False, False
+    try:
+        asked = json.loads(message).get("adopt")
+    except (ValueError, AttributeError):
+        asked = None
+    why = "not an adopt request" if asked is None else None
+    if why is None and asked != key:
+        why = "its Python, environment, model modules or rosaOS version differ"
+    if why is None:
+        why = _changed_since(since)
+    if why is not None or len(fds) != 1:
+        for fd in fds:
+            os.close(fd)
+        with contextlib.suppress(OSError):
+            _send(conn, {"event": "refused", "error": why or "no stderr was passed"})
+        return False, asked is not None
+    os.dup2(fds[0], 2)  # the new kernel's stderr: forked workers write their logs where it does
+    os.close(fds[0])
+    conn.settimeout(None)
+    try:
+        _send(conn, {"event": "ready", "pid": os.getpid()})
+    except OSError:
+        return False, False
+    return True, True
+
+
+def _changed_since(since: float) -> str | None:
+    """The first imported module whose file changed after the server started importing, said so."""
+    for module in list(sys.modules.values()):
+        path = getattr(module, "__file__", None)
+        if not path:
+            continue
+        try:
+            if os.stat(path).st_mtime > since:
+                return f"{path} changed since the fork server imported it"
+        except OSError:
+            continue
+    return None
+
+
+def _drain(fd: int) -> None:
+    with contextlib.suppress(BlockingIOError):
+        while os.read(fd, 512):
+            pass
 
 
 def _spawn(sock: socket.socket, message: bytes, fds: list[int], keep_out: tuple[int, ...]) -> None:
@@ -138,7 +252,8 @@ def _spawn(sock: socket.socket, message: bytes, fds: list[int], keep_out: tuple[
         _send(sock, {"event": "failed", "spawn": spawn, "error": f"worker {pid} died while starting"})
 
 
-def _reap(sock: socket.socket) -> None:
+def _reap(sock: socket.socket | None) -> None:
+    """Reap ended workers and tell the pool (``sock``; None while parked: no one asks)."""
     while True:
         try:
             pid, status = os.waitpid(-1, os.WNOHANG)
@@ -146,7 +261,8 @@ def _reap(sock: socket.socket) -> None:
             return
         if pid == 0:
             return
-        _send(sock, {"event": "exited", "pid": pid, "returncode": os.waitstatus_to_exitcode(status)})
+        if sock is not None:
+            _send(sock, {"event": "exited", "pid": pid, "returncode": os.waitstatus_to_exitcode(status)})
 
 
 def _become_worker(

@@ -83,7 +83,8 @@ class WorkerPool:
     A job may run ``kill_grace`` seconds past its timeout (the worker stops it itself at the
     timeout and reports it) before the pool kills the worker. With ``fork_server``, one-off
     workers are forked by a fork server that imports ``preload`` modules ahead, besides the
-    worker's own.
+    worker's own. With ``park`` (a name per data directory) the fork server outlives a kernel that
+    dies, for a minute, and the next kernel adopts it (:mod:`rosaos.processes.fork_parking`).
     """
 
     def __init__(
@@ -98,6 +99,7 @@ class WorkerPool:
         fork_server: bool = True,
         preload: Sequence[str] = (),
         max_workers: int | None = None,
+        park: str | None = None,
     ) -> None:
         if size < 0:
             raise ValueError("pool size must be 0 or more")
@@ -116,7 +118,7 @@ class WorkerPool:
         self._env = {**os.environ, **(env or {})}
         self.preload = list(preload)
         """Modules the fork server imports ahead (the process manager adds its model's)."""
-        self.fork_server = ForkServer(python, self._env) if fork_server else None
+        self.fork_server = ForkServer(python, self._env, park=park) if fork_server else None
         self._workers: set[Worker] = set()
         self._spawning: set[asyncio.Task[Any]] = set()
         self._watcher = Watcher(

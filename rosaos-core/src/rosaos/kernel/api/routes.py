@@ -9,6 +9,7 @@ Events (``POST /chat``, ``POST /stt``, ``POST /event``) go through the kernel's 
 
 from __future__ import annotations
 
+import hmac
 import logging
 import time
 from collections.abc import AsyncIterator
@@ -77,8 +78,14 @@ protected = APIRouter(dependencies=[Depends(_bearer_docs)], responses=PROTECTED_
 
 @public.get("/health")
 async def health(request: Request, runtime: Runtime) -> Health:
-    """Liveness, version and model, for monitors and the web page before login. No token needed."""
+    """Liveness, version, model and readiness, for monitors, scripts (`rosaos ready`) and the web
+    page before login. No token needed; with it, the devices still starting are named."""
+    readiness = runtime.readiness()
+    presented = request.headers.get("authorization", "").removeprefix("Bearer ").strip()
+    if not hmac.compare_digest(presented.encode(), runtime.token.encode()):
+        readiness = readiness.model_copy(update={"starting": None})
     return Health(
+        **readiness.model_dump(),
         version=rosaos.__version__,
         model=runtime.model_description,
         model_notice=runtime.model_notice,

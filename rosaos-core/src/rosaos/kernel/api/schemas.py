@@ -103,6 +103,9 @@ class KernelRuntime(Protocol):
     async def understand(self, text: str) -> Understanding:
         """Whether the offline engine can act on ``text`` as it stands; launches nothing."""
 
+    def readiness(self) -> Readiness:
+        """Which devices are still starting and whether the worker pool is warm."""
+
 
 # --- bodies and answers ----------------------------------------------------------------------------
 
@@ -236,8 +239,25 @@ class EmergencyStopReport(EmergencyStopState):
     """False when the latch could not be written to the event store: a restart would forget it."""
 
 
-class Health(BaseModel):
-    """Open to anyone who can reach the port, so nothing secret."""
+class Readiness(BaseModel):
+    """What ``rosaos up`` still starts after its banner (the banner comes before devices and pool)."""
+
+    ready: bool = Field(
+        description="Every device has had its first start and the worker pool is warm: a command "
+        "sent now waits for nothing but its own work. `rosaos ready` waits for this."
+    )
+    pool: Literal["warming", "warm", "failed"] = Field(
+        description="The warm worker pool; 'failed': no process can run (the console says why)."
+    )
+    devices_starting: int = Field(description="Devices that have not had their first start yet.")
+    starting: list[str] | None = Field(
+        default=None,
+        description="Their names, only for a request with the bearer token (names are not public).",
+    )
+
+
+class Health(Readiness):
+    """Open to anyone who can reach the port, so nothing secret (device names need the token)."""
 
     status: Literal["ok"] = "ok"
     version: str
