@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import json
 import threading
 from collections import Counter
 from pathlib import Path
@@ -24,24 +25,28 @@ from rosaos.plugins import load_drivers
 
 
 class CallCounter(Middleware):
-    """Counts the calls of ``tool`` on one lamp into a shared counter."""
+    """Counts the calls of ``tool`` on one lamp into shared counters: by lamp, and by lamp and arguments."""
 
-    def __init__(self, lamp: str, tool: str, counts: Counter[str]) -> None:
-        self.lamp, self.tool, self.counts = lamp, tool, counts
+    def __init__(self, lamp: str, tool: str, counts: Counter[str], calls: Counter[tuple[str, str]]) -> None:
+        self.lamp, self.tool, self.counts, self.calls = lamp, tool, counts, calls
 
     async def on_call_tool(self, context: MiddlewareContext[Any], call_next: CallNext[Any, Any]) -> Any:
         if getattr(context.message, "name", "") == self.tool:
             self.counts[self.lamp] += 1
+            arguments = getattr(context.message, "arguments", None) or {}
+            self.calls[self.lamp, json.dumps(arguments, sort_keys=True)] += 1
         return await call_next(context)
 
 
 class LampRack:
-    """``names`` lamps (all off), served until :meth:`close`; ``urls`` by name, ``counts`` of ``tool``."""
+    """``names`` lamps (all off), served until :meth:`close`; ``urls`` by name, ``counts`` of ``tool``
+    by lamp, and ``calls`` of it by lamp and JSON arguments (which command it was)."""
 
     def __init__(self, home: Path, names: list[str], token: str, tool: str = "toggle") -> None:
         self.names, self.token, self.tool = names, token, tool
         self.urls: dict[str, str] = {}
         self.counts: Counter[str] = Counter()
+        self.calls: Counter[tuple[str, str]] = Counter()
         self._home = home
         self._loop = asyncio.new_event_loop()
         self._stop: asyncio.Event | None = None
@@ -83,7 +88,7 @@ class LampRack:
         async with contextlib.AsyncExitStack() as stack:
             for name in self.names:
                 device = await stack.enter_async_context(open_device(world.instances[name], config.data_dir))
-                device.server.add_middleware(CallCounter(name, self.tool, self.counts))
+                device.server.add_middleware(CallCounter(name, self.tool, self.counts, self.calls))
                 served = await stack.enter_async_context(serve_http(device.server, self.token))
                 self.urls[name] = served.url
             self._ready.set()

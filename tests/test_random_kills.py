@@ -1,15 +1,14 @@
 """No command runs twice, and every run is reported, however often the kernel is killed with SIGKILL.
 
-A stream of "toggle lamp K" commands, one per lamp, is queued on ``rosaos up`` (offline engine).
+A stream of "set lamp K to L percent" commands, 8 lamps and 8 levels, is queued on ``rosaos up`` (offline engine).
 The kernel is killed with SIGKILL at random moments of the stream, 20 times (issue 21), restarted,
 and the commands are posted again with their idempotency keys (as a client that lost its answers
 would). The lamps live in the test process (:mod:`lamp_rack`), so they outlive every kernel and
-count every ``toggle`` they receive. At the end:
+count every ``set_brightness`` they receive, by level. At the end:
 
-- no lamp was toggled more than once: a launch recorded before the kill is never launched again;
-- every command is accounted for: a lamp that was toggled has its process's end on the updates
-  stream (ok, or crashed with the kernel), and a lamp that was not has a crashed process or a
-  refusal saying why;
+- no command ran more than once: a launch recorded before the kill is never launched again;
+- every command is accounted for: one that ran has its process's end on the updates stream (ok,
+  or crashed with the kernel), and one that did not has a crashed process or a refusal saying why;
 - most kills hit a kernel with commands still queued or running: a kill after the stream ended
   would test nothing.
 
@@ -23,9 +22,9 @@ number of kills, ``ROSAOS_RANDOM_SEED`` replays a run (the seed is printed).
 
 from __future__ import annotations
 
+import json
 import os
 import random
-import re
 import time
 from pathlib import Path
 from typing import Any
@@ -35,23 +34,64 @@ import pytest
 from e2e_support import start_kernel
 from lamp_rack import LampRack
 
-LAMPS = 48
+LAMPS = 8
+LEVELS = list(range(10, 110, 10))
+"""Each lamp is set to each of these brightness levels once, in order: 80 commands, each told apart
+at the lamp by its lamp and level."""
+COMMANDS = [(k, level) for level in LEVELS for k in range(LAMPS)]
 KILLS = int(os.environ.get("ROSAOS_RANDOM_KILLS", "20"))
 TOKEN = "lamp-rack-token"
 MAX_OFFSET = 0.5
 """The longest random wait, after the kernel's first command, before it is killed."""
 
 
-def post_commands(api: httpx.Client) -> None:
-    """Queue one toggle per lamp (again: the keys make a re-post a no-op)."""
-    for k in range(LAMPS):
-        answer = api.post("/chat", json={"text": f"toggle lamp {k}"}, headers={"Idempotency-Key": f"toggle-{k}"})
+def task(k: int, level: int) -> str:
+    return f"set lamp {k} to {level} percent"
+
+
+class Stream:
+    """The client: it sends each lamp its next command once the last one is handled and its process
+    has ended (a lamp held by a process refuses the next launch), and after a restart it sends
+    what it sent before again, with the same keys, as a client that lost its answers would."""
+
+    def __init__(self) -> None:
+        self.sent: dict[int, list[int]] = {k: [] for k in range(LAMPS)}
+        """Event ids by lamp, in the order of ``LEVELS``."""
+
+    def post(self, api: httpx.Client, k: int, level: int) -> int:
+        answer = api.post(
+            "/chat", json={"text": task(k, level)}, headers={"Idempotency-Key": f"set-{k}-{level}"}
+        )
         answer.raise_for_status()
+        return int(answer.json()["id"])
+
+    def resend(self, api: httpx.Client) -> None:
+        for k, ids in self.sent.items():
+            for level, event_id in zip(LEVELS, ids, strict=False):
+                assert self.post(api, k, level) == event_id, "a re-sent command was queued as a new event"
+
+    def feed(self, api: httpx.Client) -> None:
+        held = {name for process in api.get("/processes").json() for name in process["devices"]}
+        for k, ids in self.sent.items():
+            if len(ids) == len(LEVELS) or f"lamp_{k}" in held:
+                continue
+            if ids and not api.get(f"/events/{ids[-1]}").json()["handled"]:
+                continue
+            ids.append(self.post(api, k, LEVELS[len(ids)]))
+
+    def busy(self, api: httpx.Client) -> bool:
+        """Whether commands of the stream are still to send, queued or running."""
+        unsent = sum(len(LEVELS) - len(ids) for ids in self.sent.values())
+        return bool(unsent or api.get("/health").json()["pending_events"] or api.get("/processes").json())
 
 
-def busy(api: httpx.Client) -> bool:
-    """Whether the kernel still has commands of the stream queued or running."""
-    return bool(api.get("/health").json()["pending_events"] or api.get("/processes").json())
+def all_updates(api: httpx.Client) -> list[dict[str, Any]]:
+    updates: list[dict[str, Any]] = []
+    while page := api.get(
+        "/updates", params={"after": len(updates) and updates[-1]["id"], "limit": 1000}
+    ).json()["updates"]:
+        updates += page
+    return updates
 
 
 def test_random_kernel_kills_run_no_command_twice_and_lose_no_run(
@@ -61,8 +101,9 @@ def test_random_kernel_kills_run_no_command_twice_and_lose_no_run(
     seed = int(os.environ.get("ROSAOS_RANDOM_SEED", time.time_ns()))
     print(f"ROSAOS_RANDOM_SEED={seed}")
     chance = random.Random(seed)
-    rack = LampRack(tmp_path, [f"lamp_{k}" for k in range(LAMPS)], TOKEN).start()
+    rack = LampRack(tmp_path, [f"lamp_{k}" for k in range(LAMPS)], TOKEN, tool="set_brightness").start()
     live_kills = 0
+    stream = Stream()
     try:
         config = tmp_path / "rosaos.toml"
         config.write_text(
@@ -73,56 +114,79 @@ def test_random_kernel_kills_run_no_command_twice_and_lose_no_run(
                 for name, url in rack.urls.items()
             )
         )
-        for _ in range(KILLS):
+        for kill in range(KILLS):
+            began = time.monotonic()
             # Not waiting for "ready": the kernel works through the queue from its first moment,
             # and a kill while it recovers the last one's orphans is one of the points to hit.
             kernel = start_kernel(config, ready=False)
             try:
                 with kernel.api() as api:
-                    post_commands(api)
+                    stream.resend(api)
                     ran = sum(rack.counts.values())
                     deadline = time.monotonic() + 60
-                    while sum(rack.counts.values()) == ran and time.monotonic() < deadline and busy(api):
+                    while (
+                        sum(rack.counts.values()) == ran and time.monotonic() < deadline and stream.busy(api)
+                    ):
+                        stream.feed(api)
                         time.sleep(0.02)
-                    time.sleep(chance.uniform(0.0, MAX_OFFSET))
-                    live_kills += busy(api)
+                    offset = time.monotonic() + chance.uniform(0.0, MAX_OFFSET)
+                    while time.monotonic() < offset:
+                        stream.feed(api)
+                    live = stream.busy(api)
+                    live_kills += live
             finally:
                 kernel.kill()
+            ran = sum(rack.counts.values())
+            print(
+                f"kill {kill + 1}: {time.monotonic() - began:.1f} s, {ran} ran, {'live' if live else 'idle'}"
+            )
 
         kernel = start_kernel(config)
         try:
             with kernel.api() as api:
-                post_commands(api)
+                stream.resend(api)
                 deadline = time.monotonic() + 120
-                while (still := busy(api)) and time.monotonic() < deadline:
-                    time.sleep(0.2)
+                while (still := stream.busy(api)) and time.monotonic() < deadline:
+                    stream.feed(api)
+                    time.sleep(0.05)
                 assert not still, "the last kernel did not handle the whole stream within 120 s"
-                updates: list[dict[str, Any]] = api.get(
-                    "/updates", params={"after": 0, "limit": 5000}
-                ).json()["updates"]
+                updates = all_updates(api)
         finally:
             kernel.stop()
     finally:
         rack.close()
 
-    toggles = dict(rack.counts)
-    twice = {lamp: count for lamp, count in toggles.items() if count > 1}
+    twice = {call: count for call, count in rack.calls.items() if count > 1}
     assert not twice, f"commands that ran more than once: {twice}"
-    ended = [u for u in updates if u["kind"] == "process_ended"]
-    for k in range(LAMPS):
-        lamp = f"lamp_{k}"
-        reports = [u for u in ended if re.search(rf"\blamp {k}\b", u["data"]["task"].lower())]
-        if toggles.get(lamp):
-            assert reports, f"{lamp} was toggled, but no process end reports it"
+    ended = {
+        u["data"]["task"].lower().rstrip("."): u["data"] for u in updates if u["kind"] == "process_ended"
+    }
+    refused = refused_tasks(updates)
+    ran = 0
+    for k, level in COMMANDS:
+        calls = rack.calls[f"lamp_{k}", json.dumps({"brightness": level})]
+        report = ended.get(task(k, level))
+        ran += calls
+        if calls:
+            assert report, f"{task(k, level)!r} ran, but no process end reports it"
         else:
-            # A refusal (the lamp unreachable on a busy machine, say) is told as a notice and a reply.
-            said_why = [
-                u for u in updates if u["kind"] in ("error", "notice") and f"{lamp} is not" in u["text"]
-            ]
-            crashed = [u for u in reports if u["data"]["status"] == "crashed"]
-            assert crashed or said_why, f"{lamp} was never toggled, and nothing says why: {reports}"
-    assert sum(toggles.values()) >= LAMPS // 2, f"too few commands ran to test anything: {toggles}"
+            assert (report and report["status"] == "crashed") or task(k, level) in refused, (
+                f"{task(k, level)!r} never ran, and nothing says why: {report}"
+            )
+    assert ran >= len(COMMANDS) // 2, f"too few commands ran to test anything: {ran} of {len(COMMANDS)}"
     assert live_kills >= KILLS // 2, (
         f"only {live_kills} of {KILLS} kills came while commands were queued or running: the stream "
         "ran out too early to test the kills (make it longer)"
     )
+
+
+def refused_tasks(updates: list[dict[str, Any]]) -> set[str]:
+    """The tasks whose launch was refused: each refusal notice follows its ``launch_process`` call
+    (the kernel takes one event at a time)."""
+    refused, last = set(), None
+    for update in updates:
+        if update["kind"] == "tool_call" and update["data"].get("tool") == "launch_process":
+            last = update["data"]["args"]["task"].lower().rstrip(".")
+        elif update["kind"] == "notice" and update["text"].startswith("launch refused") and last:
+            refused.add(last)
+    return refused
