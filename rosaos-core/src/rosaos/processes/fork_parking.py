@@ -29,6 +29,10 @@ log = logging.getLogger(__name__)
 ADOPT_TIMEOUT = 5.0
 """Seconds to wait for a parked fork server's answer before starting a new one."""
 MESSAGE_LIMIT = 64 * 1024
+VOLATILE = frozenset({"PWD", "OLDPWD", "SHLVL", "_", "COLUMNS", "LINES", "PYTEST_CURRENT_TEST"})
+"""Variables a shell or a test runner changes from one start to the next, which no worker reads:
+left out of the key, so they alone do not keep a restart from adopting (the working directory
+itself is in it)."""
 
 
 def park_name(data_dir: Path) -> str:
@@ -42,7 +46,8 @@ def park_key(python: str, env: Mapping[str, str], preload: Sequence[str]) -> str
     what a fresh server would fork (the same API keys in its environment, the same model modules)."""
     import rosaos
 
-    what = [python, sorted(env.items()), list(preload), rosaos.__version__]
+    kept = sorted((name, value) for name, value in env.items() if name not in VOLATILE)
+    what = [python, os.getcwd(), kept, list(preload), rosaos.__version__]
     return hashlib.sha256(json.dumps(what).encode()).hexdigest()
 
 
