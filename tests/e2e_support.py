@@ -191,3 +191,15 @@ def served_device(home: Path, name: str, table: str) -> Iterator[tuple[str, str]
         yield url, (home / f"{name}-data" / "token").read_text().strip()
     finally:
         end(served, signal.SIGINT, timeout=30)
+
+
+DOG = 'driver = "ros"\nprofile = "puppypi"\ndescription = "Hiwonder PuppyPi robot dog"\n'
+"""The robot dog on the rosbridge simulator, as a ``[devices.dog]`` table for :func:`served_device`."""
+
+
+def remote_device(name: str, url: str, token: str, description: str, driver: str = "ros") -> str:
+    """A ``[devices.NAME]`` table for a kernel that reaches a device served elsewhere."""
+    return (
+        f'[devices.{name}]\ndriver = "{driver}"\nurl = "{url}"\ntoken = "{token}"\n'
+        f'description = "{description}"\n'
+    )

@@ -10,12 +10,10 @@ the dog moves again.
 from __future__ import annotations
 
 import asyncio
-import signal
 import socket
 from pathlib import Path
 
-import httpx
-from test_orphans_after_kernel_kill import start_kernel
+from e2e_support import remote_device, start_kernel
 from test_partition import dog  # noqa: F401  (the fixture)
 
 from rosaos.devices.client import DeviceClient
@@ -49,15 +47,14 @@ def test_a_latched_emergency_stop_is_enforced_by_every_device_host(
     config = tmp_path / "rosaos.toml"
     config.write_text(
         f'data_dir = "{tmp_path / "data"}"\n[kernel]\npool_size = 1\n'
-        f'[devices.dog]\ndriver = "ros"\nurl = "{dog_url}"\ntoken = "{dog_token}"\n'
-        'description = "Hiwonder PuppyPi robot dog"\n'
-        f'[devices.ghost]\ndriver = "tapo"\nurl = "http://127.0.0.1:{free_port()}/mcp"\ntoken = "x"\n'
-        'description = "A lamp whose host is down"\n'
+        + remote_device("dog", dog_url, dog_token, "Hiwonder PuppyPi robot dog")
+        + remote_device(
+            "ghost", f"http://127.0.0.1:{free_port()}/mcp", "x", "A lamp whose host is down", "tapo"
+        )
     )
-    kernel, url = start_kernel(config)
-    token = (tmp_path / "data" / "token").read_text().strip()
+    kernel = start_kernel(config)
     try:
-        with httpx.Client(base_url=url, headers={"Authorization": f"Bearer {token}"}, timeout=30) as api:
+        with kernel.api(timeout=30) as api:
             stopped = api.post("/estop", json={"reason": "test"}).json()
             refused = asyncio.run(drive(dog_url, dog_token))
             readable = asyncio.run(state(dog_url, dog_token))
@@ -65,8 +62,7 @@ def test_a_latched_emergency_stop_is_enforced_by_every_device_host(
             api.post("/estop/reset").raise_for_status()
             after_reset = asyncio.run(drive(dog_url, dog_token))
     finally:
-        kernel.send_signal(signal.SIGINT)
-        kernel.wait(60)
+        kernel.stop()
     assert stopped["latched"] and stopped["untold_hosts"] == ["ghost"], stopped
     assert "emergency stop is latched" in refused and "drive" in refused, refused
     assert "x" in readable

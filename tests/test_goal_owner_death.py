@@ -10,7 +10,6 @@ the goal must be cancelled and the robot still; it must not drive on to the goal
 from __future__ import annotations
 
 import asyncio
-import signal
 import subprocess
 import sys
 import time
@@ -19,8 +18,7 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from cli_process import line_matching
-from test_orphans_after_kernel_kill import start
+from e2e_support import served_device
 
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.deadman import OWNER_HEADER, SILENCE_LIMIT
@@ -58,22 +56,9 @@ with httpx.Client(timeout=120) as http:
 @pytest.fixture
 def turtlebot(tmp_path: Path) -> Iterator[tuple[str, str]]:
     """The turtlebot (undocked, with Nav2) on the rosbridge simulator, served on its own."""
-    config = tmp_path / "robot.toml"
-    config.write_text(
-        f'data_dir = "{tmp_path / "robot-data"}"\n'
-        '[devices.turtlebot]\ndriver = "ros"\nprofile = "turtlebot4"\nsim = { docked = false }\n'
-        'description = "TurtleBot4 with Nav2"\n'
-    )
-    served = start("serve-device", "turtlebot", "--config", str(config), "--port", "0")
-    try:
-        url = line_matching(served, r"(http://127\.0\.0\.1:\d+/mcp)").group(1)
-        yield url, (tmp_path / "robot-data" / "token").read_text().strip()
-    finally:
-        served.send_signal(signal.SIGINT)
-        try:
-            served.wait(30)
-        except subprocess.TimeoutExpired:
-            served.kill()
+    table = 'driver = "ros"\nprofile = "turtlebot4"\nsim = { docked = false }\ndescription = "TurtleBot4 with Nav2"\n'
+    with served_device(tmp_path, "turtlebot", table) as served:
+        yield served
 
 
 def state(url: str, token: str) -> dict[str, Any]:

@@ -13,56 +13,22 @@ three metres and is killed with SIGKILL while it walks. Then:
 from __future__ import annotations
 
 import asyncio
-import os
-import signal
-import subprocess
 import time
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-import httpx
 import pytest
-from cli_process import ROSAOS, line_matching
+from e2e_support import DOG, remote_device, served_device, start_kernel
 
 from rosaos.devices.client import DeviceClient
-
-
-def start(*args: str) -> subprocess.Popen[str]:
-    return subprocess.Popen(
-        [str(ROSAOS), *args],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-        env={**os.environ, "COLUMNS": "200"},
-    )
 
 
 @pytest.fixture
 def robot(tmp_path: Path) -> Iterator[tuple[str, str]]:
     """The dog (a PuppyPi on the rosbridge simulator), served on its own; yields its URL and token."""
-    config = tmp_path / "robot.toml"
-    config.write_text(
-        f'data_dir = "{tmp_path / "robot-data"}"\n'
-        '[devices.dog]\ndriver = "ros"\nprofile = "puppypi"\n'
-        'description = "Hiwonder PuppyPi robot dog"\n'
-    )
-    served = start("serve-device", "dog", "--config", str(config), "--port", "0")
-    try:
-        url = line_matching(served, r"(http://127\.0\.0\.1:\d+/mcp)").group(1)
-        yield url, (tmp_path / "robot-data" / "token").read_text().strip()
-    finally:
-        served.send_signal(signal.SIGINT)
-        try:
-            served.wait(30)
-        except subprocess.TimeoutExpired:
-            served.kill()
-
-
-def start_kernel(config: Path) -> tuple[subprocess.Popen[str], str]:
-    kernel = start("up", "--config", str(config), "--port", "0")
-    url = line_matching(kernel, r"rosaOS is up at (http://\S+?)/?$").group(1)
-    return kernel, url
+    with served_device(tmp_path, "dog", DOG) as served:
+        yield served
 
 
 async def dog_x(url: str, token: str) -> float:
@@ -87,21 +53,15 @@ def test_a_kernel_killed_mid_motion_leaves_no_robot_moving_and_reports_the_orpha
     config = tmp_path / "rosaos.toml"
     config.write_text(
         f'data_dir = "{tmp_path / "data"}"\n[kernel]\npool_size = 1\n'
-        f'[devices.dog]\ndriver = "ros"\nurl = "{robot_url}"\ntoken = "{robot_token}"\n'
-        'description = "Hiwonder PuppyPi robot dog"\n'
+        + remote_device("dog", robot_url, robot_token, "Hiwonder PuppyPi robot dog")
     )
-    kernel, url = start_kernel(config)
-    token = (tmp_path / "data" / "token").read_text().strip()
-    headers = {"Authorization": f"Bearer {token}"}
+    kernel = start_kernel(config)  # ready: the dog is up and the workers are warm
     try:
-        with httpx.Client(base_url=url, headers=headers, timeout=10) as api:
+        with kernel.api() as api:
             api.post("/chat", json={"text": "make the dog walk forward 3 meters"}).raise_for_status()
-            # The banner does not wait for the warm pool: on a busy machine the first command
-            # also waits for the fork server's imports.
-            eventually(lambda: asyncio.run(dog_x(robot_url, robot_token)) > 0.2, timeout=180)
+            eventually(lambda: asyncio.run(dog_x(robot_url, robot_token)) > 0.2, timeout=30)
     finally:
-        kernel.send_signal(signal.SIGKILL)
-        kernel.wait()
+        kernel.kill()
 
     time.sleep(1.5)  # the worker sees its pipe close and stops the dog; the base settles
     settled = asyncio.run(dog_x(robot_url, robot_token))
@@ -111,9 +71,9 @@ def test_a_kernel_killed_mid_motion_leaves_no_robot_moving_and_reports_the_orpha
     )
     assert settled < 2.5, "the dog walked its whole way: nothing stopped it"
 
-    kernel, url = start_kernel(config)
+    kernel = start_kernel(config)
     try:
-        with httpx.Client(base_url=url, headers=headers, timeout=10) as api:
+        with kernel.api() as api:
             updates = api.get("/updates", params={"after": 0, "limit": 1000}).json()["updates"]
             ended = [u for u in updates if u["kind"] == "process_ended"]
             crashed = [u for u in ended if "crashed (kernel restarted" in u["text"]]
@@ -122,7 +82,6 @@ def test_a_kernel_killed_mid_motion_leaves_no_robot_moving_and_reports_the_orpha
             assert "dog safe-stopped" in crashed[0]["data"]["error"]
             # The dog is free again: a new process gets it and walks.
             api.post("/chat", json={"text": "make the dog walk forward half a meter"}).raise_for_status()
-            eventually(lambda: asyncio.run(dog_x(robot_url, robot_token)) > settled + 0.1, timeout=180)
+            eventually(lambda: asyncio.run(dog_x(robot_url, robot_token)) > settled + 0.1, timeout=30)
     finally:
-        kernel.send_signal(signal.SIGINT)
-        kernel.wait(60)
+        kernel.stop()

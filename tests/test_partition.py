@@ -12,8 +12,6 @@ the reason, and the dog's lease is free.
 from __future__ import annotations
 
 import asyncio
-import signal
-import subprocess
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -22,8 +20,7 @@ from typing import Any
 import httpx
 import pytest
 from blackhole import blackhole
-from cli_process import line_matching
-from test_orphans_after_kernel_kill import start, start_kernel
+from e2e_support import DOG, remote_device, served_device, start_kernel
 
 from rosaos.devices.client import DeviceClient
 
@@ -36,22 +33,8 @@ FREE_BOUND = 5.0
 @pytest.fixture
 def dog(tmp_path: Path) -> Iterator[tuple[str, str]]:
     """The dog on the rosbridge simulator, served on its own; yields its URL and token."""
-    config = tmp_path / "robot.toml"
-    config.write_text(
-        f'data_dir = "{tmp_path / "robot-data"}"\n'
-        '[devices.dog]\ndriver = "ros"\nprofile = "puppypi"\n'
-        'description = "Hiwonder PuppyPi robot dog"\n'
-    )
-    served = start("serve-device", "dog", "--config", str(config), "--port", "0")
-    try:
-        url = line_matching(served, r"(http://127\.0\.0\.1:\d+/mcp)").group(1)
-        yield url, (tmp_path / "robot-data" / "token").read_text().strip()
-    finally:
-        served.send_signal(signal.SIGINT)
-        try:
-            served.wait(30)
-        except subprocess.TimeoutExpired:
-            served.kill()
+    with served_device(tmp_path, "dog", DOG) as served:
+        yield served
 
 
 def dog_state(url: str, token: str) -> dict[str, Any]:
@@ -85,17 +68,15 @@ def test_a_silent_link_stops_the_robot_and_a_healed_one_frees_its_lease(
         config = tmp_path / "rosaos.toml"
         config.write_text(
             f'data_dir = "{tmp_path / "data"}"\n[kernel]\npool_size = 1\n'
-            f'[devices.dog]\ndriver = "ros"\nurl = "http://127.0.0.1:{link.port}/mcp"\n'
-            f'token = "{dog_token}"\ndescription = "Hiwonder PuppyPi robot dog"\n'
+            + remote_device(
+                "dog", f"http://127.0.0.1:{link.port}/mcp", dog_token, "Hiwonder PuppyPi robot dog"
+            )
         )
-        kernel, url = start_kernel(config)
-        token = (tmp_path / "data" / "token").read_text().strip()
+        kernel = start_kernel(config)  # ready: the dog is up and the workers are warm
         try:
-            with httpx.Client(base_url=url, headers={"Authorization": f"Bearer {token}"}, timeout=10) as api:
+            with kernel.api() as api:
                 api.post("/chat", json={"text": "make the dog walk forward 10 meters"}).raise_for_status()
-                # 180 s: the banner does not wait for the warm pool, so on a busy machine the
-                # first command also waits for the fork server's imports.
-                wait_for(lambda: dog_state(dog_url, dog_token)["x"] > 0.2, 180, "the dog walking")
+                wait_for(lambda: dog_state(dog_url, dog_token)["x"] > 0.2, 30, "the dog walking")
 
                 link.silence()
                 # Read the dog on its own host, around the proxy: only the kernel's link is cut.
@@ -115,8 +96,7 @@ def test_a_silent_link_stops_the_robot_and_a_healed_one_frees_its_lease(
                     if u["kind"] == "process_ended"
                 ]
         finally:
-            kernel.send_signal(signal.SIGINT)
-            kernel.wait(60)
+            kernel.stop()
     assert stopped_after < STOP_BOUND, (
         f"the dog was still moving {stopped_after:.1f} s after its link went quiet"
     )
@@ -137,25 +117,23 @@ def test_a_safe_stop_that_could_not_be_delivered_is_retried_when_the_link_heals(
         config = tmp_path / "rosaos.toml"
         config.write_text(
             f'data_dir = "{tmp_path / "data"}"\n[kernel]\npool_size = 1\n'
-            f'[devices.dog]\ndriver = "ros"\nurl = "http://127.0.0.1:{link.port}/mcp"\n'
-            f'token = "{dog_token}"\ndescription = "Hiwonder PuppyPi robot dog"\n'
+            + remote_device(
+                "dog", f"http://127.0.0.1:{link.port}/mcp", dog_token, "Hiwonder PuppyPi robot dog"
+            )
         )
-        kernel, url = start_kernel(config)
-        token = (tmp_path / "data" / "token").read_text().strip()
-        headers = {"Authorization": f"Bearer {token}"}
+        kernel = start_kernel(config)  # ready: the dog is up and the workers are warm
         try:
-            with httpx.Client(base_url=url, headers=headers, timeout=10) as api:
+            with kernel.api() as api:
                 api.post("/chat", json={"text": "make the dog walk forward 10 meters"}).raise_for_status()
-                # 180 s: the banner does not wait for the warm pool, so on a busy machine the
-                # first command also waits for the fork server's imports.
-                wait_for(lambda: dog_state(dog_url, dog_token)["x"] > 0.2, 180, "the dog walking")
+                wait_for(lambda: dog_state(dog_url, dog_token)["x"] > 0.2, 30, "the dog walking")
                 link.silence()
         finally:
-            kernel.send_signal(signal.SIGKILL)
-            kernel.wait()
-        kernel, url = start_kernel(config)  # the dog cannot be told: its safe_stop is owed
+            kernel.kill()
+        # The dog cannot be told: its safe_stop is owed. Not waiting for "ready": the dog is
+        # unreachable, and the owed stop must hold a launch back whatever the readiness says.
+        kernel = start_kernel(config, ready=False)
         try:
-            with httpx.Client(base_url=url, headers=headers, timeout=10) as api:
+            with kernel.api() as api:
                 crashed = [
                     u
                     for u in api.get("/updates", params={"after": 0, "limit": 1000}).json()["updates"]
@@ -173,8 +151,7 @@ def test_a_safe_stop_that_could_not_be_delivered_is_retried_when_the_link_heals(
                 wait_for(retried, 20, "the owed safe_stop retried and reported")
                 updates = api.get("/updates", params={"after": 0, "limit": 1000}).json()["updates"]
         finally:
-            kernel.send_signal(signal.SIGINT)
-            kernel.wait(60)
+            kernel.stop()
     assert crashed and "dog NOT safe-stopped" in crashed[-1]["data"]["error"], crashed
     texts = [u["text"] for u in updates]
     assert any("owes a safe_stop" in text or "is not available" in text for text in texts), texts
