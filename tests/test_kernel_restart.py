@@ -133,10 +133,18 @@ def test_an_emergency_stop_latched_before_a_sigkill_holds_after_restart_until_re
     first, url, _ = start_kernel(config)
     headers = {"Authorization": f"Bearer {(config.parent / 'data' / 'token').read_text().strip()}"}
     try:
-        # The banner comes before the devices are up (issue 27): latch once the lamp serves, so
-        # its safe_stop is what the report shows (a lamp still starting starts latched instead).
-        with httpx.Client(base_url=url, headers=headers, timeout=30) as api:
-            wait_for(lambda: all(d["status"] == "healthy" for d in api.get("/devices").json()))
+        # The banner comes before the devices are up (issue 27): latch once rosaOS is ready, as a
+        # script would wait for it, so the lamp's safe_stop is what the report shows (a lamp still
+        # starting starts latched instead).
+        ready = subprocess.run(
+            [str(ROSAOS), "ready", "--config", str(config), "--url", url, "--timeout", "120"],
+            capture_output=True,
+            text=True,
+            timeout=180,
+            check=False,
+        )
+        assert ready.returncode == 0, ready.stdout + ready.stderr
+        assert ready.stdout.startswith("rosaOS is ready"), ready.stdout
         # Latched the way a person would, with the CLI.
         latch = subprocess.run(
             [
