@@ -90,11 +90,14 @@ def test_a_silent_link_stops_the_robot_and_a_healed_one_frees_its_lease(
 
                 link.heal()
                 freed_after = wait_for(lambda: not holders(api, "dog"), 30, "the dog's lease freed")
-                ended = [
-                    u
-                    for u in api.get("/updates", params={"after": 0, "limit": 1000}).json()["updates"]
-                    if u["kind"] == "process_ended"
-                ]
+
+                def ended_updates() -> list[dict[str, Any]]:
+                    updates = api.get("/updates", params={"after": 0, "limit": 1000}).json()["updates"]
+                    return [u for u in updates if u["kind"] == "process_ended"]
+
+                # The end is published once the intake has its callback, a moment after the lease.
+                wait_for(ended_updates, 10, "the process's end on the updates stream")
+                ended = ended_updates()
         finally:
             kernel.stop()
     assert stopped_after < STOP_BOUND, (

@@ -19,6 +19,7 @@ from processes_support import (
     Endings,
     KernelStandIn,
     LoopbackDevice,
+    eventually,
     make_job,
     parent_pid,
     pid_alive,
@@ -83,7 +84,7 @@ async def test_the_next_kernel_adopts_the_fork_server_of_one_that_died_and_forks
         assert (callback.status, callback.output) == ("ok", "lamp level is 42")
     finally:
         await pool.stop()
-    wait_until_dead(server)  # a kernel that stops (not one that dies) leaves nothing behind
+    wait_until_dead(server, within=30)  # a kernel that stops (not one that dies) leaves nothing behind
 
 
 async def test_a_parked_fork_server_that_does_not_fit_exits_and_a_fresh_one_starts(tmp_path: Path) -> None:
@@ -93,9 +94,10 @@ async def test_a_parked_fork_server_that_does_not_fit_exits_and_a_fresh_one_star
     await pool.start()
     try:
         assert pool.fork_server is not None
-        assert not pool.fork_server.adopted and pool.fork_server.ready
+        assert not pool.fork_server.adopted
+        await eventually(lambda: pool.fork_server and pool.fork_server.ready, within=120, what="a fresh one")
         assert pool.fork_server.pid not in (None, server)
-        wait_until_dead(server)
+        wait_until_dead(server, within=30)
     finally:
         await pool.stop()
 
