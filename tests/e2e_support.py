@@ -203,3 +203,43 @@ def remote_device(name: str, url: str, token: str, description: str, driver: str
         f'[devices.{name}]\ndriver = "{driver}"\nurl = "{url}"\ntoken = "{token}"\n'
         f'description = "{description}"\n'
     )
+
+
+# --- talking to an in-process kernel's API, and the walking dog of the stop tests --------------------
+
+
+async def chat(api: httpx.AsyncClient, text: str) -> int:
+    """``POST /chat``; the event's id."""
+    response = await api.post("/chat", json={"text": text})
+    assert response.status_code == 202, response.text
+    return int(response.json()["id"])
+
+
+async def handled(api: httpx.AsyncClient, event_id: int) -> bool:
+    return bool((await api.get(f"/events/{event_id}")).json().get("handled"))
+
+
+async def updates_of(api: httpx.AsyncClient, event_id: int) -> list[dict[str, Any]]:
+    """The updates that event ``event_id`` caused (its replies, tool calls, notices)."""
+    updates = (await api.get("/updates", params={"after": 0, "limit": 1000})).json()["updates"]
+    return [u for u in updates if u.get("event_id") == event_id]
+
+
+async def all_healthy(api: httpx.AsyncClient) -> bool:
+    return all(device["status"] == "healthy" for device in (await api.get("/devices")).json())
+
+
+async def walk_the_dog(
+    api: httpx.AsyncClient, kernel: Kernel, command: str, timeout: float = 120
+) -> dict[str, Any]:
+    """Say ``command``; return the process that holds the dog once the dog is moving."""
+    await chat(api, command)
+
+    async def walking() -> dict[str, Any] | None:
+        running = [p for p in (await api.get("/processes")).json() if "dog" in p["devices"]]
+        if running and abs((await device_state(kernel, "dog"))["linear"]) > 0.01:
+            return running[0]
+        return None
+
+    walk: dict[str, Any] = await eventually(walking, timeout=timeout)
+    return walk

@@ -14,17 +14,27 @@ from __future__ import annotations
 
 import asyncio
 import time
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Awaitable, Callable
 from typing import Any
 
 import httpx
 import pytest
 import pytest_asyncio
-from e2e_support import device_state, eventually, kernel_api, scripted_kernel
+from e2e_support import (
+    all_healthy,
+    chat,
+    device_state,
+    eventually,
+    handled,
+    kernel_api,
+    scripted_kernel,
+    updates_of,
+)
 
 from rosaos.kernel.runtime import Kernel
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
+WalkingDog = Callable[[str], Awaitable[dict[str, Any]]]
 
 WORLD = """
 [devices.dog]
@@ -52,37 +62,14 @@ async def kernel(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Kern
 @pytest_asyncio.fixture(loop_scope="module")
 async def api(kernel: Kernel) -> AsyncIterator[httpx.AsyncClient]:
     async with kernel_api(kernel) as client:
-        await eventually(lambda: _healthy(client), timeout=120)
+        await eventually(lambda: all_healthy(client), timeout=120)
         yield client
 
 
-async def chat(api: httpx.AsyncClient, text: str) -> int:
-    response = await api.post("/chat", json={"text": text})
-    assert response.status_code == 202, response.text
-    return int(response.json()["id"])
-
-
-async def handled(api: httpx.AsyncClient, event_id: int) -> bool:
-    return bool((await api.get(f"/events/{event_id}")).json().get("handled"))
-
-
-async def updates_of(api: httpx.AsyncClient, event_id: int) -> list[dict[str, Any]]:
-    updates = (await api.get("/updates", params={"after": 0, "limit": 1000})).json()["updates"]
-    return [u for u in updates if u.get("event_id") == event_id]
-
-
-async def walking(api: httpx.AsyncClient, kernel: Kernel) -> dict[str, Any] | None:
-    running = [p for p in (await api.get("/processes")).json() if "dog" in p["devices"]]
-    if running and abs((await device_state(kernel, "dog"))["linear"]) > 0.01:
-        return running[0]
-    return None
-
-
 async def test_stop_the_dog_stops_it_at_intake_while_the_kernel_is_mid_turn(
-    api: httpx.AsyncClient, kernel: Kernel
+    api: httpx.AsyncClient, kernel: Kernel, walking_dog: WalkingDog
 ) -> None:
-    await chat(api, 'dog: call move_distance {"meters": 2}')
-    walk = await eventually(lambda: walking(api, kernel), timeout=120)
+    walk = await walking_dog('dog: call move_distance {"meters": 2}')
     busy = await chat(api, f"slow {SLOW_TURN:g}")
     await asyncio.sleep(0.5)  # the kernel's model is now inside its 8 s turn
     assert not await handled(api, busy)
@@ -111,9 +98,10 @@ async def test_stop_the_dog_stops_it_at_intake_while_the_kernel_is_mid_turn(
     await eventually(lambda: handled(api, stop), timeout=60)  # the kernel still handles it, after its turn
 
 
-async def test_the_kernel_still_answers_the_stop_with_what_was_stopped(api: httpx.AsyncClient) -> None:
-    await chat(api, 'dog: call move_distance {"meters": 2}')
-    await eventually(lambda: _dog_held(api), timeout=120)
+async def test_the_kernel_still_answers_the_stop_with_what_was_stopped(
+    api: httpx.AsyncClient, walking_dog: WalkingDog
+) -> None:
+    await walking_dog('dog: call move_distance {"meters": 2}')
     stop = await chat(api, "stop: dog")
     await eventually(lambda: handled(api, stop), timeout=30)
     said = await updates_of(api, stop)
@@ -128,11 +116,3 @@ async def test_a_sentence_that_is_not_a_stop_is_left_to_the_kernel(api: httpx.As
     await eventually(lambda: handled(api, event), timeout=30)
     said = await updates_of(api, event)
     assert not any(u["data"].get("at_intake") for u in said if u["kind"] == "tool_call"), said
-
-
-async def _dog_held(api: httpx.AsyncClient) -> bool:
-    return any("dog" in p["devices"] for p in (await api.get("/processes")).json())
-
-
-async def _healthy(api: httpx.AsyncClient) -> bool:
-    return all(device["status"] == "healthy" for device in (await api.get("/devices")).json())

@@ -8,17 +8,27 @@ process walks the dog with ``move_distance``, and the kernel, told "stop: dog", 
 from __future__ import annotations
 
 import asyncio
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Awaitable, Callable
 from typing import Any
 
 import httpx
 import pytest
 import pytest_asyncio
-from e2e_support import device_state, eventually, kernel_api, scripted_kernel
+from e2e_support import (
+    all_healthy,
+    chat,
+    device_state,
+    eventually,
+    handled,
+    kernel_api,
+    scripted_kernel,
+    updates_of,
+)
 
 from rosaos.kernel.runtime import Kernel
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
+WalkingDog = Callable[[str], Awaitable[dict[str, Any]]]
 
 WORLD = """
 [devices.dog]
@@ -38,37 +48,14 @@ async def kernel(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Kern
 async def api(kernel: Kernel) -> AsyncIterator[httpx.AsyncClient]:
     async with kernel_api(kernel) as client:
         # A launch on a device that is not healthy yet is refused: wait (the simulator boots slowly when busy).
-        await eventually(lambda: _all_healthy(client), timeout=120)
+        await eventually(lambda: all_healthy(client), timeout=120)
         yield client
 
 
-async def chat(api: httpx.AsyncClient, text: str) -> int:
-    response = await api.post("/chat", json={"text": text})
-    assert response.status_code == 202, response.text
-    return int(response.json()["id"])
-
-
-async def handled(api: httpx.AsyncClient, event_id: int) -> bool:
-    return bool((await api.get(f"/events/{event_id}")).json().get("handled"))
-
-
-async def updates_of(api: httpx.AsyncClient, event_id: int) -> list[dict[str, Any]]:
-    updates = (await api.get("/updates", params={"after": 0, "limit": 1000})).json()["updates"]
-    return [u for u in updates if u.get("event_id") == event_id]
-
-
-async def walking(api: httpx.AsyncClient, kernel: Kernel) -> dict[str, Any] | None:
-    running = [p for p in (await api.get("/processes")).json() if "dog" in p["devices"]]
-    if running and abs((await device_state(kernel, "dog"))["linear"]) > 0.01:
-        return running[0]
-    return None
-
-
 async def test_the_llm_kernel_stops_the_held_dog_with_the_stop_tool(
-    api: httpx.AsyncClient, kernel: Kernel
+    api: httpx.AsyncClient, kernel: Kernel, walking_dog: WalkingDog
 ) -> None:
-    await chat(api, 'dog: call move_distance {"meters": 2}')
-    walk = await eventually(lambda: walking(api, kernel), timeout=120)
+    walk = await walking_dog('dog: call move_distance {"meters": 2}')
 
     stop = await chat(api, "stop: dog")
     await eventually(lambda: handled(api, stop), timeout=20)
@@ -95,7 +82,3 @@ async def test_the_llm_kernel_reads_state_without_a_process(api: httpx.AsyncClie
     assert not any(u["kind"] == "process_launched" for u in said)
     reply = next(u["text"] for u in said if u["kind"] == "kernel_reply")
     assert "where it started" in reply and "rad" not in reply.replace("radians", "")
-
-
-async def _all_healthy(api: httpx.AsyncClient) -> bool:
-    return all(device["status"] == "healthy" for device in (await api.get("/devices")).json())

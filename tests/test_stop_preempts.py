@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import subprocess
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Awaitable, Callable
 from pathlib import Path
 from typing import Any
 
@@ -18,11 +18,21 @@ import httpx
 import pytest
 import pytest_asyncio
 from cli_process import ROSAOS
-from e2e_support import device_state, eventually, kernel_api, running_kernel
+from e2e_support import (
+    all_healthy,
+    chat,
+    device_state,
+    eventually,
+    handled,
+    kernel_api,
+    running_kernel,
+    updates_of,
+)
 
 from rosaos.kernel.runtime import Kernel
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
+WalkingDog = Callable[[str], Awaitable[dict[str, Any]]]
 
 WORLD = """
 [devices.turtlebot]
@@ -60,23 +70,8 @@ async def kernel(home: Path) -> AsyncIterator[Kernel]:
 @pytest_asyncio.fixture(loop_scope="module")
 async def api(kernel: Kernel) -> AsyncIterator[httpx.AsyncClient]:
     async with kernel_api(kernel) as client:
-        await eventually(lambda: _all_healthy(client), timeout=120)
+        await eventually(lambda: all_healthy(client), timeout=120)
         yield client
-
-
-async def chat(api: httpx.AsyncClient, text: str) -> int:
-    response = await api.post("/chat", json={"text": text})
-    assert response.status_code == 202, response.text
-    return int(response.json()["id"])
-
-
-async def handled(api: httpx.AsyncClient, event_id: int) -> bool:
-    return bool((await api.get(f"/events/{event_id}")).json().get("handled"))
-
-
-async def replies(api: httpx.AsyncClient, event_id: int) -> list[dict[str, Any]]:
-    updates = (await api.get("/updates", params={"after": 0, "limit": 1000})).json()["updates"]
-    return [u for u in updates if u.get("event_id") == event_id]
 
 
 async def process_on(api: httpx.AsyncClient, device: str) -> dict[str, Any] | None:
@@ -89,10 +84,6 @@ async def process(api: httpx.AsyncClient, process_id: int) -> dict[str, Any]:
     return next(p for p in listed if p["id"] == process_id)
 
 
-async def moving(kernel: Kernel, name: str) -> bool:
-    return abs((await device_state(kernel, name))["linear"]) > 0.01
-
-
 async def stop_and_check_still(api: httpx.AsyncClient, kernel: Kernel, text: str, robot: str) -> str:
     """Say ``text``; once handled, the robot's pose must not change over 0.5 s. Returns the reply."""
     event_id = await chat(api, text)
@@ -102,15 +93,15 @@ async def stop_and_check_still(api: httpx.AsyncClient, kernel: Kernel, text: str
     later = await device_state(kernel, robot)
     travelled = abs(later["x"] - first["x"]) + abs(later["y"] - first["y"])
     assert travelled < STILL, f"the {robot} moved {travelled:.3f} m in the 0.5 s after the stop was handled"
-    said = [u["text"] for u in await replies(api, event_id) if u["kind"] == "kernel_reply"]
+    said = [u["text"] for u in await updates_of(api, event_id) if u["kind"] == "kernel_reply"]
     assert said, "the stop got no reply"
     return " ".join(said)
 
 
-async def test_stop_the_dog_terminates_the_walk_that_holds_it(api: httpx.AsyncClient, kernel: Kernel) -> None:
-    await chat(api, "walk the dog forward two meters")
-    walk = await eventually(lambda: process_on(api, "dog"))
-    await eventually(lambda: moving(kernel, "dog"))
+async def test_stop_the_dog_terminates_the_walk_that_holds_it(
+    api: httpx.AsyncClient, kernel: Kernel, walking_dog: WalkingDog
+) -> None:
+    walk = await walking_dog("walk the dog forward two meters")
 
     reply = await stop_and_check_still(api, kernel, "okay, enough, halt the dog", "dog")
 
@@ -120,14 +111,12 @@ async def test_stop_the_dog_terminates_the_walk_that_holds_it(api: httpx.AsyncCl
 
 
 async def test_a_bare_stop_stops_the_moving_robot_and_then_the_music(
-    api: httpx.AsyncClient, kernel: Kernel
+    api: httpx.AsyncClient, kernel: Kernel, walking_dog: WalkingDog
 ) -> None:
     music = await chat(api, "play some music")
     await eventually(lambda: handled(api, music))
     await eventually(lambda: _playing(kernel))
-    await chat(api, "walk the dog back one meter")
-    walk = await eventually(lambda: process_on(api, "dog"))
-    await eventually(lambda: moving(kernel, "dog"))
+    walk = await walking_dog("walk the dog back one meter")
 
     reply = await stop_and_check_still(api, kernel, "stop", "dog")
 
@@ -145,7 +134,7 @@ async def test_a_question_is_answered_while_a_search_holds_the_robot_and_stop_en
 
     asked = await chat(api, "is the turtlebot docked?")
     await eventually(lambda: handled(api, asked))
-    said = await replies(api, asked)
+    said = await updates_of(api, asked)
     kinds = [u["kind"] for u in said]
     assert "process_launched" not in kinds and "notice" not in kinds, said
     answer = next(u["text"] for u in said if u["kind"] == "kernel_reply")
@@ -154,7 +143,7 @@ async def test_a_question_is_answered_while_a_search_holds_the_robot_and_stop_en
 
     battery = await chat(api, "how charged is the turtlebot?")
     await eventually(lambda: handled(api, battery))
-    assert any("battery is at" in u["text"] for u in await replies(api, battery))
+    assert any("battery is at" in u["text"] for u in await updates_of(api, battery))
     assert (await process(api, search["id"]))["state"] == "running"  # the question took no lease
 
     await stop_and_check_still(api, kernel, "stop the turtlebot", "turtlebot")
@@ -162,10 +151,9 @@ async def test_a_question_is_answered_while_a_search_holds_the_robot_and_stop_en
 
 
 async def test_chat_wait_exits_non_zero_when_its_launch_is_refused(
-    api: httpx.AsyncClient, kernel: Kernel, home: Path
+    kernel: Kernel, home: Path, walking_dog: WalkingDog
 ) -> None:
-    await chat(api, "walk the dog forward two meters")
-    walk = await eventually(lambda: process_on(api, "dog"))
+    walk = await walking_dog("walk the dog forward two meters")
     try:
         command = [ROSAOS, "chat", "-c", str(home / "rosaos.toml"), "--url", kernel.url]
         refused = await _run([*command, "-m", "turn the dog left", "--wait"])
@@ -175,10 +163,6 @@ async def test_chat_wait_exits_non_zero_when_its_launch_is_refused(
         assert stopped.returncode == 0, stopped.stdout + stopped.stderr
     finally:
         await kernel.manager.terminate(walk["id"])
-
-
-async def _all_healthy(api: httpx.AsyncClient) -> bool:
-    return all(device["status"] == "healthy" for device in (await api.get("/devices")).json())
 
 
 async def _playing(kernel: Kernel) -> bool:
