@@ -1,7 +1,8 @@
 """Compositional understanding, second round: kinds of language a new writer used that the reader
 did not yet read. A command with its reason after it; music transport (resume, replay, repeat,
 back a track); reversing with units; a robot facing front or looking straight ahead again; two
-lights trading states; questions about what plays. Each kind is checked on several sentences, and
+lights trading states; questions about what plays. Stops and questions name devices with the
+reader's own resolver (one for every reader). Each kind is checked on several sentences, and
 against what must stay refused (a negation, a device the world lacks).
 """
 
@@ -13,11 +14,11 @@ import pytest
 from intents_support import home_world
 
 from rosaos.config import DeviceConfig
-from rosaos.intents.grammar.vocabulary import sources_from_config
+from rosaos.intents.grammar.vocabulary import DeviceVocabulary, sources_from_config
 from rosaos.intents.understanding.compose.speech import clauses, normalise, remark, without_reason
 from rosaos.intents.understanding.matching import IntentMatcher
 from rosaos.intents.understanding.questions import Question, read_question
-from rosaos.intents.understanding.stop_words import DeviceRefs
+from rosaos.intents.understanding.stop_words import DeviceRefs, StopRequest, read_stop
 from rosaos.plugins import load_drivers
 
 
@@ -58,7 +59,9 @@ def pair() -> IntentMatcher:
 def robots() -> IntentMatcher:
     return _matcher(
         {
-            "turtlebot": DeviceConfig(driver="ros", description="TurtleBot4 mobile robot with a charging dock"),
+            "turtlebot": DeviceConfig(
+                driver="ros", description="TurtleBot4 mobile robot with a charging dock"
+            ),
             "dog": DeviceConfig(driver="ros", description="Hiwonder PuppyPi quadruped robot dog"),
             "reachy": DeviceConfig(driver="reachy", description="Reachy Mini desktop robot"),
         }
@@ -227,3 +230,41 @@ def test_facing_front_is_only_for_a_driver_that_declares_it(robots: IntentMatche
 )
 def test_questions_about_what_plays(said: str) -> None:
     assert read_question(said, DeviceRefs(home_world())) == Question("playing", ())
+
+
+STAIRS = [
+    DeviceVocabulary(name="stair_light", driver="tapo", description="Pendant light above the stairwell"),
+    DeviceVocabulary(name="hall_light", driver="tapo", description="Ceiling light in the hallway"),
+    DeviceVocabulary(name="turtlebot", driver="ros", description="TurtleBot4 wheeled robot with a dock"),
+    DeviceVocabulary(name="spotify", driver="spotify", description="Music on the living room speaker"),
+]
+
+
+@pytest.mark.parametrize(
+    ("said", "devices"),
+    [
+        ("stop the light over the stairs", ("stair_light",)),
+        ("stop the speaker", ("spotify",)),
+        ("hold it, wheeled robot", ("turtlebot",)),
+    ],
+)
+def test_a_stop_names_devices_the_way_a_command_does(said: str, devices: tuple[str, ...]) -> None:
+    assert read_stop(said, DeviceRefs(STAIRS)) == StopRequest(devices)
+
+
+@pytest.mark.parametrize(
+    ("said", "question"),
+    [
+        ("is the light over the stairs on?", Question("on", ("stair_light",))),
+        ("what's playing on the speaker?", Question("playing", ("spotify",))),
+        ("is the wheeled robot docked?", Question("docked", ("turtlebot",))),
+    ],
+)
+def test_a_question_names_devices_the_way_a_command_does(said: str, question: Question) -> None:
+    assert read_question(said, DeviceRefs(STAIRS)) == question
+
+
+@pytest.mark.parametrize("said", ["stop at the kitchen", "stop the garage light", "is the kettle on?"])
+def test_a_place_or_a_missing_device_is_not_a_device(said: str) -> None:
+    refs = DeviceRefs(STAIRS)
+    assert read_stop(said, refs) is None and read_question(said, refs) is None

@@ -335,9 +335,7 @@ class IntentMatcher:
     def _hides_command(self, reading: Reading) -> bool:
         """A wildcard that swallowed a conjunction ("play jazz and turn on the lamp"), or one that
         says no words of its own ("play it again": what plays, not a search for "it again")."""
-        return any(
-            len(self._splitter.split(text)) > 1 or _says_nothing(text) for text in reading.wildcards
-        )
+        return any(len(self._splitter.split(text)) > 1 or _says_nothing(text) for text in reading.wildcards)
 
     def _partition(self, pieces: tuple[str, ...], allow_unknown: bool, focus: Focus) -> list[Reading] | None:
         """Cut ``pieces`` (texts and separators, alternating) into the fewest clauses that all match.
@@ -458,7 +456,23 @@ class IntentMatcher:
 
 
 _BACK_REFERENCE = frozenset(
-    "it that this the same song track tune one again more time once over please".split()
+    [
+        "it",
+        "that",
+        "this",
+        "the",
+        "same",
+        "song",
+        "track",
+        "tune",
+        "one",
+        "again",
+        "more",
+        "time",
+        "once",
+        "over",
+        "please",
+    ]
 )
 
 

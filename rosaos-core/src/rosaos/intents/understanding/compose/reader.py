@@ -238,7 +238,11 @@ class Composer:
         if reference.unknown:
             return None
         named = list(reference.devices) if reference.named else list(self.capabilities)
-        able = [device for device in named if self._capability(device, said) and (focus is None or device in focus)]
+        able = [
+            device
+            for device in named
+            if self._capability(device, said) and (focus is None or device in focus)
+        ]
         if len(able) > 2:
             return build_result(self.context, text, [self.context.clarify(text, 0, RANK_DRIVER, able)], False)
         if len(able) != 2:
