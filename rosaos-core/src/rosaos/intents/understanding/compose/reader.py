@@ -60,6 +60,9 @@ class _Clause:
     text: str
     said: Said | None
     reference: Reference
+    about: tuple[str, ...] = ()
+    """For a remark, the devices it is about: "it" in the next clause means them ("the kitchen
+    light is too bright, dim it")."""
 
 
 class Composer:
@@ -125,6 +128,7 @@ class Composer:
                 if reading is None and (not clause.reference.named or _commentary(clause.text)):
                     if complete and not _commentary(clause.text):
                         return None  # "… and some jazz": maybe a command the templates read
+                    before = clause.about or before
                     continue  # commentary around a command: "ugh, it's so bright, ..."
             else:
                 reading = self._reading(clause.text, clause.said, clause.reference, before, focus)
@@ -143,7 +147,8 @@ class Composer:
         if remark(text):
             # "the baby is napping", "I'm heading out": why, not what. Its words are neither an
             # action ("out") nor a device this world lacks ("baby").
-            return _Clause(text, None, Reference())
+            about = self.references.resolve(text)
+            return _Clause(text, None, Reference(), () if about.unknown else about.devices)
         said = read_action(text, self.colours)
         reference = self.references.resolve(said.rest if said else text)
         return _Clause(text, said, reference)

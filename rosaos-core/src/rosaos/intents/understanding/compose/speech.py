@@ -87,8 +87,8 @@ _REASON = re.compile(
 )
 _REMARK = re.compile(
     rf"^(?:{_SUBJECT}\s+(?:\w+\s+)?(?:is|are|was|were|am|has|have|had|will|can't|cannot|won't|isn't|aren't|"
-    r"keeps?|just|got|gets?|needs?|wants?|likes?|loves?|hates?|(?:\w+ing))\b"
-    r"|(?:i'm|im|i've|i'll|i'd|we're|we've|we'll|you're|he's|she's|they're|it's|there's|that's|everyone's|"
+    r"keeps?|just|got|gets?|hates?|(?:\w+ing))\b"
+    r"|(?:i'm|im|i've|i'll(?!\s+(?:have|take)\b)|(?:i'd|we'd)(?!\s+(?:like|love|prefer|rather|want)\b)|we're|we've|we'll|you're|he's|she's|they're|it's|there's|that's|everyone's|"
     r"everybody's|someone's|somebody's|nobody's|no one's|everything's|nothing's|something's)\b"
     r"|(?:the|my|our|his|her|their|a)\s+(?:\w+\s+)?\w+\s+(?:hurts?|aches?|sleeps|naps|works|starts|feels|looks|"
     r"seems|sounds|smells|came|went|left|arrived|woke|fell|says|said|called|rang|knocked|is|are|was|were)\b"
