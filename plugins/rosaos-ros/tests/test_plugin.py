@@ -120,6 +120,6 @@ async def test_the_on_request_tools_are_the_servers_and_a_search_task_is_not_off
         on_request_pattern=SPEC.on_request_pattern,
     )
     search = "Undock, then search the environment for a person and report whether you found one."
-    assert offered_names(device, search)[1] == frozenset(SPEC.on_request_tools)
+    assert offered_names(device, search)[1] == frozenset(SPEC.on_request_tools) | {"safe_stop"}
     assert {"undock", "search", "drive", "stop"} <= names - offered_names(device, search)[1]
-    assert offered_names(device, "publish 0.1 on /cmd_vel")[1] == frozenset()
+    assert offered_names(device, "publish 0.1 on /cmd_vel")[1] == {"safe_stop"}

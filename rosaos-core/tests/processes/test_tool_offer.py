@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from rosaos.processes.jobs import GrantedDevice
-from rosaos.processes.tool_offer import asks_for_on_request_tools, offered_names
+from rosaos.processes.tool_offer import KERNEL_ONLY, asks_for_on_request_tools, offered_names
 
 EXPERT = ["list_topics", "publish", "set_param"]
 WORDS = r"\b(topics?|param(eter)?s?|publish\w*)\b|(^|\s)/[a-z_]"
@@ -26,7 +26,7 @@ def robot(**changes: object) -> GrantedDevice:
 
 def test_a_drive_or_a_search_is_not_offered_the_expert_tools() -> None:
     for task in ("Drive forward one meter.", "Undock, then search for a person and report it."):
-        assert offered_names(robot(), task) == (None, frozenset(EXPERT))
+        assert offered_names(robot(), task) == (None, frozenset(EXPERT) | KERNEL_ONLY)
 
 
 def test_a_task_that_speaks_of_them_gets_them() -> None:
@@ -37,11 +37,11 @@ def test_a_task_that_speaks_of_them_gets_them() -> None:
         "call set_param",
     ):
         assert asks_for_on_request_tools(robot(), task), task
-        assert offered_names(robot(), task) == (None, frozenset())
+        assert offered_names(robot(), task) == (None, KERNEL_ONLY)
 
 
 def test_a_device_without_expert_tools_is_offered_everything_or_its_own_list() -> None:
     plain = robot(on_request_tools=[], on_request_pattern=None)
-    assert offered_names(plain, "Drive forward.") == (None, frozenset())
+    assert offered_names(plain, "Drive forward.") == (None, KERNEL_ONLY)
     attached = robot(name="reachy", tools=["speak"], on_request_tools=[], on_request_pattern=None)
-    assert offered_names(attached, "Turn on the light.") == (frozenset({"speak"}), frozenset())
+    assert offered_names(attached, "Turn on the light.") == (frozenset({"speak"}), KERNEL_ONLY)
