@@ -97,6 +97,7 @@ def all_updates(api: httpx.Client) -> list[dict[str, Any]]:
     return updates
 
 
+@pytest.mark.timeout(900)  # 21 kernel starts: about 2-3 min on two CI cores, far more on a crowded box
 def test_random_kernel_kills_run_no_command_twice_and_lose_no_run(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
