@@ -18,11 +18,12 @@ from pathlib import Path
 
 import httpx
 import pytest
-from devices_support import ROSAOS, closed_port_url, free_port, requires_tapo, rosaos, write_config
 
 from rosaos.auth import token_path
 from rosaos.cli.device_commands import check_device, list_devices, serve_device_command
 from rosaos.plugins import load_drivers
+
+from .devices_support import ROSAOS, closed_port_url, free_port, requires_tapo, rosaos, write_config
 
 pytestmark = [pytest.mark.slow, requires_tapo]
 
