@@ -1,6 +1,7 @@
 """``rosaos devices list``, ``rosaos devices check`` and ``rosaos serve-device``, as a user runs them.
 
-The CLI runs as a subprocess where the process boundary matters; quick error paths call the
+The CLI runs as a subprocess where the process boundary matters (``serve-device``); the other
+commands run in this process through typer's ``CliRunner``, and quick error paths call the
 command functions directly. Every test has its own data dir (``$ROSAOS_DATA_DIR``) and config.
 """
 
