@@ -23,10 +23,10 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT))  # tests/ is imported as a namespace package: its helpers import relatively
 
-from e2e_support import start_kernel  # noqa: E402
-from lamp_rack import LampRack  # noqa: E402
+from tests.e2e_support import start_kernel  # noqa: E402
+from tests.lamp_rack import LampRack  # noqa: E402
 
 TOKEN = "bench-token"
 

@@ -15,7 +15,6 @@ from pathlib import Path
 from typing import Any
 
 import httpx
-from cli_process import ROSAOS, line_matching
 
 from rosaos.auth import load_or_create_token
 from rosaos.config import load_config
@@ -24,6 +23,8 @@ from rosaos.devices.world import build_world
 from rosaos.kernel.runtime import Kernel
 from rosaos.models.select import ModelSpec
 from rosaos.plugins import load_drivers
+
+from .cli_process import ROSAOS, line_matching
 
 
 async def eventually(check: Callable[[], Awaitable[Any]], timeout: float = 30.0) -> Any:
@@ -73,7 +74,7 @@ sim = { on = true, brightness = 60 }
 async def scripted_kernel(home: Path, world: str = TWO_LIGHTS) -> AsyncIterator[Kernel]:
     """A kernel whose kernel and process models are the scripted ``FunctionModel``s of
     ``kernel_scripts.py`` (the workers import it from this folder)."""
-    from kernel_scripts import kernel_model
+    from .kernel_scripts import kernel_model
 
     async with running_kernel(
         home,

@@ -13,11 +13,11 @@ import asyncio
 import socket
 from pathlib import Path
 
-from e2e_support import remote_device, start_kernel
-from test_partition import dog  # noqa: F401  (the fixture)
-
 from rosaos.devices.client import DeviceClient
 from rosaos.drivers import DeviceError
+
+from .e2e_support import remote_device, start_kernel
+from .test_partition import dog  # noqa: F401  (the fixture)
 
 
 def free_port() -> int:

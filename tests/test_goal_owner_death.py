@@ -18,10 +18,11 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from e2e_support import served_device
 
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.deadman import OWNER_HEADER, SILENCE_LIMIT
+
+from .e2e_support import served_device
 
 STOP_BOUND = 2.0
 """Seconds past the deadman's silence limit by which the robot must be still (issue 21's bound)."""

@@ -19,9 +19,10 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from e2e_support import DOG, remote_device, served_device, start_kernel
 
 from rosaos.devices.client import DeviceClient
+
+from .e2e_support import DOG, remote_device, served_device, start_kernel
 
 
 @pytest.fixture

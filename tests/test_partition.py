@@ -19,10 +19,11 @@ from typing import Any
 
 import httpx
 import pytest
-from blackhole import blackhole
-from e2e_support import DOG, remote_device, served_device, start_kernel
 
 from rosaos.devices.client import DeviceClient
+
+from .blackhole import blackhole
+from .e2e_support import DOG, remote_device, served_device, start_kernel
 
 STOP_BOUND = 2.0
 """The robot must be still within this many seconds of the link going quiet (the issue's bound)."""

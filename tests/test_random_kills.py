@@ -31,8 +31,9 @@ from typing import Any
 
 import httpx
 import pytest
-from e2e_support import start_kernel
-from lamp_rack import LampRack
+
+from .e2e_support import start_kernel
+from .lamp_rack import LampRack
 
 LAMPS = 8
 LEVELS = list(range(10, 110, 10))

@@ -20,7 +20,10 @@ from typing import Any
 import httpx
 import pytest
 import pytest_asyncio
-from e2e_support import (
+
+from rosaos.kernel.runtime import Kernel
+
+from .e2e_support import (
     all_healthy,
     chat,
     device_state,
@@ -30,8 +33,6 @@ from e2e_support import (
     scripted_kernel,
     updates_of,
 )
-
-from rosaos.kernel.runtime import Kernel
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 WalkingDog = Callable[[str], Awaitable[dict[str, Any]]]

@@ -17,8 +17,11 @@ from typing import Any
 import httpx
 import pytest
 import pytest_asyncio
-from cli_process import ROSAOS
-from e2e_support import (
+
+from rosaos.kernel.runtime import Kernel
+
+from .cli_process import ROSAOS
+from .e2e_support import (
     all_healthy,
     chat,
     device_state,
@@ -28,8 +31,6 @@ from e2e_support import (
     running_kernel,
     updates_of,
 )
-
-from rosaos.kernel.runtime import Kernel
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 WalkingDog = Callable[[str], Awaitable[dict[str, Any]]]

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 import httpx
 import pytest
-from kernel_support import AUTH, ORIGIN, TOKEN, TestRuntime
 
 from rosaos.kernel.api.schemas import Readiness
+
+from .kernel_support import AUTH, ORIGIN, TOKEN, TestRuntime
 
 PROTECTED = [
     ("GET", "/processes"),

@@ -15,7 +15,11 @@ import sys
 from pathlib import Path
 
 import pytest
-from processes_support import (
+
+from rosaos.processes.fork_parking import park_name
+from rosaos.processes.pool import WorkerPool
+
+from .processes_support import (
     Endings,
     KernelStandIn,
     LoopbackDevice,
@@ -26,9 +30,6 @@ from processes_support import (
     wait_until_dead,
     worker_env,
 )
-
-from rosaos.processes.fork_parking import park_name
-from rosaos.processes.pool import WorkerPool
 
 pytestmark = [pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]
 
