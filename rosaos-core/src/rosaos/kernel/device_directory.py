@@ -47,6 +47,7 @@ class DeviceDirectory:
                 confirm=self._confirm_rule(name),
                 attached_tools=tuple(spec.attached_tools),
                 attached_prompt=spec.attached_prompt,
+                host=self._hosting.host_of(name),
             )
         self._cached = (version, endpoints)
         return endpoints
