@@ -14,12 +14,12 @@ from typing import Any
 import httpx
 from fastmcp import FastMCP
 
-from rosaos.device_notices import NoticeBoard
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.devices.host_notices import HOST_BOARDS, HostNoticeAnswer
 from rosaos.devices.serve import ServedDevice, add_notice_route, serve_http
 from rosaos.events.types import DeviceNoticeEvent
-from rosaos.kernel.notices import NoticeWatcher, host_groups, host_notices_url
+from rosaos.notices.notice_board import NoticeBoard
+from rosaos.notices.notice_watcher import NoticeWatcher, host_groups, host_notices_url
 
 TOKEN = "host-notice-token-0123456789"
 OTHER = "another-token-9876543210"

@@ -1,7 +1,7 @@
 """Every notice board a host process serves, read with one long poll: ``POST /host/notices``.
 
 The shared host serves hundreds of simulated instances, each on its own port with its own board
-(:mod:`rosaos.device_notices`). Polling each board on its own kept one open request per device:
+(:mod:`rosaos.notices.notice_board`). Polling each board on its own kept one open request per device:
 at 300 lamps the kernel spent most of its idle CPU (about 8 % of a core) renewing them. So every
 device server in a process also answers ``POST /host/notices``, which reads any of the process's
 boards at once: the kernel sends each board's cursor, and the answer waits until one of them has
@@ -24,7 +24,7 @@ from starlette.requests import Request
 from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Receive, Scope, Send
 
-from rosaos.device_notices import MAX_WAIT, NoticeBatch, NoticeBoard
+from rosaos.notices.notice_board import MAX_WAIT, NoticeBatch, NoticeBoard
 
 HOST_NOTICES_PATH = "/host/notices"
 MAX_BOARDS = 10_000

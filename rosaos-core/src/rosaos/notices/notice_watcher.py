@@ -2,7 +2,7 @@
 
 One task per host long-polls ``POST /host/notices`` for all the devices it serves
 (:mod:`rosaos.devices.host_notices`; a device alone on its host: its ``GET /notices``,
-:mod:`rosaos.device_notices`) with the devices' own token, so a device host never holds the
+:mod:`rosaos.notices.notice_board`) with the devices' own token, so a device host never holds the
 kernel's token and a remote device works the same as a local one. Each notice that passes :class:`NoticeFilter` becomes a ``device_notice``
 event with an idempotency key made from the board and sequence number, so a notice fetched twice
 (a retry after a lost answer) is enqueued once.
@@ -27,10 +27,10 @@ from collections.abc import Awaitable, Callable, Mapping
 import httpx
 from pydantic import ValidationError
 
-from rosaos.device_notices import MAX_WAIT, Notice, NoticeBatch
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.devices.host_notices import HOST_NOTICES_PATH, BoardCursor, HostNoticeAnswer, HostNoticeQuery
 from rosaos.events.types import DeviceNotice, DeviceNoticeEvent
+from rosaos.notices.notice_board import MAX_WAIT, Notice, NoticeBatch
 from rosaos.tls import shared_context
 
 log = logging.getLogger(__name__)
