@@ -181,7 +181,7 @@ async def burst(url: str, token: str, n: int, limit: float, data_dir: Path, robo
                 if drivers is not None and kind == "process_launched":
                     drivers.launched(event, int(data["process_id"]))
                 elif drivers is not None and kind == "process_ended":
-                    drivers.ended(int(data.get("process_id", -1)), str(data.get("status")))
+                    drivers.ended(int(data.get("process_id", -1)), str(data.get("status")), data.get("error"))
                 if kind == "process_launched" and event in sent:
                     launched[int(data["process_id"])] = event
                 elif kind == "process_ended" and int(data.get("process_id", -1)) in launched:

@@ -81,10 +81,10 @@ class RobotDrivers:
         else:  # read before the leg's POST answer was: kept until the leg is known
             self._early[event] = process
 
-    def ended(self, process: int, status: str) -> None:
+    def ended(self, process: int, status: str, error: str | None = None) -> None:
         leg = self.processes.get(process)
         if leg is not None:
-            leg.status = status
+            leg.status = status if error is None else f"{status}: {error}"
             leg.ended.set()
 
     async def stop(self) -> dict[str, Any]:
