@@ -21,6 +21,70 @@ def detection(at: float, x: float, y: float) -> Receipt:
     )
 
 
+def kitchen_at(x: float, y: float, name: str = "the kitchen") -> Place:
+    return Place(
+        name=name, device="turtlebot", frame="odom", anchor="odom:turtlebot:1", x=x, y=y, saved_at=time.time()
+    )
+
+
+async def test_a_place_is_renamed_and_keeps_its_pose_and_frame(
+    client: httpx.AsyncClient, runtime: TestRuntime
+) -> None:
+    runtime.memory.save_place(kitchen_at(2.0, 1.0))
+    response = await client.patch("/places/Kitchen", json={"name": "the galley"}, headers=AUTH)
+    assert response.status_code == 200, response.text
+    assert (response.json()["name"], response.json()["x"], response.json()["anchor"]) == (
+        "the galley",
+        2.0,
+        "odom:turtlebot:1",
+    )
+    assert [p.name for p in runtime.memory.places()] == ["the galley"]
+
+
+async def test_a_place_is_deleted_and_the_answer_is_what_was_deleted(
+    client: httpx.AsyncClient, runtime: TestRuntime
+) -> None:
+    runtime.memory.save_place(kitchen_at(2.0, 1.0))
+    response = await client.delete("/places/the%20kitchen", headers=AUTH)
+    assert response.status_code == 200, response.text
+    assert response.json()["name"] == "the kitchen"
+    assert runtime.memory.places() == []
+
+
+async def test_renaming_or_deleting_an_unknown_place_is_404_naming_the_known_ones(
+    client: httpx.AsyncClient, runtime: TestRuntime
+) -> None:
+    runtime.memory.save_place(kitchen_at(2.0, 1.0))
+    renamed = await client.patch("/places/the attic", json={"name": "the loft"}, headers=AUTH)
+    deleted = await client.delete("/places/the attic", headers=AUTH)
+    for response in (renamed, deleted):
+        assert response.status_code == 404
+        assert "the attic" in response.json()["detail"] and "the kitchen" in response.json()["detail"]
+    assert [p.name for p in runtime.memory.places()] == ["the kitchen"]
+
+
+async def test_a_name_another_place_has_is_409_and_changes_nothing(
+    client: httpx.AsyncClient, runtime: TestRuntime
+) -> None:
+    runtime.memory.save_place(kitchen_at(2.0, 1.0))
+    runtime.memory.save_place(kitchen_at(5.0, 5.0, "the hall"))
+    response = await client.patch("/places/the hall", json={"name": "The Kitchen"}, headers=AUTH)
+    assert response.status_code == 409
+    assert "already a place called" in response.json()["detail"]
+    assert {(p.name, p.x) for p in runtime.memory.places()} == {("the kitchen", 2.0), ("the hall", 5.0)}
+
+
+async def test_an_empty_blank_or_too_long_name_is_422_and_changes_nothing(
+    client: httpx.AsyncClient, runtime: TestRuntime
+) -> None:
+    runtime.memory.save_place(kitchen_at(2.0, 1.0))
+    for bad in ({"name": ""}, {"name": "   "}, {"name": "x" * 81}, {}, {"name": "ok", "extra": 1}):
+        response = await client.patch("/places/the kitchen", json=bad, headers=AUTH)
+        assert response.status_code == 422, (bad, response.text)
+        assert response.json()["detail"], bad
+    assert [p.name for p in runtime.memory.places()] == ["the kitchen"]
+
+
 async def test_places_and_sightings_are_listed_with_their_frame_and_the_kernels_clock(
     client: httpx.AsyncClient, runtime: TestRuntime
 ) -> None:
@@ -60,4 +124,6 @@ async def test_places_and_sightings_are_listed_with_their_frame_and_the_kernels_
 async def test_memory_routes_need_the_token(client: httpx.AsyncClient) -> None:
     assert (await client.get("/places")).status_code == 401
     assert (await client.get("/sightings")).status_code == 401
+    assert (await client.patch("/places/the kitchen", json={"name": "x"})).status_code == 401
+    assert (await client.delete("/places/the kitchen")).status_code == 401
     assert (await client.get("/sightings", params={"limit": 0}, headers=AUTH)).status_code == 422

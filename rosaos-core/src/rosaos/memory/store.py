@@ -72,6 +72,14 @@ class MemoryRequestError(ValueError):
     """A request memory cannot carry out; the message says why and what to do instead."""
 
 
+class UnknownPlaceError(MemoryRequestError):
+    """No place has that name (the HTTP API answers 404)."""
+
+
+class PlaceNameTakenError(MemoryRequestError):
+    """Another place already has that name (the HTTP API answers 409)."""
+
+
 def place_key(name: str) -> str:
     """The key a place is found by: lowercase, single spaces, no leading article ("the Kitchen" → "kitchen")."""
     words = " ".join(name.lower().replace("_", " ").split())
@@ -172,9 +180,13 @@ class MemoryStore:
         """Rename a place; refuses a name already taken."""
         place = self.require_place(name)
         if not place_key(new_name):
-            raise MemoryRequestError("the new name is empty")
-        if place_key(new_name) != place.key and self.place(new_name) is not None:
+            raise MemoryRequestError("the new name is empty; give the place a name, e.g. 'the kitchen'")
+        if len(new_name.strip()) > NAME_MAX:
             raise MemoryRequestError(
+                f"the new name is {len(new_name.strip())} characters; at most {NAME_MAX}"
+            )
+        if place_key(new_name) != place.key and self.place(new_name) is not None:
+            raise PlaceNameTakenError(
                 f"there is already a place called {new_name!r}; forget it first or pick another name"
             )
         renamed = place.model_copy(update={"name": new_name.strip()})
@@ -194,7 +206,7 @@ class MemoryStore:
         place = self.place(name)
         if place is None:
             known = ", ".join(p.name for p in self.places()) or "none yet"
-            raise MemoryRequestError(
+            raise UnknownPlaceError(
                 f"I don't know a place called {name!r} (known places: {known}); "
                 f"stand the robot there and say 'remember this spot as {name}'"
             )

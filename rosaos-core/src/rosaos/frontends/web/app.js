@@ -11,6 +11,7 @@ import { followUpdates, showChatDetails } from "./stream.js";
 import { renderEmergencyStop, wireEmergencyStop } from "./estop.js";
 import { wireMap } from "./map.js";
 import { noteOrigins, renderPlaces, renderSightings } from "./memory_map.js";
+import { listPlaces, placeClicked, placeRenamed } from "./memory_places.js";
 import { cancelTimer, detectTimers } from "./timers.js";
 import { answerConfirmation, renderConfirmations, timelineProcesses } from "./timeline.js";
 import { setMarkedText, suggestions } from "./words.js";
@@ -110,7 +111,7 @@ function start() {
   pollForever("/processes?all=true", timelineProcesses);
   pollForever("/confirmations", renderConfirmations);
   detectTimers();
-  pollForever("/places", renderPlaces);
+  pollForever("/places", (body) => { renderPlaces(body); listPlaces(body); });
   pollForever("/sightings", renderSightings);
   pollForever("/devices", (devices) => { noteOrigins(devices); renderDevices(devices); suggest(devices); });
   pollForever("/estop", renderEmergencyStop);
@@ -125,6 +126,8 @@ async function main() {
   wireMap();
   $("#timeline").addEventListener("click", answerConfirmation);
   $("#timers").addEventListener("click", cancelTimer);
+  $("#places").addEventListener("click", placeClicked);
+  $("#places").addEventListener("submit", placeRenamed);
   // A new login link pasted into this tab changes only the fragment, which does not reload the
   // page: start over so the new code is used.
   window.addEventListener("hashchange", () => {

@@ -1,9 +1,11 @@
 """What rosaOS remembers, for the page's floor map: ``GET /places`` and ``GET /sightings``.
 
 Registered on the protected router of :mod:`rosaos.kernel.api.routes` (the bearer token applies).
-Read-only: places are saved, renamed and forgotten by saying so to the kernel (``POST /chat``) or
-with ``rosaos places``; sightings come from the robots' cameras, and "forget what you saw" clears
-them. Each place and sighting keeps the frame its coordinates are in and the device whose frame
+Places are saved by saying so to the kernel (``POST /chat``) or with ``rosaos places``; the page
+renames and deletes them here (``PATCH`` and ``DELETE /places/{name}``), with the same rules as
+``rosaos places rename`` and ``delete``: an unknown place is 404, a name another place has is 409,
+an empty or too long name 422. Sightings come from the robots' cameras, and "forget what you saw"
+clears them. Each place and sighting keeps the frame its coordinates are in and the device whose frame
 that is, so the page can draw it where that device's own pose is drawn (its ``map_origin``).
 """
 
@@ -12,12 +14,23 @@ from __future__ import annotations
 import time
 from typing import Annotated
 
-from fastapi import Query
-from pydantic import BaseModel, Field
+from fastapi import HTTPException, Query
+from fastapi import Path as FastPath
+from pydantic import BaseModel, ConfigDict, Field
 
 from rosaos.kernel.api.routes import Runtime, protected
 from rosaos.memory.sightings import Sighting
-from rosaos.memory.store import Place
+from rosaos.memory.store import (
+    NAME_MAX,
+    MemoryRequestError,
+    Place,
+    PlaceNameTakenError,
+    UnknownPlaceError,
+)
+
+PlaceName = Annotated[
+    str, FastPath(min_length=1, max_length=NAME_MAX, description="The place's name, any case.")
+]
 
 
 class PlaceList(BaseModel):
@@ -38,6 +51,43 @@ class SightingList(BaseModel):
 async def list_places(runtime: Runtime) -> PlaceList:
     """The named places robots can go to, each in the frame it was saved in."""
     return PlaceList(places=runtime.memory.places())
+
+
+class PlaceRename(BaseModel):
+    """``PATCH /places/{name}``: the place's new name."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    name: str = Field(min_length=1, max_length=NAME_MAX, description="The new name, e.g. 'the kitchen'.")
+
+
+def _refusal(error: MemoryRequestError) -> HTTPException:
+    if isinstance(error, UnknownPlaceError):
+        return HTTPException(404, str(error))
+    if isinstance(error, PlaceNameTakenError):
+        return HTTPException(409, str(error))
+    return HTTPException(422, str(error))
+
+
+@protected.patch(
+    "/places/{name}",
+    responses={404: {"description": "No such place"}, 409: {"description": "Another place has the new name"}},
+)
+async def rename_place(name: PlaceName, rename: PlaceRename, runtime: Runtime) -> Place:
+    """Rename a place; its pose and frame stay. Answers the renamed place."""
+    try:
+        return runtime.memory.rename_place(name, rename.name)
+    except MemoryRequestError as error:
+        raise _refusal(error) from None
+
+
+@protected.delete("/places/{name}", responses={404: {"description": "No such place"}})
+async def delete_place(name: PlaceName, runtime: Runtime) -> Place:
+    """Delete a place. Answers the place that was deleted (say so again to save it back)."""
+    try:
+        return runtime.memory.forget_place(name)
+    except MemoryRequestError as error:
+        raise _refusal(error) from None
 
 
 @protected.get("/sightings")
