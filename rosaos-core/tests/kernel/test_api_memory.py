@@ -6,10 +6,11 @@ import json
 import time
 
 import httpx
-from kernel_support import AUTH, TestRuntime
 
 from rosaos.memory.store import Place
 from rosaos.receipts import Receipt
+
+from .kernel_support import AUTH, TestRuntime
 
 
 def detection(at: float, x: float, y: float) -> Receipt:
