@@ -11,11 +11,12 @@ from typing import Any
 import numpy as np
 import onnxruntime as ort
 import pytest
-from voice_support import needs_espeak, speak
 
 from rosaos.frontends.voice.moonshine import weights_dir
 from rosaos.frontends.voice.onnx_graph import converted
 from rosaos.frontends.voice.sources import VoiceError, read_wav
+
+from .voice_support import needs_espeak, speak
 
 SOURCES = ("encoder_model.ort", "decoder_model_merged.ort")
 
