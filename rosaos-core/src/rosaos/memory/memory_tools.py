@@ -5,7 +5,9 @@ engine and an LLM kernel use the same ones:
 
 - ``remember_place``, ``list_places``, ``forget_place``, ``go_to_place`` (it launches a process
   that calls the robot's ``go_to`` with the place's frame anchor; the callback says how it went);
-- ``remember``, ``recall``, ``forget``: facts, aliases and preferences.
+- ``remember``, ``recall``, ``forget``: facts, aliases and preferences;
+- ``recall_sightings``, ``show_sighting`` ("show me": the picture's address, which the page shows),
+  ``forget_sightings``: what the robots saw.
 """
 
 from __future__ import annotations
@@ -71,6 +73,33 @@ def add_memory_tools(
         return {
             "sightings": [s.model_dump(mode="json") | {"ago": ago(s.at)} for s in found],
             "kept_days": sightings.keep_days,
+        }
+
+    @server.tool(annotations=READ_ONLY)
+    async def show_sighting(
+        sighting_id: Annotated[
+            int | None, Field(ge=1, description="A sighting's id from recall_sightings; omit for the newest.")
+        ] = None,
+    ) -> dict[str, Any]:
+        """Show a sighting's picture (the newest one with a picture by default) on the web page.
+
+        Returns the sighting and ``picture``, the picture's address on the kernel
+        (``/sightings/{id}/picture``): put that address in your reply, and the page shows the
+        picture under it. The picture itself stays on this machine.
+        """
+        found = sightings.get(sighting_id) if sighting_id else sightings.with_picture()
+        if found is None:
+            which = f"sighting {sighting_id}" if sighting_id else "sighting with a picture"
+            raise ToolError(
+                f"I have no {which} in the last {sightings.keep_days:g} days; recall_sightings lists them"
+            )
+        if sightings.picture(found) is None:
+            raise ToolError(
+                f"sighting {found.id} has no picture on this machine (none was taken, or it was deleted)"
+            )
+        return found.model_dump(mode="json") | {
+            "ago": ago(found.at),
+            "picture": f"/sightings/{found.id}/picture",
         }
 
     @server.tool(annotations=DELETES)
