@@ -18,10 +18,10 @@ from e2e_support import eventually
 
 from rosaos.bench.sim_world import SimDevices
 from rosaos.config import load_config
-from rosaos.device_notices import NoticeBoard
 from rosaos.devices import serve
 from rosaos.devices.world import build_world
 from rosaos.kernel.runtime import Kernel
+from rosaos.notices.notice_board import NoticeBoard
 from rosaos.plugins import load_drivers
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")

@@ -23,9 +23,9 @@ from playwright.async_api import async_playwright
 
 from rosaos.kernel.runtime import Kernel, KernelError, _bind_or_explain
 from rosaos.kernel.stop_tools import STOP_TOOL_NAMES
-from rosaos.kernel.timer_tools import TIMER_TOOL_NAMES
 from rosaos.kernel.tools import KERNEL_TOOL_NAMES
 from rosaos.memory.memory_tools import MEMORY_TOOL_NAMES
+from rosaos.timers.timer_tools import TIMER_TOOL_NAMES
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 

@@ -29,11 +29,11 @@ from typing_extensions import TypeVar
 from rosaos.cards import Card
 
 # Re-exported: notices are part of the driver contract.
-from rosaos.device_notices import Notice as Notice
-from rosaos.device_notices import NoticeBoard as NoticeBoard
-from rosaos.device_notices import NoticeError as NoticeError
-from rosaos.device_notices import NoticeImportance as NoticeImportance
-from rosaos.device_notices import NoticeSpec as NoticeSpec
+from rosaos.notices.notice_board import Notice as Notice
+from rosaos.notices.notice_board import NoticeBoard as NoticeBoard
+from rosaos.notices.notice_board import NoticeError as NoticeError
+from rosaos.notices.notice_board import NoticeImportance as NoticeImportance
+from rosaos.notices.notice_board import NoticeSpec as NoticeSpec
 
 Concurrency = Literal["exclusive", "shared"]
 """How many live processes may hold one instance: ``exclusive`` means one, ``shared`` any."""

@@ -60,7 +60,7 @@ class SafetyDecision(BaseModel):
     ``deadman_stop``: the command stream went quiet and the device stopped; ``limited``: cut short
     by a bound (time, distance); ``stopped``: ended by a stop or the emergency stop;
     ``confirm_asked``, ``confirmed``, ``declined``, ``expired``: a person was asked before the call,
-    and said yes, said no, or did not answer in time (:mod:`rosaos.kernel.confirmations`)."""
+    and said yes, said no, or did not answer in time (:mod:`rosaos.confirmations.confirmation_desk`)."""
     rule: str = Field(default="", max_length=200)
     detail: str = Field(default="", max_length=1000)
 

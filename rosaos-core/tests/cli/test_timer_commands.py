@@ -13,9 +13,9 @@ from pathlib import Path
 
 import pytest
 
-from rosaos.cli.timer_commands import cancel_timer_command, timers_command
 from rosaos.kernel.event_store import EventStore
-from rosaos.kernel.timers import TimerBook
+from rosaos.timers.timer_book import TimerBook
+from rosaos.timers.timer_commands import cancel_timer_command, timers_command
 
 
 def stopped_kernel_with_a_timer(tmp_path: Path) -> Path:

@@ -10,12 +10,12 @@ import pytest
 from fastmcp import FastMCP
 from pydantic import BaseModel, Field
 
-from rosaos.device_notices import NoticeBatch, NoticeBoard, NoticeError, NoticeSpec, check_notice_specs
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.devices.serve import add_notice_route, serve_http
 from rosaos.drivers import DeviceContext, DeviceSettings
 from rosaos.events.types import DeviceNoticeEvent
-from rosaos.kernel.notices import NoticeFilter, NoticeWatcher, notice_event, notices_url
+from rosaos.notices.notice_board import NoticeBatch, NoticeBoard, NoticeError, NoticeSpec, check_notice_specs
+from rosaos.notices.notice_watcher import NoticeFilter, NoticeWatcher, notice_event, notices_url
 
 TOKEN = "notice-token-0123456789"
 

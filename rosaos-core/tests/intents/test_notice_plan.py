@@ -10,8 +10,8 @@ from intents_support import home_world
 
 from rosaos.events.plan import Plan
 from rosaos.events.types import DeviceNotice
-from rosaos.kernel.notice_text import render_notice
 from rosaos.models.kernel_model import LocalIntentModel
+from rosaos.notices.notice_text import render_notice
 
 BATTERY = DeviceNotice(
     device="turtlebot",

@@ -6,7 +6,7 @@ from datetime import datetime
 
 import pytest
 
-from rosaos.intents.grammar.timer_phrases import (
+from rosaos.timers.timer_phrases import (
     CancelTimer,
     ListTimers,
     SetTimer,

@@ -14,9 +14,9 @@ from intents_support import home_world
 
 from rosaos.events.plan import Plan
 from rosaos.kernel.event_store import EventStore
-from rosaos.kernel.timer_tools import add_timer_tools
-from rosaos.kernel.timers import TimerBook, fired_event
 from rosaos.models.kernel_model import LocalIntentModel
+from rosaos.timers.timer_book import TimerBook, fired_event
+from rosaos.timers.timer_tools import add_timer_tools
 
 
 class TimerKernel(EngineKernel):

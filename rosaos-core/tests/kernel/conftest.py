@@ -21,10 +21,10 @@ from fastapi import FastAPI
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.app import create_app
 from rosaos.kernel.event_store import EventStore
-from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
 from rosaos.memory.sightings import SightingLog
 from rosaos.memory.store import MemoryStore
+from rosaos.timers.timer_book import TimerBook
 
 # Test modules import kernel_support from this folder (pytest's importlib mode does not put it
 # on sys.path).

@@ -12,17 +12,17 @@ from dataclasses import dataclass, field
 from datetime import UTC, datetime
 from typing import Any
 
+from rosaos.confirmations.confirmation_desk import ConfirmationDesk
 from rosaos.events.plan import Plan
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.login_codes import LoginCodes
 from rosaos.kernel.api.schemas import DeviceView, EmergencyStopReport, EmergencyStopState, Understanding
-from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.intake import Intake
-from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
 from rosaos.memory.sightings import SightingLog
 from rosaos.memory.store import MemoryStore
+from rosaos.timers.timer_book import TimerBook
 
 TOKEN = "test-token-0123456789"
 ORIGIN = "http://127.0.0.1:8765"

@@ -101,7 +101,7 @@ def test_a_cut_goes_down_to_half_the_budget_so_the_next_turns_keep_the_same_pref
 
 
 def test_the_default_prompt_tells_the_model_about_every_timer_tool_and_timer_event() -> None:
-    from rosaos.kernel.timer_tools import TIMER_TOOL_NAMES
+    from rosaos.timers.timer_tools import TIMER_TOOL_NAMES
 
     prompt = kernel_prompt([])
     assert all(name in prompt for name in TIMER_TOOL_NAMES)

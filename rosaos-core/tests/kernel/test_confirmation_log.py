@@ -10,9 +10,9 @@ from pathlib import Path
 
 import pytest
 
+from rosaos.confirmations.confirmation_chat import record_confirmation
+from rosaos.confirmations.confirmation_desk import ConfirmationDesk, ConfirmationRequest
 from rosaos.kernel.activity import ActivityLog
-from rosaos.kernel.confirmation_chat import record_confirmation
-from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmationRequest
 from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.updates import UpdateStream
 

@@ -6,8 +6,13 @@ import asyncio
 
 import pytest
 
-from rosaos.kernel.confirmations import ConfirmationDesk, ConfirmationRequest, question, read_answer
-from rosaos.processes.confirming import confirm_rule, needs_confirmation
+from rosaos.confirmations.confirmation_desk import (
+    ConfirmationDesk,
+    ConfirmationRequest,
+    question,
+    read_answer,
+)
+from rosaos.confirmations.confirming import confirm_rule, needs_confirmation
 
 
 def test_real_ros_robots_confirm_destructive_tools_by_default_and_sims_do_not() -> None:

@@ -12,9 +12,9 @@ from rosaos.events.types import NewEvent, TimerFired
 from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.intake import Intake, Queued
 from rosaos.kernel.loop import render_event
-from rosaos.kernel.timer_text import DueTimeError, resolve_due
-from rosaos.kernel.timers import TimerBook, TimerError
 from rosaos.kernel.updates import UpdateStream
+from rosaos.timers.timer_book import TimerBook, TimerError
+from rosaos.timers.timer_text import DueTimeError, resolve_due
 
 
 async def kernel_book(store: EventStore) -> TimerBook:

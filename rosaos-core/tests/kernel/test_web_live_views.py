@@ -10,7 +10,7 @@ from kernel_support import TestRuntime, eventually
 from playwright.async_api import Page
 from web_support import ARTIFACTS, card, desk
 
-from rosaos.kernel.confirmations import ConfirmationRequest
+from rosaos.confirmations.confirmation_desk import ConfirmationRequest
 from rosaos.kernel.updates import UpdateStream
 
 

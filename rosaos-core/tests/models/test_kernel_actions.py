@@ -14,11 +14,11 @@ from pydantic_ai.messages import (
 )
 
 from rosaos.events.types import Event
-from rosaos.intents.planning.notice_plan import SILENCE
 from rosaos.kernel.event_text import render_event
 from rosaos.models.conversation import event_request
 from rosaos.models.kernel_actions import help_text
 from rosaos.models.kernel_model import LocalIntentModel
+from rosaos.notices.notice_plan import SILENCE
 
 TOOLS = ["launch_process", "terminate_process", "stop", "device_state"]
 MODEL = LocalIntentModel(home_world())

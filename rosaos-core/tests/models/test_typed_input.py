@@ -22,6 +22,8 @@ from rosaos.models.kernel_model import LocalIntentModel
 
 PACKAGE = Path(rosaos.__file__).parent
 ENGINE_PACKAGES = ("models", "intents")
+ENGINE_MODULES = ("timers/timer_phrases.py", "timers/timer_turn.py", "notices/notice_plan.py")
+"""The engine's parts that live with their feature (issue 26 gathers timers and notices)."""
 RENDERED = (
     "User said",
     "User typed",
@@ -39,12 +41,18 @@ RENDERED = (
 )
 """What only text rendered for an LLM contains: its headers (a tag compared without its brackets
 too) and its ``key=value`` fields."""
-RENDERERS = ("rosaos.kernel.event_text", "rosaos.kernel.notice_text", "rosaos.kernel.loop")
+RENDERERS = (
+    "rosaos.kernel.event_text",
+    "rosaos.notices.notice_text",
+    "rosaos.timers.timer_text",
+    "rosaos.kernel.loop",
+)
 TOOLS = ["launch_process"]
 
 
 def engine_sources() -> list[Path]:
-    return sorted(path for name in ENGINE_PACKAGES for path in (PACKAGE / name).rglob("*.py"))
+    packages = [path for name in ENGINE_PACKAGES for path in (PACKAGE / name).rglob("*.py")]
+    return sorted(packages + [PACKAGE / name for name in ENGINE_MODULES])
 
 
 def code_strings(tree: ast.AST) -> list[ast.Constant]:

@@ -5,7 +5,8 @@ models, intents) imports it; ``tests/test_layers.py`` checks.
   importing it lazily so ``rosaos --help`` stays fast;
 - ``options``: the options several commands share; ``devices_app``: ``rosaos devices ...``;
 - ``up_command``: ``rosaos up``; ``process_commands``: ``ps``, ``kill``, ``estop``;
-  ``log_command``: ``log``; ``open_command``: ``open``; ``timer_commands``: ``ps --timers``, ``kill --timer``;
+  ``log_command``: ``log``; ``open_command``: ``open`` (``ps --timers``, ``kill --timer``:
+  :mod:`rosaos.timers.timer_commands`);
 - ``device_commands``: what ``devices list``, ``devices check`` and ``serve-device`` do;
 - ``bench_command``: ``bench``;
 - ``console``: the rich console every command prints through.

@@ -213,7 +213,7 @@ def ps(
 ) -> None:
     """List the kernel's processes: id, state, devices held, age, task. --timers: its timers."""
     if timers:
-        from rosaos.cli.timer_commands import timers_command
+        from rosaos.timers.timer_commands import timers_command
 
         raise typer.Exit(timers_command(config, url, json_output, all_processes))
     from rosaos.cli.process_commands import ps_command
@@ -268,7 +268,7 @@ def kill(
 ) -> None:
     """Terminate a process; its device leases are released. --timer: cancel a timer instead."""
     if timer:
-        from rosaos.cli.timer_commands import cancel_timer_command
+        from rosaos.timers.timer_commands import cancel_timer_command
 
         raise typer.Exit(cancel_timer_command(config, url, process_id, json_output))
     from rosaos.cli.process_commands import kill_command

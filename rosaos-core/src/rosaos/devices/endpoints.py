@@ -24,7 +24,7 @@ class DeviceEndpoint:
     token: str
     status: DeviceStatus
     confirm: list[str] | Literal["destructive"] | None = None
-    """What needs a person's yes (:func:`rosaos.processes.confirming.confirm_rule`)."""
+    """What needs a person's yes (:func:`rosaos.confirmations.confirming.confirm_rule`)."""
     attached_tools: tuple[str, ...] = ()
     """For an always-attached device: the tools a process gets when the kernel did not ask for it."""
     attached_prompt: str | None = None

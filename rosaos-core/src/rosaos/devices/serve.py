@@ -22,11 +22,11 @@ from fastmcp import FastMCP
 from starlette.types import ASGIApp
 
 from rosaos.auth import BearerAuthMiddleware, HostOriginGuard, bound_hosts
-from rosaos.device_notices import NoticeBoard, notice_endpoint
 from rosaos.devices.deadman import HeardMiddleware, deadman_of, running_deadman
 from rosaos.devices.latch import add_latch
 from rosaos.devices.world import DeviceInstance
 from rosaos.drivers import SETS, DeviceBackend, DeviceError, no_safe_stop
+from rosaos.notices.notice_board import NoticeBoard, notice_endpoint
 
 MCP_PATH = "/mcp"
 HEALTH_PATH = "/health"
@@ -97,7 +97,7 @@ _BOARDS: weakref.WeakKeyDictionary[FastMCP, NoticeBoard] = weakref.WeakKeyDictio
 
 def add_notice_route(server: FastMCP, board: NoticeBoard) -> None:
     """Every device server gets ``GET /notices`` (behind its token): the kernel long-polls it for the
-    notices the driver posts with ``ctx.notify`` (:mod:`rosaos.device_notices`)."""
+    notices the driver posts with ``ctx.notify`` (:mod:`rosaos.notices.notice_board`)."""
     server.custom_route(NOTICES_PATH, methods=["GET"])(notice_endpoint(board))
     _BOARDS[server] = board  # so serve_http can end its long polls before stopping
 

@@ -42,7 +42,7 @@ class DeviceNotice(BaseModel):
     """Any JSON, nested at most :data:`MAX_DATA_DEPTH` levels (deeper breaks JSON encoders)."""
     name: str | None = Field(default=None, pattern=r"^[a-z][a-z0-9_]{0,63}$")
     """What happened, as the driver declares it (``battery_low``, ``person_seen``); see
-    :mod:`rosaos.device_notices`. None for a free-form notice posted by hand."""
+    :mod:`rosaos.notices.notice_board`. None for a free-form notice posted by hand."""
     driver: str | None = Field(default=None, max_length=100)
     importance: Literal["info", "notify"] = "info"
     """``notify``: the kernel tells the user; ``info``: it notes it and stays quiet."""
@@ -76,7 +76,7 @@ class ErrorReport(BaseModel):
 
 
 class TimerFired(BaseModel):
-    """A timer fell due (see :mod:`rosaos.kernel.timers`): the kernel does its action now."""
+    """A timer fell due (see :mod:`rosaos.timers.timer_book`): the kernel does its action now."""
 
     model_config = ConfigDict(extra="forbid")
 

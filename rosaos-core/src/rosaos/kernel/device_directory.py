@@ -10,10 +10,10 @@ hundred devices each.
 from __future__ import annotations
 
 from rosaos.config import RosaosConfig
+from rosaos.confirmations.confirming import ConfirmRule, confirm_rule
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.devices.hosting import DeviceHosting
 from rosaos.devices.world import World
-from rosaos.processes.confirming import ConfirmRule, confirm_rule
 
 
 class DeviceDirectory:

@@ -19,9 +19,9 @@ from collections.abc import Sequence
 from typing import Any
 
 from rosaos.events.types import Event
-from rosaos.kernel.notice_text import render_notice
-from rosaos.kernel.timer_text import render_timer_fired
+from rosaos.notices.notice_text import render_notice
 from rosaos.receipts import receipts_text
+from rosaos.timers.timer_text import render_timer_fired
 
 EVENT_SEPARATOR = "\n\n"
 

@@ -22,6 +22,8 @@ from dataclasses import dataclass
 from typing import Any
 
 from rosaos.config import RosaosConfig
+from rosaos.confirmations.confirmation_chat import answer_from_chat, ask_people, record_confirmation
+from rosaos.confirmations.confirmation_desk import ConfirmationDesk
 from rosaos.devices.hosting import DeviceHosting
 from rosaos.devices.state_cache import DeviceStateCache
 from rosaos.devices.supervisor import DeviceSupervisor
@@ -29,8 +31,6 @@ from rosaos.devices.world import World
 from rosaos.events.plan import Plan
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
-from rosaos.kernel.confirmation_chat import answer_from_chat, ask_people, record_confirmation
-from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.device_directory import DeviceDirectory
 from rosaos.kernel.device_status import DeviceStatusUpdates
 from rosaos.kernel.emergency_stop import EmergencyStopControl, stored_emergency_stop
@@ -39,15 +39,12 @@ from rosaos.kernel.host_latch import HostLatches, keep_latch
 from rosaos.kernel.intake import Intake, Queued
 from rosaos.kernel.launch_cause import CurrentEvent, LaunchCause
 from rosaos.kernel.loop import KernelLoop
-from rosaos.kernel.notices import NoticeWatcher
 from rosaos.kernel.orphans import LiveProcesses, recover_orphans
 from rosaos.kernel.pending_stops import PendingStops, StopUndelivered
 from rosaos.kernel.process_ends import ProcessEnds, end_event
 from rosaos.kernel.stop_at_intake import StopAtIntake
 from rosaos.kernel.stop_tools import add_stop_tools
 from rosaos.kernel.stopping import Stopper
-from rosaos.kernel.timer_tools import add_timer_tools
-from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.tools import build_kernel_tools
 from rosaos.kernel.updates import UpdateStream
 from rosaos.memory.memory_tools import add_memory_tools, memory_summary
@@ -55,10 +52,13 @@ from rosaos.memory.sightings import SightingLog
 from rosaos.memory.store import MemoryStore
 from rosaos.models.defaults import KernelModels
 from rosaos.models.select import ModelSpec
+from rosaos.notices.notice_watcher import NoticeWatcher
 from rosaos.processes.jobs import WorkerCallback
 from rosaos.processes.manager import LaunchRefused, ProcessInfo, ProcessManager
 from rosaos.processes.pool import WorkerPool
 from rosaos.processes.prompts import base_process_prompt
+from rosaos.timers.timer_book import TimerBook
+from rosaos.timers.timer_tools import add_timer_tools
 
 log = logging.getLogger(__name__)
 

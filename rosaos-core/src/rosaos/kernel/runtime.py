@@ -22,6 +22,7 @@ from pydantic_ai.models import Model
 
 from rosaos.auth import bound_hosts, load_or_create_token
 from rosaos.config import MapOrigin, RosaosConfig
+from rosaos.confirmations.confirmation_desk import ConfirmationDesk
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.devices.hosting import DeviceHosting
 from rosaos.devices.run_files import write_atomic
@@ -34,20 +35,19 @@ from rosaos.kernel.api.app import create_app
 from rosaos.kernel.api.kernel_client import kernel_file, running_kernel_url
 from rosaos.kernel.api.login_codes import LoginCodes, login_url
 from rosaos.kernel.api.schemas import DeviceView, EmergencyStopReport, EmergencyStopState, Understanding
-from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.emergency_stop import EMERGENCY_STOP_KEY as EMERGENCY_STOP_KEY
 from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.intake import Intake
 from rosaos.kernel.loop import KernelLoop
-from rosaos.kernel.notices import NoticeWatcher
 from rosaos.kernel.parts import EVENTS_FILE, KernelParts, build_parts
-from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import UpdateStream
 from rosaos.memory.sightings import SightingLog
 from rosaos.memory.store import MemoryStore
 from rosaos.models.defaults import KernelModels, kernel_models
 from rosaos.models.select import ModelSpec
+from rosaos.notices.notice_watcher import NoticeWatcher
 from rosaos.processes.manager import ProcessInfo, ProcessManager
+from rosaos.timers.timer_book import TimerBook
 
 log = logging.getLogger(__name__)
 

@@ -28,7 +28,6 @@ from pydantic_ai.messages import ModelMessage, ModelResponsePart, TextPart, Tool
 from rosaos.events.plan import result_data
 from rosaos.intents.grammar.state_words import battery, doing, people_seen, position
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
-from rosaos.intents.planning.notice_plan import SILENCE
 from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.intents.understanding.questions import Question, read_question
 from rosaos.intents.understanding.stop_words import DeviceRefs, read_stop
@@ -42,6 +41,7 @@ from rosaos.models.conversation import (
     turn_event,
 )
 from rosaos.models.process_model import final_reply
+from rosaos.notices.notice_plan import SILENCE
 
 STOP_TOOL = "stop"
 STATE_TOOL = "device_state"

@@ -13,11 +13,11 @@ handled (:func:`rosaos.models.conversation.turn_event`, never the text an LLM re
 - a :class:`~rosaos.events.callback.WorkerCallback`: the process's output (its plan made it a
   user-facing sentence), or an apology with the error; its plan's follow-up, if it has one.
 - a :class:`~rosaos.events.types.DeviceNotice`: ``notify`` ones are said through the Reachy Mini (one process that calls its
-  ``speak``); ``info`` ones get no reply (:mod:`rosaos.intents.planning.notice_plan`).
+  ``speak``); ``info`` ones get no reply (:mod:`rosaos.notices.notice_plan`).
 - an :class:`~rosaos.events.types.ErrorReport`: acknowledged in one sentence.
 - timers ("… in ten minutes", "what timers are set?", "cancel that timer") and a
   :class:`~rosaos.events.types.TimerFired`:
-  :mod:`rosaos.models.timer_turn`, asked first;
+  :mod:`rosaos.timers.timer_turn`, asked first;
 - "stop" however it is said, questions about a device's state and "what can you do?": the
   kernel's lease-free ``stop`` and ``device_state`` tools (:mod:`rosaos.models.kernel_actions`),
   asked next;
@@ -47,7 +47,6 @@ from rosaos.events.types import DeviceNotice, ErrorReport, Event
 from rosaos.intents.grammar.phrases import phrase
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.planning.follow_ups import callback_response, plan_follow_up
-from rosaos.intents.planning.notice_plan import SILENCE, notice_response
 from rosaos.intents.understanding.matching import IntentMatcher, MatchResult
 from rosaos.intents.understanding.stop_words import DeviceRefs
 from rosaos.memory.memory_phrases import resolve_aliases
@@ -65,7 +64,8 @@ from rosaos.models.conversation import (
     turn_event,
 )
 from rosaos.models.memory_turn import is_memory_sentence, memory_turn
-from rosaos.models.timer_turn import is_timer_sentence, timer_turn
+from rosaos.notices.notice_plan import SILENCE, notice_response
+from rosaos.timers.timer_turn import is_timer_sentence, timer_turn
 
 LAUNCH_TOOL = "launch_process"
 NO_OUTPUT = "(no output)"

@@ -20,12 +20,12 @@ from pydantic_ai.models import Model
 from pydantic_ai.toolsets import AbstractToolset, ToolsetTool
 from pydantic_ai.usage import RunUsage
 
+from rosaos.confirmations.confirming import ConfirmationDeclined
 from rosaos.events.plan import Plan
 from rosaos.intents.grammar.phrases import phrase
 from rosaos.intents.planning.follow_ups import unmet_output
 from rosaos.models.conversation import content_text
 from rosaos.models.process_model import clamp_arguments, final_reply, resolve_tool
-from rosaos.processes.confirming import ConfirmationDeclined
 
 
 async def run_plan(plan: Plan, toolsets: Sequence[AbstractToolset[Any]], model: Model, language: str) -> str:

@@ -37,10 +37,10 @@ from pydantic_ai.models import Model
 from pydantic_ai.toolsets import AbstractToolset
 from pydantic_ai.usage import UsageLimits
 
+from rosaos.confirmations.confirming import ConfirmationDeclined, ConfirmingToolset, KernelAsker
 from rosaos.events.callback import ProcessStatus, WorkerCallback
 from rosaos.models.process_model import LocalPlanModel
 from rosaos.models.select import ModelError, build_model
-from rosaos.processes.confirming import ConfirmationDeclined, ConfirmingToolset, KernelAsker
 from rosaos.processes.final_call import FINAL_CALL_MODEL, FinalCallModel
 from rosaos.processes.jobs import GrantedDevice, WorkerJob
 from rosaos.processes.keepalive import DeadlineToolset, DeviceLink, keepalives, owner_headers

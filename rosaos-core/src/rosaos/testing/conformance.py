@@ -31,11 +31,11 @@ import pytest
 
 from rosaos.cards import card_keys_missing
 from rosaos.config import DeviceConfig
-from rosaos.device_notices import NoticeBatch, check_notice_specs
 from rosaos.devices.world import DeviceInstance
 from rosaos.drivers import DriverSpec
 from rosaos.intents.grammar.intents_file import IntentsFile, IntentsFileError, load_intents_file
-from rosaos.kernel.notices import notices_url
+from rosaos.notices.notice_board import NoticeBatch, check_notice_specs
+from rosaos.notices.notice_watcher import notices_url
 from rosaos.plugins import DriverInfo, DriverRegistry
 from rosaos.testing.device_runner import (
     RunningDevice,

@@ -1,6 +1,6 @@
-"""What to do about a sentence: follow-ups, notices, timer turns (the plan is :mod:`rosaos.events.plan`).
+"""What to do about a sentence: follow-ups (the plan is :mod:`rosaos.events.plan`).
 
-- ``follow_ups``: "X, then Y" and "X, and when you find someone, Y";
-- ``notice_plan``: the answer to a device notice;
-- ``timer_plan``: set, list and cancel timers; carry out a fired one.
+- ``follow_ups``: "X, then Y" and "X, and when you find someone, Y".
+
+The answer to a device notice is :mod:`rosaos.notices.notice_plan`; timer turns are :mod:`rosaos.timers.timer_turn`.
 """

@@ -25,13 +25,13 @@ from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.responses import Response
 
 import rosaos
+import rosaos.confirmations.confirmation_routes
+import rosaos.timers.timer_routes
 from rosaos.auth import BearerAuthMiddleware, HostOriginGuard
 from rosaos.kernel.api import (
-    confirmation_routes,  # noqa: F401  (adds its routes to protected)
     control_routes,  # noqa: F401  (adds its routes to protected)
     frame_routes,  # noqa: F401  (adds its routes to protected)
     memory_routes,  # noqa: F401  (adds its routes to protected)
-    timer_routes,  # noqa: F401  (adds its routes to protected)
 )
 from rosaos.kernel.api.routes import KERNEL_ONLY, WEB_DIR, protected, public
 from rosaos.kernel.api.schemas import KernelRuntime

@@ -14,18 +14,18 @@ from typing import Any, Literal, Protocol
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from rosaos.config import MapOrigin
+from rosaos.confirmations.confirmation_desk import ConfirmationDesk
 from rosaos.events.plan import Plan
 from rosaos.events.types import IdempotencyKey, Source
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.login_codes import LoginCodes
-from rosaos.kernel.confirmations import ConfirmationDesk
 from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.intake import Intake
-from rosaos.kernel.timers import TimerBook
 from rosaos.kernel.updates import Update, UpdateStream
 from rosaos.memory.sightings import SightingLog
 from rosaos.memory.store import MemoryStore
 from rosaos.processes.manager import ProcessInfo
+from rosaos.timers.timer_book import TimerBook
 
 
 class KernelRuntime(Protocol):

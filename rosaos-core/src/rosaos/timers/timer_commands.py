@@ -20,11 +20,11 @@ from rosaos.cli.console import console as terminal
 from rosaos.cli.log_command import EVENTS_FILE
 from rosaos.cli.up_command import EXIT_CONFIG
 from rosaos.config import ConfigError, load_config
-from rosaos.intents.grammar.timer_phrases import duration_text
 from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable, running_kernel_url
 from rosaos.kernel.event_store import EventStore
-from rosaos.kernel.timer_text import clock_text
-from rosaos.kernel.timers import TimerBook, TimerError
+from rosaos.timers.timer_book import TimerBook, TimerError
+from rosaos.timers.timer_phrases import duration_text
+from rosaos.timers.timer_text import clock_text
 
 
 async def _stored_book(path: Path) -> tuple[EventStore, TimerBook]:

@@ -9,13 +9,13 @@ from typing import Annotated, Any
 
 from fastapi import HTTPException, Query
 
-from rosaos.kernel.api.routes import Runtime, protected
-from rosaos.kernel.confirmations import (
+from rosaos.confirmations.confirmation_desk import (
     Confirmation,
     ConfirmationAnswer,
     ConfirmationList,
     ConfirmationRequest,
 )
+from rosaos.kernel.api.routes import Runtime, protected
 
 MAX_WAIT = 30.0
 

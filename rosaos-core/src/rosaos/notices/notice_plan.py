@@ -3,7 +3,7 @@
 A ``notify`` notice becomes one process on the user-interface device (the Reachy Mini) that says
 the driver's sentence with its ``speak`` tool. An ``info`` notice gets no reply at all: the web
 page and an open ``rosaos chat`` show it, and nobody is interrupted. Rate limits and deduplication happen
-before the event is queued (:mod:`rosaos.kernel.notices`), so every notice that reaches here is
+before the event is queued (:mod:`rosaos.notices.notice_watcher`), so every notice that reaches here is
 worth its one sentence.
 """
 

@@ -4,8 +4,8 @@
 "at half past seven turn on the lamp", "set a timer for 20 minutes to turn off the fan",
 "what timers are set?", "cancel that timer", "cancel the light timer", "cancel timer 3".
 Numbers come in digits or words. The action is checked by the caller against the intent
-templates (:mod:`rosaos.models.timer_turn`): a timer is only set for a command the engine
-understands now. Clock times are local and resolved by the kernel (:mod:`rosaos.kernel.timer_text`).
+templates (:mod:`rosaos.timers.timer_turn`): a timer is only set for a command the engine
+understands now. Clock times are local and resolved by the kernel (:mod:`rosaos.timers.timer_text`).
 """
 
 from __future__ import annotations

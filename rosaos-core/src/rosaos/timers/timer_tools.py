@@ -14,8 +14,8 @@ from fastmcp import FastMCP
 from fastmcp.exceptions import ToolError
 from pydantic import Field
 
-from rosaos.kernel.timer_text import DueTimeError, due_text, resolve_due
-from rosaos.kernel.timers import MAX_DELAY, Timer, TimerBook, TimerError
+from rosaos.timers.timer_book import MAX_DELAY, Timer, TimerBook, TimerError
+from rosaos.timers.timer_text import DueTimeError, due_text, resolve_due
 
 TIMER_TOOL_NAMES = ("set_timer", "list_timers", "cancel_timer")
 

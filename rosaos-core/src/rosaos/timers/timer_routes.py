@@ -14,7 +14,7 @@ from fastapi import HTTPException, Query
 from fastapi import Path as FastPath
 
 from rosaos.kernel.api.routes import MAX_ID, Runtime, protected
-from rosaos.kernel.timers import Timer, TimerError, TimerList
+from rosaos.timers.timer_book import Timer, TimerError, TimerList
 
 
 @protected.get("/timers")

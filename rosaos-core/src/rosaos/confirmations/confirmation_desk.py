@@ -1,6 +1,6 @@
 """Confirmation before risky actuation: a process pauses until a person says yes.
 
-Config names what needs a yes (:func:`~rosaos.processes.confirming.confirm_rule`, beside the
+Config names what needs a yes (:func:`~rosaos.confirmations.confirming.confirm_rule`, beside the
 worker's toolset that applies it): per device, ``confirm = ["drive",
 "move_distance"]`` or ``confirm = "destructive"`` (every tool annotated ``destructiveHint``) or
 ``"off"``; globally, a top-level ``confirm``; by default, ``destructive`` for the ``real`` backend

@@ -2,7 +2,7 @@
 
 :class:`rosaos.models.kernel_model.LocalIntentModel` asks :func:`timer_turn` first. It answers:
 
-- user text that is a timer request (:mod:`rosaos.intents.grammar.timer_phrases`) with a ``set_timer``,
+- user text that is a timer request (:mod:`rosaos.timers.timer_phrases`) with a ``set_timer``,
   ``list_timers`` or ``cancel_timer`` call, once the action is a command the engine understands
   now (a timer is never set for something it could not do when it fires);
 - those tools' results with one sentence ("Timer 2 set: turn off the kitchen light at 22:10
@@ -22,13 +22,6 @@ from typing import Any
 from pydantic_ai.messages import ModelMessage, ModelResponsePart, TextPart, ToolCallPart
 
 from rosaos.events.types import TimerFired
-from rosaos.intents.grammar.timer_phrases import (
-    CancelTimer,
-    ListTimers,
-    SetTimer,
-    duration_text,
-    read_timer_request,
-)
 from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.models.conversation import (
     ToolOutcome,
@@ -37,6 +30,13 @@ from rosaos.models.conversation import (
     said,
     tool_outcomes,
     turn_event,
+)
+from rosaos.timers.timer_phrases import (
+    CancelTimer,
+    ListTimers,
+    SetTimer,
+    duration_text,
+    read_timer_request,
 )
 
 Match = Callable[[str], MatchResult]

@@ -7,11 +7,11 @@ import logging
 import time
 from collections.abc import Mapping
 
+from rosaos.confirmations.confirmation_desk import Confirmation, ConfirmationDesk
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.events.types import Event
 from rosaos.kernel.activity import ActivityLog
-from rosaos.kernel.confirmations import Confirmation, ConfirmationDesk
 from rosaos.kernel.loop import Output
 from rosaos.kernel.updates import UpdateStream
 from rosaos.receipts import Receipt, SafetyDecision, SafetyKind

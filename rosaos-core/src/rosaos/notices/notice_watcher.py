@@ -1,6 +1,6 @@
 """Device notices, kernel side: fetch them from every device, filter, and enqueue the ones that pass.
 
-One task per device long-polls its ``GET /notices`` (:mod:`rosaos.device_notices`) with the
+One task per device long-polls its ``GET /notices`` (:mod:`rosaos.notices.notice_board`) with the
 device's own token, so a device host never holds the kernel's token and a remote device works the
 same as a local one. Each notice that passes :class:`NoticeFilter` becomes a ``device_notice``
 event with an idempotency key made from the board and sequence number, so a notice fetched twice
@@ -26,9 +26,9 @@ from collections.abc import Awaitable, Callable, Mapping
 import httpx
 from pydantic import ValidationError
 
-from rosaos.device_notices import MAX_WAIT, Notice, NoticeBatch
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.events.types import DeviceNotice, DeviceNoticeEvent
+from rosaos.notices.notice_board import MAX_WAIT, Notice, NoticeBatch
 from rosaos.tls import shared_context
 
 log = logging.getLogger(__name__)

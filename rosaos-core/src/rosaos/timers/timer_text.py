@@ -1,7 +1,7 @@
 """Timer times for people and models: "23:00" → the next 23:00, "in 10 minutes", "late by 2 h".
 
 Clock times are the kernel machine's local time: "stop the music at 11 pm" means 11 pm where
-the robot is. Stored times are UTC (:mod:`rosaos.kernel.timers`).
+the robot is. Stored times are UTC (:mod:`rosaos.timers.timer_book`).
 """
 
 from __future__ import annotations
@@ -10,7 +10,7 @@ import re
 from datetime import datetime, timedelta
 
 from rosaos.events.types import TimerFired
-from rosaos.intents.grammar.timer_phrases import duration_text
+from rosaos.timers.timer_phrases import duration_text
 
 _CLOCK = re.compile(r"^\s*(?P<hour>\d{1,2})(?::(?P<minute>\d{2}))?(?::(?P<second>\d{2}))?\s*$")
 

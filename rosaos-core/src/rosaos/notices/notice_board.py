@@ -8,7 +8,7 @@ A driver declares its notices in :attr:`rosaos.drivers.DriverSpec.notices` and p
 The notice lands on the instance's :class:`NoticeBoard` (one per instance, so it does not matter
 whether an instance has a process of its own or shares one with others). The hosting layer serves
 the board at ``GET /notices`` next to ``/mcp``, behind the device's bearer token, and the kernel
-long-polls it (:mod:`rosaos.kernel.notices`), turning each notice into a ``[Device notice]`` event.
+long-polls it (:mod:`rosaos.notices.notice_watcher`), turning each notice into a ``[Device notice]`` event.
 The kernel pulls, so a device never needs the kernel's address or its token, and a device served
 by ``rosaos serve-device`` on a robot's own computer works the same way.
 """
