@@ -172,15 +172,16 @@ def run(port: int, profiles: list[str], dump: Path | None = None, light_only: bo
                         wait_healthy(api)
                         api.post("/chat", json={"text": sentence}).raise_for_status()
                         settle(api, script, quiet=0.2)
-                    if dump is not None:
-                        dump.mkdir(parents=True, exist_ok=True)
-                        script.dump = str(dump)
-                    results[profile] = {
-                        "light switch": measure(api, script, "turn on the kitchen light", profile),
-                    }
-                    script.dump = None
+                    commands = {"light switch": "turn on the kitchen light"}
                     if not light_only:
-                        results[profile]["paper demo"] = measure(api, script, DEMO_SENTENCE, profile)
+                        commands["paper demo"] = DEMO_SENTENCE
+                    results[profile] = {}
+                    for name, sentence in commands.items():
+                        if dump is not None:
+                            (dump / profile / name.replace(" ", "-")).mkdir(parents=True, exist_ok=True)
+                            script.dump = str(dump / profile / name.replace(" ", "-"))
+                        results[profile][name] = measure(api, script, sentence, profile)
+                        script.dump = None
                     # Back to the start: the robot docks again for the next profile's demo.
                     script.reset(PROFILES["none"])
         finally:
@@ -200,7 +201,9 @@ def main() -> None:
     parser.add_argument("--profiles", nargs="+", default=["cloud", "local-8b"], choices=sorted(PROFILES))
     parser.add_argument("--port", type=int, default=19410, help="port for rosaos up (default 19410)")
     parser.add_argument("--json", type=Path, help="also write the results here")
-    parser.add_argument("--dump", type=Path, help="write the light switch's request bodies here")
+    parser.add_argument(
+        "--dump", type=Path, help="write every measured request body here (PROFILE/COMMAND/NNN-role.json)"
+    )
     parser.add_argument("--light-only", action="store_true", help="skip the paper's demo")
     args = parser.parse_args()
     results = {}

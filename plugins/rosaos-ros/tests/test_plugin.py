@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 from typing import Any
 
@@ -12,8 +11,7 @@ from pydantic import ValidationError
 from rosaos.drivers import DeviceContext, DeviceError
 from rosaos.plugins import load_drivers
 from rosaos.processes.jobs import GrantedDevice
-from rosaos.processes.prompts import process_system_prompt
-from rosaos.processes.tool_list import DeviceTools
+from rosaos.processes.tool_offer import offered_names
 from rosaos_ros.plugin import SPEC, real_backend, sim_backend
 from rosaos_ros.settings import RosSettings
 
@@ -86,23 +84,6 @@ def test_a_user_profile_in_the_data_dir_is_found_by_name(tmp_path: Path) -> None
         backend.deadman.close()
 
 
-async def test_the_process_prompt_lists_every_tool_from_the_server(open_robot: Any) -> None:
-    # prompt.md says how to use the tools; the worker lists them from the MCP metadata.
-    async with open_robot() as robot:
-        listed = await robot.client.list_tools()
-    device = GrantedDevice(
-        name="ros_1",
-        driver="ros",
-        url="http://127.0.0.1:1/mcp",
-        token="t",
-        description="d",
-        prompt=SPEC.prompt,
-    )
-    prompt = process_system_prompt("BASE", "task", [device], {"ros_1": DeviceTools.from_mcp(listed)})
-    missing = [tool.name for tool in listed if not re.search(rf"^- `{tool.name}[`(]", prompt, re.MULTILINE)]
-    assert not missing, f"the process prompt does not list {missing}"
-
-
 async def test_every_tool_sets_all_three_hints(open_robot: Any) -> None:
     async with open_robot() as robot:
         tools = await robot.client.list_tools()
@@ -119,3 +100,26 @@ async def test_set_param_is_destructive_so_a_destructive_rule_asks_first(open_ro
     async with open_robot() as robot:
         hints = {tool.name: tool.annotations for tool in await robot.client.list_tools()}
     assert hints["set_param"] is not None and hints["set_param"].destructive_hint is True
+
+
+async def test_the_on_request_tools_are_the_servers_and_a_search_task_is_not_offered_them(
+    open_robot: Any,
+) -> None:
+    # Issue 22: the ROS graph's 25 tools are 13 KB of schema on every request of a drive or search.
+    async with open_robot() as robot:
+        names = {tool.name for tool in await robot.client.list_tools()}
+    assert set(SPEC.on_request_tools) <= names
+    device = GrantedDevice(
+        name="turtlebot",
+        driver="ros",
+        url="http://127.0.0.1:1/mcp",
+        token="t",
+        description="d",
+        prompt=SPEC.prompt,
+        on_request_tools=list(SPEC.on_request_tools),
+        on_request_pattern=SPEC.on_request_pattern,
+    )
+    search = "Undock, then search the environment for a person and report whether you found one."
+    assert offered_names(device, search)[1] == frozenset(SPEC.on_request_tools) | {"safe_stop"}
+    assert {"undock", "search", "drive", "stop"} <= names - offered_names(device, search)[1]
+    assert offered_names(device, "publish 0.1 on /cmd_vel")[1] == {"safe_stop"}

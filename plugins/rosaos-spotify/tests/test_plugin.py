@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 from typing import Any
 
@@ -11,9 +10,6 @@ from pydantic import ValidationError
 
 from rosaos.drivers import DeviceContext, DeviceError
 from rosaos.plugins import load_drivers
-from rosaos.processes.jobs import GrantedDevice
-from rosaos.processes.prompts import process_system_prompt
-from rosaos.processes.tool_list import DeviceTools
 from rosaos_spotify.plugin import SPEC, pause_music, real_backend
 from rosaos_spotify.settings import SpotifySettings
 from rosaos_spotify.web_api import WebApiBackend
@@ -89,20 +85,3 @@ async def test_safe_stop_with_nothing_playing_is_fine(open_player: Any) -> None:
     async with open_player() as player:
         await pause_music(player.backend)
         assert (await player.state())["is_playing"] is False
-
-
-async def test_the_process_prompt_lists_every_tool_from_the_server(open_player: Any) -> None:
-    # prompt.md no longer lists the tools: the worker writes the list from the MCP metadata.
-    async with open_player() as player:
-        listed = await player.client.list_tools()
-    device = GrantedDevice(
-        name="spotify_1",
-        driver="spotify",
-        url="http://127.0.0.1:1/mcp",
-        token="t",
-        description="d",
-        prompt=SPEC.prompt,
-    )
-    prompt = process_system_prompt("BASE", "task", [device], {"spotify_1": DeviceTools.from_mcp(listed)})
-    missing = [tool.name for tool in listed if not re.search(rf"^- `{tool.name}[`(]", prompt, re.MULTILINE)]
-    assert not missing, f"the process prompt does not list {missing}"

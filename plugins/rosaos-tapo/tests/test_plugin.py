@@ -2,16 +2,12 @@
 
 from __future__ import annotations
 
-import re
 from typing import Any
 
 import pytest
 from pydantic import ValidationError
 
 from rosaos.plugins import load_drivers
-from rosaos.processes.jobs import GrantedDevice
-from rosaos.processes.prompts import process_system_prompt
-from rosaos.processes.tool_list import DeviceTools
 from rosaos_tapo.plugin import SPEC, leave_light_as_is
 from rosaos_tapo.settings import TapoSettings
 
@@ -52,20 +48,3 @@ async def test_safe_stop_leaves_the_light_as_it_is(open_bulb: Any) -> None:
         await leave_light_as_is(bulb.backend)
         after = await bulb.call("get_state")
     assert after == before
-
-
-async def test_the_process_prompt_lists_every_tool_from_the_server(open_bulb: Any) -> None:
-    # prompt.md no longer lists the tools: the worker writes the list from the MCP metadata.
-    async with open_bulb() as bulb:
-        listed = await bulb.client.list_tools()
-    device = GrantedDevice(
-        name="tapo_1",
-        driver="tapo",
-        url="http://127.0.0.1:1/mcp",
-        token="t",
-        description="d",
-        prompt=SPEC.prompt,
-    )
-    prompt = process_system_prompt("BASE", "task", [device], {"tapo_1": DeviceTools.from_mcp(listed)})
-    missing = [tool.name for tool in listed if not re.search(rf"^- `{tool.name}[`(]", prompt, re.MULTILINE)]
-    assert not missing, f"the process prompt does not list {missing}"

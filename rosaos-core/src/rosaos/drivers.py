@@ -180,6 +180,14 @@ class DriverSpec(BaseModel, Generic[BackendT, SettingsT]):
     only because it is always attached (how to speak to the user). Empty: all of them."""
     attached_prompt: str | None = None
     """The device prompt that goes with :attr:`attached_tools` (short: those tools only)."""
+    on_request_tools: tuple[str, ...] = ()
+    """Tools a process model is offered only when its task asks for them: the task names one, or
+    matches :attr:`on_request_pattern` (:mod:`rosaos.processes.tool_offer`). For expert tools most
+    tasks never use: ROS's topic, service, parameter, action and node tools are 25 of its 40
+    schemas, 13 KB on every model request of a drive or a search. The offline plan runner may
+    call any tool."""
+    on_request_pattern: str | None = None
+    """Case-insensitive regular expression of the words by which a task asks for :attr:`on_request_tools`."""
     settings: type[SettingsT] = DeviceSettings  # type: ignore[assignment]  # SettingsT defaults to it
     """The settings class of one instance; every context the factories get carries one."""
     server: Callable[[DeviceContext[SettingsT], BackendT], FastMCP]

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 from rosaos.processes.jobs import GrantedDevice
 from rosaos.processes.prompts import DEFAULT_PROCESS_PROMPT, base_process_prompt, process_system_prompt
-from rosaos.processes.tool_list import DeviceTools, ToolSummary
 
 
 def device(name: str, driver: str = "tapo") -> GrantedDevice:
@@ -61,34 +60,9 @@ def test_configured_base_prompt_replaces_the_default() -> None:
     assert base_process_prompt("  ") == DEFAULT_PROCESS_PROMPT
 
 
-def listed_tools() -> DeviceTools:
-    return DeviceTools(
-        tools=(
-            ToolSummary.of(
-                "set_brightness",
-                "Set the brightness in percent.\n\nColour stays as it is.",
-                {"properties": {"brightness": {"type": "integer"}}, "required": ["brightness"]},
-            ),
-            ToolSummary.of(
-                "speak", "Say something.", {"properties": {"text": {}, "voice": {}}, "required": ["text"]}
-            ),
-            ToolSummary.of("get_state", "Read the light.", {"properties": {}}),
-        )
-    )
-
-
-def test_the_tool_list_comes_from_the_server_metadata_with_its_parameters() -> None:
-    prompt = process_system_prompt(
-        "BASE", "task", [device("kitchen_light")], {"kitchen_light": listed_tools()}
-    )
-    assert "Tools:\n- `set_brightness(brightness)`: Set the brightness in percent.\n" in prompt
-    assert "- `speak(text, voice?)`: Say something." in prompt  # optional parameters end in ?
-    assert "- `get_state`: Read the light." in prompt
-    assert "Colour stays as it is" not in prompt  # the first paragraph only: the schema has the rest
-
-
-def test_the_tool_list_names_only_the_tools_the_process_is_offered() -> None:
-    attached = device("reachy", "reachy").model_copy(update={"tools": ["speak"]})
-    prompt = process_system_prompt("BASE", "task", [attached], {"reachy": listed_tools()})
-    assert "`speak(text, voice?)`" in prompt
-    assert "set_brightness" not in prompt and "get_state" not in prompt
+def test_the_prompt_does_not_list_the_tools_their_schemas_already_give() -> None:
+    # Issue 22: the model is sent every tool's name, parameters and description as its schema;
+    # listing them in the prompt as well cost 1.5 KB of a light switch's prompt, on every request.
+    prompt = process_system_prompt("BASE", "task", [device("kitchen_light"), device("reachy", "reachy")])
+    assert "Tools:" not in prompt
+    assert "How to drive kitchen_light." in prompt and "How to drive reachy." in prompt

@@ -22,12 +22,12 @@ from rosaos_reachy.tools import companion, motion, vision
 
 SpokenText = Annotated[
     str,
-    Field(min_length=1, max_length=1000, description="What to say, as plain text in the user's language."),
+    Field(min_length=1, max_length=1000, description="Plain text in the user's language."),
 ]
 
 Interrupt = Annotated[
     bool,
-    Field(description="Cut off whatever the robot is saying (and sentences waiting) and say this now."),
+    Field(description="Cut off what is being said (and waiting) and say this now."),
 ]
 
 
@@ -47,18 +47,15 @@ def build_server(ctx: DeviceContext, backend: ReachyBackend) -> FastMCP:
 
     @mcp.tool(annotations=ACT)
     async def speak(text: SpokenText, interrupt: Interrupt = False) -> SpeechReport:
-        """Say ``text`` out loud to the user. Returns once the robot has started speaking, with the
-        duration; it keeps talking while you go on. A sentence said while another is still being
-        spoken follows it, unless ``interrupt`` cuts that one off (and any waiting their turn).
+        """Say ``text`` aloud; returns once speech starts, with its duration, and speaks on while you go on.
 
-        Use it when the task asks the robot to say something; keep it short and conversational.
+        A sentence said during another follows it, unless ``interrupt``.
         """
         return await backend.speaker.say(text, interrupt=interrupt)
 
     @mcp.tool(annotations=SET)
     async def stop_speaking() -> StopReport:
-        """Stop talking at once: cut off the sentence being spoken and drop any waiting their turn.
-        The voice front end calls it when the user talks over the robot."""
+        """Stop talking at once, dropping any sentences waiting."""
         return await backend.speaker.stop()
 
     motion.register(mcp, backend)

@@ -102,6 +102,40 @@ async def stop_robot(backend: RosBackend) -> None:
     await backend.safe_stop()
 
 
+ROS_GRAPH_TOOLS = (
+    "list_topics",
+    "topic_info",
+    "subscribe_once",
+    "subscribe_for",
+    "publish",
+    "publish_for",
+    "list_services",
+    "service_info",
+    "call_service",
+    "list_params",
+    "get_param",
+    "set_param",
+    "delete_param",
+    "has_param",
+    "param_details",
+    "list_nodes",
+    "node_info",
+    "list_actions",
+    "send_goal",
+    "cancel_goal",
+    "goal_status",
+    "action_status",
+    "message_details",
+    "service_details",
+    "action_details",
+)
+"""The tools on ROS's own terms (topics, services, parameters, actions, nodes, interfaces)."""
+ROS_GRAPH_WORDS = (
+    r"\b(topics?|services?|param(eter)?s?|actions?|nodes?|messages?|msgs?|publish\w*|subscrib\w*|"
+    r"goals?|interfaces?|ros ?2?|rosbridge)\b|(^|[\s'\"(`])/[a-z_]"
+)
+"""Words of a task that asks for :data:`ROS_GRAPH_TOOLS`, or an absolute ROS name such as ``/cmd_vel``."""
+
 SPEC: DriverSpec[RosBackend, RosSettings] = DriverSpec(
     name="ros",
     title="ROS 2 robot (via rosbridge)",
@@ -113,6 +147,10 @@ SPEC: DriverSpec[RosBackend, RosSettings] = DriverSpec(
     ),
     concurrency="exclusive",
     prompt=read_packaged_text(__file__, "prompt.md"),
+    # The ROS graph itself: offered to a process model only when its task speaks of it
+    # ("publish 0.2 on /cmd_vel", "what does /battery_state say?"), not for a drive or a search.
+    on_request_tools=ROS_GRAPH_TOOLS,
+    on_request_pattern=ROS_GRAPH_WORDS,
     settings=RosSettings,
     server=build_server,
     backends={"sim": sim_backend, "real": real_backend},

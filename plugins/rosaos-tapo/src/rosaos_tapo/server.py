@@ -22,30 +22,24 @@ from rosaos_tapo.colors import UnknownColorError, White, lookup_color
 # value twice is the same as once, except for relative changes (toggle, adjust_brightness).
 READ_ONLY, SET, CHANGE = drivers.READ_ONLY, drivers.SETS, drivers.CHANGES
 
-Brightness = Annotated[
-    int, Field(ge=0, le=100, description="Brightness in percent, 1-100; 0 turns the light off.")
-]
+Brightness = Annotated[int, Field(ge=0, le=100, description="Percent; 0 turns the light off.")]
 BrightnessChange = Annotated[
     int,
-    Field(ge=-100, le=100, description="Percentage points to add; negative dims. The result stays 1-100."),
+    Field(ge=-100, le=100, description="Percentage points; negative dims. The result stays 1-100."),
 ]
-Kelvin = Annotated[
-    int, Field(ge=2500, le=6500, description="White colour temperature in kelvin: 2700 warm, 6500 cool.")
-]
-KelvinChange = Annotated[
-    int, Field(ge=-4000, le=4000, description="Kelvin to add; negative is warmer, positive cooler.")
-]
+Kelvin = Annotated[int, Field(ge=2500, le=6500, description="2700 warm white, 4000 neutral, 6500 daylight.")]
+KelvinChange = Annotated[int, Field(ge=-4000, le=4000, description="Kelvin; negative is warmer.")]
 Hue = Annotated[
     int,
-    Field(ge=0, le=360, description="Hue in degrees: 0 red, 60 yellow, 120 green, 240 blue, 300 magenta."),
+    Field(
+        ge=0,
+        le=360,
+        description="Degrees: 0 red, 30 orange, 60 yellow, 120 green, 180 cyan, 240 blue, 300 magenta.",
+    ),
 ]
-Saturation = Annotated[int, Field(ge=0, le=100, description="Saturation in percent: 0 white, 100 vivid.")]
-OptionalBrightness = Annotated[
-    int | None, Field(ge=1, le=100, description="Brightness in percent, 1-100; omit to keep the current one.")
-]
-ColorName = Annotated[
-    str, Field(min_length=1, max_length=40, description="A colour name, e.g. red, green, warm white.")
-]
+Saturation = Annotated[int, Field(ge=0, le=100, description="Percent: 0 white, 100 vivid.")]
+OptionalBrightness = Annotated[int | None, Field(ge=1, le=100, description="Percent; omit to keep it.")]
+ColorName = Annotated[str, Field(min_length=1, max_length=40, description="e.g. red, warm white.")]
 
 
 def build_server(ctx: DeviceContext, backend: TapoBackend) -> FastMCP:
@@ -54,78 +48,56 @@ def build_server(ctx: DeviceContext, backend: TapoBackend) -> FastMCP:
 
     @mcp.tool(annotations=READ_ONLY)
     async def get_state() -> BulbState:
-        """Read the light: on/off, brightness %, hue, saturation %, colour temperature in K.
-
-        ``color_temp`` is 0 while the bulb shows a colour; hue and saturation then describe it.
-        """
+        """Read the light: on, brightness %, hue, saturation %, color_temp K (0 while in colour)."""
         return await backend.state()
 
     @mcp.tool(annotations=SET)
     async def turn_on() -> BulbState:
-        """Turn the light on, at the brightness and colour it had before."""
+        """Turn the light on, as it was before."""
         return await backend.turn_on()
 
     @mcp.tool(annotations=SET)
     async def turn_off() -> BulbState:
-        """Turn the light off. Brightness and colour are kept for the next turn_on."""
+        """Turn the light off (brightness and colour are kept)."""
         return await backend.turn_off()
 
     @mcp.tool(annotations=CHANGE)
     async def toggle() -> BulbState:
-        """Turn the light off if it is on, or on if it is off."""
+        """Turn the light off if on, on if off."""
         return await backend.toggle()
 
     @mcp.tool(annotations=SET)
     async def set_brightness(brightness: Brightness) -> BulbState:
-        """Set the brightness in percent (1-100) and turn the light on; 0 turns it off.
-
-        Colour and colour temperature stay as they are.
-        """
+        """Set the brightness and turn the light on; 0 turns it off."""
         return await backend.set_brightness(brightness)
 
     @mcp.tool(annotations=CHANGE)
     async def adjust_brightness(change: BrightnessChange) -> BulbState:
-        """Make the light brighter or dimmer by some percentage points, and turn it on.
-
-        Use for "dim" (e.g. -25) or "brighter" (e.g. +25) when no exact level is asked for.
-        The result is kept within 1-100; to switch the light off use turn_off.
-        """
+        """Make the light brighter or dimmer by some points ("dim": -25), and turn it on."""
         return await backend.adjust_brightness(change)
 
     @mcp.tool(annotations=SET)
     async def set_color_temp(kelvin: Kelvin) -> BulbState:
-        """Switch to white light at a colour temperature (2500-6500 K) and turn the light on.
-
-        2700 K is warm white (like a classic bulb), 4000 K neutral, 6500 K cool daylight.
-        Brightness stays as it is.
-        """
+        """White light at a colour temperature; turns the light on."""
         return await backend.set_color_temp(kelvin)
 
     @mcp.tool(annotations=CHANGE)
     async def adjust_color_temp(change: KelvinChange) -> BulbState:
-        """Make white light warmer (negative kelvin) or cooler (positive), and turn the light on.
-
-        Use for "warmer" (e.g. -700) or "cooler" (e.g. +700) when no exact temperature is asked
-        for. From a colour, it starts at neutral white (4000 K); the result stays 2500-6500 K.
-        """
+        """Make white light warmer or cooler (from a colour: from 4000 K), and turn it on."""
         return await backend.adjust_color_temp(change)
 
     @mcp.tool(annotations=SET)
     async def set_color(hue: Hue, saturation: Saturation, brightness: OptionalBrightness = None) -> BulbState:
-        """Show a colour given as hue (0-360°) and saturation (0-100 %), and turn the light on.
-
-        The bulb leaves white mode (``color_temp`` becomes 0). Brightness changes only if given.
-        For white light use set_color_temp instead.
-        """
+        """Show a colour by hue and saturation, and turn the light on (white: set_color_temp)."""
         return await backend.set_color(hue, saturation, brightness)
 
     @mcp.tool(annotations=SET)
     async def set_color_name(name: ColorName) -> BulbState:
-        """Set the light to a named colour or white, and turn it on.
+        """Set a named colour or white, and turn the light on.
 
         Colours: red, orange, amber, yellow, lime, green, teal, cyan, sky blue, blue, indigo,
         purple, violet, magenta, pink. Whites: white, warm white, soft white, candlelight,
-        cool white, daylight. Brightness stays as it is.
+        cool white, daylight.
         """
         try:
             color = lookup_color(name)

@@ -81,7 +81,7 @@ def _add_safe_stop(server: FastMCP, instance: DeviceInstance, backend: DeviceBac
     spec = instance.spec
 
     async def safe_stop() -> str:
-        """Emergency stop: put this device in its safe state (stop motion, cancel goals)."""
+        """Emergency stop: put this device in its safe state."""
         await spec.safe_stop(backend)
         return f"{instance.name}: safe stop done"
 

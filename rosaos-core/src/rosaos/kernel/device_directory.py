@@ -47,6 +47,8 @@ class DeviceDirectory:
                 confirm=self._confirm_rule(name),
                 attached_tools=tuple(spec.attached_tools),
                 attached_prompt=spec.attached_prompt,
+                on_request_tools=tuple(spec.on_request_tools),
+                on_request_pattern=spec.on_request_pattern,
             )
         self._cached = (version, endpoints)
         return endpoints

@@ -29,6 +29,7 @@ from rosaos.kernel.offline_turn import offline_turn
 from rosaos.kernel.short_turns import LaunchAckModel, relayable, relayed_messages
 from rosaos.kernel.updates import UpdateKind, UpdateStream
 from rosaos.models.kernel_model import LocalIntentModel
+from rosaos.models.tool_schemas import CompactToolsModel
 
 log = logging.getLogger(__name__)
 
@@ -177,7 +178,7 @@ class KernelLoop:
                         prompt,
                         message_history=self.history,
                         instructions=self.instructions(),
-                        model=LaunchAckModel(offline) if offline is not None else offline,
+                        model=LaunchAckModel(CompactToolsModel(offline)) if offline is not None else offline,
                         usage_limits=UsageLimits(request_limit=self.request_limit),
                     )
                     new_messages, output = result.new_messages(), result.output

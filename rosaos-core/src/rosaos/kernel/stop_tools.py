@@ -49,17 +49,14 @@ def add_stop_tools(
             list[str] | None,
             Field(
                 max_length=32,
-                description="Instance names to stop ('stop the dog': ['dog']). Empty or omitted for a bare "
-                "'stop' or 'stop everything': every robot in motion, then what speaks, then music, "
-                "then every running process.",
+                description="Instance names ('stop the dog': ['dog']); omit for a bare 'stop': robots "
+                "in motion, speech, music, every process.",
             ),
         ] = None,
     ) -> dict[str, Any]:
-        """Stop at once, needing no lease: terminate the processes holding each device and call its safe_stop.
+        """Stop at once, with no lease: ends the processes holding the devices and calls their safe_stop.
 
-        Use it whenever a person says stop, halt, freeze, enough, hold it, or the like, even while
-        another process holds the device: do not launch a process for a stop. Returns what was
-        stopped and which tasks ended, and 'summary', a sentence to tell the user.
+        Returns 'summary', to tell the user.
         """
         try:
             report = await stopper.stop(devices or [])
@@ -75,16 +72,13 @@ def add_stop_tools(
             str | None,
             Field(
                 max_length=200,
-                description="Instance name ('turtlebot'); omit to read every device.",
+                description="Instance name; omit for every device.",
             ),
         ] = None,
     ) -> dict[str, Any]:
-        """Read a device's current state, needing no lease and starting no process (also while another process holds it).
+        """Read a device's state with no lease and no process, also while another process holds it.
 
-        Use it to answer questions ("is the porch light on?", "where is the robot?", "how much
-        battery?", "what's playing?"). Returns the raw state, 'said' (sentences in words, positions
-        in metres and degrees: prefer them to the raw numbers) and 'held_by' (running processes
-        using it). Answer yes or no first when the question is yes or no.
+        Returns state, 'said' (in words and degrees: prefer it) and 'held_by'.
         """
         known = endpoints()
         if device is not None and device not in known:

@@ -17,6 +17,7 @@ from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.drivers import CHANGES, DELETES, READ_ONLY
 from rosaos.events.plan import Plan
 from rosaos.kernel.launch_cause import CurrentEvent, LaunchCause
+from rosaos.models.tool_schemas import ENGINE_ONLY
 from rosaos.processes.manager import LaunchRefused, ProcessInfo, ProcessManager
 
 KERNEL_TOOL_NAMES = ("launch_process", "terminate_process", "list_processes", "list_devices")
@@ -48,35 +49,34 @@ def build_kernel_tools(
             Field(
                 min_length=1,
                 max_length=4000,
-                description="What the process agent must do, in full: it sees nothing else of the conversation.",
+                description="Complete and self-contained: the agent sees nothing else.",
             ),
         ],
         devices: Annotated[
             list[str],
-            Field(max_length=16, description="Instance names of the devices it needs (see list_devices)."),
+            Field(max_length=16, description="Instance names of the devices it needs."),
         ],
         then: Annotated[
             str | None,
             Field(
                 max_length=2000,
                 description=(
-                    "Optional follow-up: what to launch when this process succeeds (e.g. 'turn the lamp "
-                    "green' after a search that finds someone). It is not done by this process; it comes "
-                    "back to you with the [Process callback], so it survives a restart."
+                    "A next step to launch only if this one succeeds (after a search: 'turn the lamp "
+                    "green'). Not done by this process: it comes back with its callback."
                 ),
             ),
         ] = None,
         plan: Annotated[
             Plan | None,
-            Field(description="The offline engine's exact device calls; leave it out."),
+            Field(
+                description="The offline engine's exact device calls; a model is not shown it.",
+                json_schema_extra={ENGINE_ONLY: True},
+            ),
         ] = None,
     ) -> dict[str, Any]:
-        """Start a process agent on a task with the devices it needs; returns its id at once.
+        """Start a process agent on a task with its devices; its result comes later as a [Process callback].
 
-        The result arrives later as a [Process callback] event, with ``then`` (a follow-up to launch
-        only if this process succeeds) beside its task. An exclusive device held by
-        another process is refused with the holder named: wait for its callback, ask the user,
-        or terminate_process(holder). The always-attached device is granted automatically.
+        A device another process holds is refused, naming the holder.
         """
         then = " ".join(then.split()) if then is not None and then.strip() else None
         cause = current.next_cause() if current is not None else None
@@ -103,10 +103,8 @@ def build_kernel_tools(
         return {"process_id": info.id, "devices": info.devices, "state": info.state}
 
     @server.tool(annotations=DELETES)
-    async def terminate_process(
-        process_id: Annotated[int, Field(ge=1, description="The id launch_process returned.")],
-    ) -> dict[str, Any]:
-        """Kill a running process; its device leases are released."""
+    async def terminate_process(process_id: Annotated[int, Field(ge=1)]) -> dict[str, Any]:
+        """Kill a running process and release its devices."""
         try:
             info = await manager.terminate(process_id)
         except KeyError as error:
@@ -115,12 +113,12 @@ def build_kernel_tools(
 
     @server.tool(annotations=READ_ONLY)
     async def list_processes() -> list[dict[str, Any]]:
-        """List the running processes: id, task, devices held, state."""
+        """The running processes: id, task, devices, state."""
         return [_process_data(info) for info in manager.list()]
 
     @server.tool(annotations=READ_ONLY)
     async def list_devices() -> list[dict[str, Any]]:
-        """List the devices of the world: name, driver, description, concurrency, availability, holder."""
+        """The devices: name, driver, description, availability, holder."""
         holders: dict[str, list[int]] = {}
         for info in manager.list():
             for name in info.devices:

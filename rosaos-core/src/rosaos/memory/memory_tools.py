@@ -31,14 +31,10 @@ from rosaos.processes.manager import LaunchRefused, ProcessInfo
 
 __all__ = ["MEMORY_TOOL_NAMES", "add_memory_tools"]
 
-PlaceName = Annotated[
-    str, Field(min_length=1, max_length=NAME_MAX, description="The place's name, e.g. 'the kitchen'.")
-]
+PlaceName = Annotated[str, Field(min_length=1, max_length=NAME_MAX, description="e.g. 'the kitchen'")]
 Device = Annotated[
     str | None,
-    Field(
-        max_length=100, description="The robot's instance name; omit when there is only one robot on a map."
-    ),
+    Field(max_length=100, description="The robot; omit if there is one."),
 ]
 Coordinate = Annotated[float | None, Field(ge=-1000, le=1000, allow_inf_nan=False)]
 Launch = Callable[[str, list[str], Plan], Awaitable[ProcessInfo]]
@@ -59,12 +55,11 @@ def add_memory_tools(
     @server.tool(annotations=READ_ONLY)
     async def recall_sightings(
         place: Annotated[
-            str | None, Field(max_length=NAME_MAX, description="Only near this named place ('the kitchen').")
+            str | None, Field(max_length=NAME_MAX, description="Only near this named place.")
         ] = None,
-        today: Annotated[bool, Field(description="Only since midnight (local time).")] = False,
+        today: Annotated[bool, Field(description="Only since midnight.")] = False,
     ) -> dict[str, Any]:
-        """Who the robots saw, newest first: when ('ago'), which robot, where (x, y, frame), the nearest
-        named place, and the picture (relative to the images folder)."""
+        """Who the robots saw, newest first: when, robot, where, nearest place, picture."""
         known = store.place(place) if place else None
         named = known.name if known is not None else place
         midnight = datetime.now().astimezone().replace(hour=0, minute=0, second=0, microsecond=0)
@@ -77,16 +72,11 @@ def add_memory_tools(
 
     @server.tool(annotations=READ_ONLY)
     async def show_sighting(
-        sighting_id: Annotated[
-            int | None, Field(ge=1, description="A sighting's id from recall_sightings; omit for the newest.")
-        ] = None,
+        sighting_id: Annotated[int | None, Field(ge=1, description="Default: the newest.")] = None,
     ) -> dict[str, Any]:
-        """Show a sighting's picture (the newest one with a picture by default) on the web page.
-
-        Returns the sighting and ``picture``, the picture's address on the kernel
-        (``/sightings/{id}/picture``): put that address in your reply, and the page shows the
-        picture under it. The picture itself stays on this machine.
-        """
+        """Show a sighting's picture on the page: put the returned ``picture`` address in your reply."""
+        # /sightings/{id}/picture on the kernel: the page shows the picture under the reply that
+        # names it (sighting_pictures.js); the picture itself never goes to the model.
         found = sightings.get(sighting_id) if sighting_id else sightings.with_picture()
         if found is None:
             which = f"sighting {sighting_id}" if sighting_id else "sighting with a picture"
@@ -104,25 +94,18 @@ def add_memory_tools(
 
     @server.tool(annotations=DELETES)
     async def forget_sightings() -> dict[str, Any]:
-        """Forget everything the robots saw (the pictures stay in the images folder)."""
+        """Forget every sighting (the pictures stay)."""
         return {"forgotten": sightings.clear()}
 
     @server.tool(annotations=CHANGES)
     async def remember_place(
         name: PlaceName,
         device: Device = None,
-        x: Annotated[
-            Coordinate, Field(description="Metres; omit x and y for where the robot is now.")
-        ] = None,
+        x: Annotated[Coordinate, Field(description="Metres; omit x, y for here.")] = None,
         y: Coordinate = None,
-        yaw: Annotated[
-            float | None, Field(ge=-7, le=7, allow_inf_nan=False, description="Heading in radians, optional.")
-        ] = None,
+        yaw: Annotated[float | None, Field(ge=-7, le=7, allow_inf_nan=False, description="Radians.")] = None,
     ) -> dict[str, Any]:
-        """Save a named place: where the robot is now, or the x, y given (in the robot's current frame).
-
-        The place keeps its frame (map or odometry) and is never used in another one.
-        """
+        """Name a place: where the robot is, or x, y in its current frame (kept with the place)."""
         if (x is None) != (y is None):
             raise ToolError("give both x and y, or neither (then the robot's current spot is saved)")
         try:
@@ -144,7 +127,7 @@ def add_memory_tools(
 
     @server.tool(annotations=READ_ONLY)
     async def list_places() -> list[dict[str, Any]]:
-        """List the named places: name, robot, frame, x, y, yaw, when saved."""
+        """The named places."""
         return [place_data(place) for place in store.places()]
 
     @server.tool(annotations=DELETES)
@@ -157,10 +140,9 @@ def add_memory_tools(
 
     @server.tool(annotations=CHANGES)
     async def go_to_place(name: PlaceName, device: Device = None) -> dict[str, Any]:
-        """Send a robot to a named place (the one that saved it, by default); returns the process id.
+        """Send a robot to a named place (by default the one that saved it); result as a [Process callback].
 
-        Refused at once when the robot is in another frame than the place (another map, or
-        odometry that restarted). The result arrives later as a [Process callback].
+        Refused if the robot is in another frame.
         """
         try:
             place = store.require_place(name)
@@ -181,24 +163,13 @@ def add_memory_tools(
     async def remember(
         kind: Annotated[
             NoteKind,
-            Field(
-                description="fact ('my name is Sam'), alias (a name for a device: key 'rex', value "
-                "'the dog') or preference ('reading light': '40 percent')."
-            ),
+            Field(description="fact ('my name is Sam'), alias (key 'rex', value 'the dog') or preference."),
         ],
-        key: Annotated[
-            str, Field(min_length=1, max_length=100, description="What it is about: 'name', 'rex'.")
-        ],
-        value: Annotated[str, Field(min_length=1, max_length=500, description="What to remember about it.")],
-        said: Annotated[
-            str | None, Field(max_length=500, description="The person's sentence, to read back later.")
-        ] = None,
+        key: Annotated[str, Field(min_length=1, max_length=100, description="'name', 'rex'")],
+        value: Annotated[str, Field(min_length=1, max_length=500)],
+        said: Annotated[str | None, Field(max_length=500, description="Their sentence.")] = None,
     ) -> dict[str, Any]:
-        """Remember something a person told you; the same kind and key again replaces it.
-
-        An alias is used when sentences are understood: after key 'rex', value 'the dog',
-        "Rex, sit" names the dog.
-        """
+        """Remember what a person told you; the same kind and key replaces it. An alias renames a device."""
         try:
             note = store.save_note(kind, key, value, said or f"{key}: {value}")
         except MemoryRequestError as error:
@@ -208,10 +179,10 @@ def add_memory_tools(
     @server.tool(annotations=READ_ONLY)
     async def recall(
         about: Annotated[
-            str | None, Field(max_length=200, description="Words to look for; omit for everything.")
+            str | None, Field(max_length=200, description="Words to look for; omit for all.")
         ] = None,
     ) -> dict[str, Any]:
-        """What you remember: facts, aliases and preferences people told you, and the named places."""
+        """What you remember: facts, aliases, preferences, places."""
         words = (about or "").lower().split()
 
         def hit(text: str) -> bool:
@@ -227,12 +198,10 @@ def add_memory_tools(
     async def forget(
         matching: Annotated[
             str,
-            Field(
-                min_length=1, max_length=200, description="Words of the thing to forget ('my name is Sam')."
-            ),
+            Field(min_length=1, max_length=200, description="Words of it ('my name')."),
         ],
     ) -> list[dict[str, Any]]:
-        """Forget what people told you that contains all these words; returns what was forgotten."""
+        """Forget what people told you that has all these words."""
         gone = store.forget_notes(matching)
         if not gone:
             raise ToolError(f"I don't remember anything about {matching!r}; recall lists what I know")

@@ -41,6 +41,10 @@ class GrantedDevice(BaseModel):
     tools: list[str] | None = None
     """The only tools of this device the process is offered; None: all of them. An always-attached
     device the kernel did not ask for comes with its speaking tools only."""
+    on_request_tools: list[str] = Field(default_factory=list)
+    """Tools a process model is offered only when its task asks for them (:mod:`rosaos.processes.tool_offer`)."""
+    on_request_pattern: str | None = None
+    """The words by which a task asks for them (a case-insensitive regular expression)."""
 
 
 class WorkerJob(BaseModel):

@@ -374,6 +374,8 @@ def _granted(endpoint: DeviceEndpoint, asked: bool = True) -> GrantedDevice:
         prompt=(endpoint.attached_prompt or endpoint.prompt) if attached_only else endpoint.prompt,
         confirm=endpoint.confirm,
         tools=list(endpoint.attached_tools) if attached_only else None,
+        on_request_tools=list(endpoint.on_request_tools),
+        on_request_pattern=endpoint.on_request_pattern,
     )
 
 

@@ -8,29 +8,22 @@ to drive it (the device prompt that the driver ships).
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 
 from rosaos.events.plan import plan_text
 from rosaos.processes.jobs import GrantedDevice, WorkerJob
-from rosaos.processes.tool_list import DeviceTools
 
 DEFAULT_PROCESS_PROMPT = """\
-You are a process agent in rosaOS, an operating system for robots and smart devices.
-The kernel gave you one task and the devices it needs. Do the task with those devices' tools, \
-then reply with one short sentence saying what you did and the resulting state. The kernel tells \
-the user that sentence as it is (it may be spoken aloud), so write it for them, and do not also \
-speak it with a tool. Write it in the same response as the tool calls that finish the task: when \
-they all succeed, that is your report and the process ends; if one fails, you are asked again.
+You are a process agent of rosaOS, an operating system for robots and smart devices. Do the task \
+below with your devices' tools. Beside the calls that finish it, write one short sentence for the \
+user: what you did and the resulting state. It is told to them as it is, maybe aloud; do not also \
+speak it. If the calls succeed the process ends there; if one fails you are asked again.
 
-- Do exactly the task: do not touch devices or settings the task does not ask for.
-- A tool's result shows the device's new state; read the state first (get_state) only when the \
-task depends on it.
-- Tool arguments are bounded by the device's real limits; if a value is out of range, use the \
-nearest valid one and say so.
-- If a tool fails, read its message: retry once if it says how to fix the call, otherwise stop \
-and report what failed and why.
-- A task is done only when a tool call did it. Never invent a device state or a result you did \
-not get from a tool.
+- Do only the task: no other device or setting.
+- Results show the new state; read the state first only when the task depends on it.
+- A value out of a tool's range: use the nearest valid one and say so.
+- A failed call: retry once if its message says how, else report what failed and why.
+- Only a successful call does a task: never claim a state or result no tool gave you.
 """
 
 
@@ -64,19 +57,15 @@ def job_text(job: WorkerJob) -> str:
     return "\n\n".join(parts)
 
 
-def process_system_prompt(
-    base_prompt: str,
-    task: str,
-    devices: Sequence[GrantedDevice],
-    tools: Mapping[str, DeviceTools] | None = None,
-) -> str:
+def process_system_prompt(base_prompt: str, task: str, devices: Sequence[GrantedDevice]) -> str:
     """Assemble the process agent's system prompt for ``task`` with ``devices`` granted, task last.
 
     Each device section is headed by its instance name and description, followed by the driver's
-    device prompt and the device's tool list, written from its MCP metadata (``tools``, by
-    instance; :mod:`rosaos.processes.tool_list`), limited to the tools the process is offered.
-    With more than one device the tool names are prefixed by the instance name
-    (``kitchen_light_set_color``), and the section says so, so the model can tell them apart.
+    device prompt: what no schema says (when to prefer which tool, what "a bit" means). The tools
+    themselves are not listed: the model is sent every offered tool's name, parameters and
+    description as its schema, and a list here would say it all a second time on every request
+    (issue 22: 1.5 KB of a light switch's 4 KB prompt). With more than one device the tool names
+    are prefixed by the instance name (``kitchen_light_set_color``), and the section says so.
     """
     parts = [base_prompt.strip()]
     if not devices:
@@ -89,10 +78,7 @@ def process_system_prompt(
             heading = f"## {device.name} ({device.driver})\n{device.description.strip()}"
             if prefixed:
                 heading += f"\nIts tools are named `{tool_prefix(device.name)}_<tool>`."
-            listed = tools.get(device.name) if tools is not None else None
-            tool_list = listed.render(device.tools) if listed is not None else ""
-            body = f"{device.prompt.strip()}\n\n{tool_list}" if tool_list else device.prompt.strip()
-            parts.append(f"{heading}\n\n{body}")
+            parts.append(f"{heading}\n\n{device.prompt.strip()}")
     # The task comes last: what stays the same for every task on these devices (the base prompt,
     # the device sections, and the tool schemas before them) is then a prefix that a local model
     # server caches (llama.cpp, vLLM, Ollama), so only the task is prefilled anew.

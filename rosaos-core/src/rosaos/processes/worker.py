@@ -41,6 +41,7 @@ from rosaos.confirmations.confirming import ConfirmationDeclined, ConfirmingTool
 from rosaos.events.callback import ProcessStatus, WorkerCallback
 from rosaos.models.process_model import LocalPlanModel
 from rosaos.models.select import ModelError, build_model
+from rosaos.models.tool_schemas import CompactToolsModel
 from rosaos.processes.final_call import FINAL_CALL_MODEL, FinalCallModel
 from rosaos.processes.jobs import GrantedDevice, WorkerJob
 from rosaos.processes.keepalive import DeadlineToolset, DeviceLink, keepalives, owner_headers
@@ -51,7 +52,7 @@ from rosaos.processes.prompts import job_text, process_system_prompt, tool_prefi
 from rosaos.processes.protocol import Done, Progress, Ready, Rejected, encode
 from rosaos.processes.recording import RecordingToolset
 from rosaos.processes.tool_calls import ToolCallLog, observed
-from rosaos.processes.tool_list import DeviceTools
+from rosaos.processes.tool_offer import offered_tools
 from rosaos.processes.vision import ImageFallbackModel, image_budget_for, image_headers
 from rosaos.receipts import Receipt
 from rosaos.tls import shared_context
@@ -146,9 +147,6 @@ class DeviceSessions:
     def __init__(self) -> None:
         self._open: dict[tuple[str, str], MCPToolset[Any]] = {}
         self._images: dict[tuple[str, str], int | None] = {}
-        self._listed: dict[tuple[str, str], list[Any]] = {}
-        """Each open session's MCP tools, from its last ``tools/list``: the prompt's tool list
-        (summarized only when a model needs a prompt, not on the offline plan's path)."""
 
     async def toolset(self, device: GrantedDevice, images: int | None = None) -> MCPToolset[Any]:
         key = (device.url, device.token)
@@ -159,23 +157,13 @@ class DeviceSessions:
         if kept is not None:
             try:
                 async with asyncio.timeout(CONNECT_TIMEOUT):
-                    self._listed[key] = await kept.client.list_tools()
+                    await kept.client.list_tools()
                 return kept
             except Exception:
                 await self._close(key)
         toolset = await _connect(device, images)
         self._open[key], self._images[key] = toolset, images
         return toolset
-
-    async def tools(self, device: GrantedDevice) -> DeviceTools:
-        """The tools of ``device``'s open session (:meth:`toolset` first), listed once per job at most."""
-        key = (device.url, device.token)
-        listed = self._listed.get(key)
-        if listed is None:
-            async with asyncio.timeout(CONNECT_TIMEOUT):
-                listed = await self._open[key].client.list_tools()
-            self._listed[key] = listed
-        return DeviceTools.from_mcp(listed)
 
     async def forget(self, devices: Sequence[GrantedDevice]) -> None:
         """Close the sessions of a job that failed: the next job starts from fresh ones."""
@@ -188,7 +176,6 @@ class DeviceSessions:
 
     async def _close(self, key: tuple[str, str]) -> None:
         self._images.pop(key, None)
-        self._listed.pop(key, None)
         toolset = self._open.pop(key, None)
         if toolset is not None:
             with contextlib.suppress(Exception):
@@ -253,7 +240,9 @@ async def _run_agent_linked(
             session = await SESSIONS.toolset(device, image_budget_for(job.model, model))
             bounded = DeadlineToolset(wrapped=session, link=links.get(device.name))
             # The offline plan runner calls the tools its plan names; only a model is offered less.
-            offered = bounded if isinstance(model, LocalPlanModel) else offered_tools(bounded, device.tools)
+            offered = (
+                bounded if isinstance(model, LocalPlanModel) else offered_tools(bounded, device, job.task)
+            )
             guarded = ConfirmingToolset(offered, device=device.name, rule=device.confirm, asker=asker)
             toolset = observed(
                 RecordingToolset(guarded, device=device.name, receipts=recorded), device.name, calls
@@ -265,13 +254,16 @@ async def _run_agent_linked(
             granted = [device.name for device in job.devices]
             model = FinalCallModel(
                 LeaseGuardModel(
-                    ImageFallbackModel(model), job.process_id, granted, job.world_devices, recorded
+                    ImageFallbackModel(CompactToolsModel(model)),
+                    job.process_id,
+                    granted,
+                    job.world_devices,
+                    recorded,
                 )
             )
-        listed = {device.name: await SESSIONS.tools(device) for device in job.devices}
         agent = Agent(
             model,
-            instructions=process_system_prompt(job.base_prompt, job_text(job), job.devices, listed),
+            instructions=process_system_prompt(job.base_prompt, job_text(job), job.devices),
             toolsets=toolsets,
             name=f"process-{job.process_id}",
         )
@@ -280,14 +272,6 @@ async def _run_agent_linked(
         await SESSIONS.forget(job.devices)
         raise
     return str(result.output)
-
-
-def offered_tools(session: AbstractToolset[Any], tools: Sequence[str] | None) -> AbstractToolset[Any]:
-    """``session`` limited to ``tools`` (None: all of them), e.g. the Reachy's speaking tools."""
-    if tools is None:
-        return session
-    allowed = frozenset(tools)
-    return session.filtered(lambda ctx, tool: tool.name in allowed)
 
 
 async def _connect(device: GrantedDevice, images: int | None = None) -> MCPToolset[Any]:

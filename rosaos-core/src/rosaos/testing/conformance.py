@@ -240,8 +240,8 @@ class DriverConformance:
     def test_prompt_calls_only_tools_the_server_has(
         self, rosaos_driver: DriverInfo, shared_tools: list[mcp_types.Tool]
     ) -> None:
-        """``prompt.md`` names no tool the server lacks: a process agent gets the tool list from the
-        server's own metadata (:mod:`rosaos.processes.tool_list`), and the prose must agree with it."""
+        """``prompt.md`` names no tool the server lacks: a process agent is sent the tools as schemas
+        from the server's own metadata, and the prose must agree with them."""
         names = {tool.name for tool in shared_tools}
         called = set(re.findall(r"`([a-z_][a-z0-9_]*)\(", rosaos_driver.spec.prompt))
         unknown = sorted(called - names)

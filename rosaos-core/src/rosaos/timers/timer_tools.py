@@ -39,27 +39,24 @@ def add_timer_tools(server: FastMCP, book: TimerBook) -> None:
             Field(
                 min_length=1,
                 max_length=4000,
-                description="The command to carry out when it fires, as the user would say it now "
-                "('turn off the kitchen light'), without the time.",
+                description="The command without its time ('turn off the kitchen light').",
             ),
         ],
         in_seconds: Annotated[
             float | None,
-            Field(gt=0, le=MAX_DELAY.total_seconds(), description="Fire after this many seconds."),
+            Field(gt=0, le=MAX_DELAY.total_seconds()),
         ] = None,
         at: Annotated[
             str | None,
             Field(
                 max_length=40,
-                description="Or fire at this local clock time: 'HH:MM' (24-hour; the next such "
-                "moment, today or tomorrow) or an ISO 8601 date and time.",
+                description="Or a local time: 'HH:MM' (24 h, the next one) or ISO 8601.",
             ),
         ] = None,
     ) -> dict[str, Any]:
-        """Set a durable timer: at the due time its action arrives as a [Timer fired] event.
+        """Do an action later: when due, it comes back as a [Timer fired] event (it survives restarts).
 
-        Give exactly one of in_seconds or at. The timer survives a restart and fires once; it
-        returns the timer's id (to cancel it) and when it fires.
+        Give in_seconds or at.
         """
         now = datetime.now(UTC)
         try:
@@ -71,29 +68,23 @@ def add_timer_tools(server: FastMCP, book: TimerBook) -> None:
 
     @server.tool(annotations={"readOnlyHint": True, "destructiveHint": False, "idempotentHint": True})
     async def list_timers() -> list[dict[str, Any]]:
-        """List the timers still to fire, soonest first: id, action, due time, and 'when' for people."""
+        """The timers still to fire, soonest first."""
         now = datetime.now(UTC)
         return [timer_data(timer, now) for timer in await book.pending()]
 
     @server.tool(annotations={"readOnlyHint": False, "destructiveHint": True, "idempotentHint": True})
     async def cancel_timer(
-        timer_id: Annotated[
-            int | None, Field(ge=1, description="The timer's id (from set_timer or list_timers).")
-        ] = None,
+        timer_id: Annotated[int | None, Field(ge=1)] = None,
         matching: Annotated[
             str | None,
             Field(
                 max_length=200,
-                description="Or cancel the pending timers whose action contains all these words "
-                "('light' for 'the light timer').",
+                description="Or those whose action has all these words ('light').",
             ),
         ] = None,
-        cancel_all: Annotated[bool, Field(description="Or cancel every pending timer.")] = False,
+        cancel_all: bool = False,
     ) -> list[dict[str, Any]]:
-        """Cancel timers so they never fire. With no argument, the most recently set one ('that timer').
-
-        Returns the cancelled timers; an error says when there was nothing to cancel.
-        """
+        """Cancel timers; with no argument the newest ('that timer')."""
         now = datetime.now(UTC)
         targets = await _targets(book, timer_id, matching, cancel_all)
         cancelled = []

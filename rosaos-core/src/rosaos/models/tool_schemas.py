@@ -1,0 +1,154 @@
+"""What an LLM reads of a tool: its schema without the text that tells a model nothing.
+
+Every kernel request carries the schema of every kernel tool, and every process request those of
+its devices' tools. On a local 8B model each token of them costs about 0.5 ms of prefill, on
+every request (``benchmarks/llm_path.py``). The tools' own schemas stay as FastMCP makes them
+from the typed signatures: the MCP servers validate calls with them, and the offline engine reads
+their bounds. :class:`CompactToolsModel` changes only what a model is sent:
+
+- a parameter marked :data:`ENGINE_ONLY` (``launch_process``'s ``plan``: the offline engine's
+  exact calls, 3 KB of nested schema) is left out; a model that sent one anyway is still
+  validated by the server;
+- an optional parameter written as ``anyOf: [X, null]`` with ``default: null`` becomes X, left
+  out of ``required``: a model omits it the same way;
+- ``title`` keys are dropped, and so are the length bounds of free text (``minLength: 1``, a
+  ``maxLength`` of :data:`FREE_TEXT` or more): a model's sentence never comes near them, and the
+  server still refuses one that does, with a message saying the limit.
+
+Types, numeric bounds, short lengths, patterns, enums, informative defaults and descriptions stay:
+they are what the tool really accepts (issue 22: a schema's maximum is the real limit).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from typing import Any
+
+from pydantic_ai import RunContext
+from pydantic_ai.messages import ModelMessage, ModelResponse
+from pydantic_ai.models import ModelRequestParameters, StreamedResponse
+from pydantic_ai.models.wrapper import WrapperModel
+from pydantic_ai.settings import ModelSettings
+from pydantic_ai.tools import ToolDefinition
+
+ENGINE_ONLY = "x-rosaos-engine-only"
+"""Schema key of a parameter only the offline engine fills in: ``Field(json_schema_extra={ENGINE_ONLY: True})``."""
+FREE_TEXT = 200
+"""A string ``maxLength`` from which on the bound is not shown to a model (free text, not a code)."""
+
+
+def compact_schema(schema: Any) -> Any:
+    """``schema`` as a model should read it (see the module docstring); the input is not changed."""
+    if isinstance(schema, list):
+        return [compact_schema(item) for item in schema]
+    if not isinstance(schema, dict):
+        return schema
+    result: dict[str, Any] = {}
+    for key, value in schema.items():
+        if key == "title" and isinstance(value, str):
+            continue
+        if key == "properties" and isinstance(value, dict):
+            value = {
+                name: compact_schema(prop)
+                for name, prop in value.items()
+                if not (isinstance(prop, dict) and prop.get(ENGINE_ONLY))
+            }
+        else:
+            value = compact_schema(value)
+        result[key] = value
+    if result.get("type") == "string":
+        if result.get("minLength") == 1:
+            del result["minLength"]
+        if isinstance(result.get("maxLength"), int) and result["maxLength"] >= FREE_TEXT:
+            del result["maxLength"]
+    if "required" in result and isinstance(result.get("properties"), dict):
+        result["required"] = [name for name in result["required"] if name in result["properties"]]
+    if isinstance(result.get("$defs"), dict):
+        _drop_unused_defs(result)
+    return _without_null_option(result)
+
+
+def _without_null_option(schema: dict[str, Any]) -> dict[str, Any]:
+    """``{anyOf: [X, {type: null}], default: null, ...}`` → ``{...X, ...}``; anything else as it is."""
+    options = schema.get("anyOf")
+    if not isinstance(options, list) or len(options) != 2 or schema.get("default", 0) is not None:
+        return schema
+    kept = [option for option in options if option != {"type": "null"}]
+    if len(kept) != 1 or not isinstance(kept[0], dict):
+        return schema
+    merged = {key: value for key, value in schema.items() if key not in ("anyOf", "default")}
+    for key, value in kept[0].items():
+        merged.setdefault(key, value)
+    return merged
+
+
+def _drop_unused_defs(schema: dict[str, Any]) -> None:
+    """Remove ``$defs`` entries nothing refers to any more (the engine-only parameter's types)."""
+    defs: dict[str, Any] = schema["$defs"]
+    used: set[str] = set()
+    pending = [{key: value for key, value in schema.items() if key != "$defs"}]
+    while pending:
+        node = pending.pop()
+        if isinstance(node, dict):
+            ref = node.get("$ref")
+            if isinstance(ref, str) and ref.startswith("#/$defs/"):
+                name = ref.removeprefix("#/$defs/")
+                if name not in used and name in defs:
+                    used.add(name)
+                    pending.append(defs[name])
+            pending.extend(node.values())
+        elif isinstance(node, list):
+            pending.extend(node)
+    kept = {name: value for name, value in defs.items() if name in used}
+    if kept:
+        schema["$defs"] = kept
+    else:
+        del schema["$defs"]
+
+
+def compact_tool(tool: ToolDefinition) -> ToolDefinition:
+    """``tool`` with :func:`compact_schema` applied to its parameters and its description trimmed."""
+    return dataclasses.replace(
+        tool,
+        parameters_json_schema=compact_schema(tool.parameters_json_schema),
+        description=tool.description.strip() if tool.description else tool.description,
+    )
+
+
+def compact_parameters(parameters: ModelRequestParameters) -> ModelRequestParameters:
+    """The request's parameters with every function tool compacted."""
+    return dataclasses.replace(
+        parameters, function_tools=[compact_tool(t) for t in parameters.function_tools]
+    )
+
+
+class CompactToolsModel(WrapperModel):
+    """An LLM that is sent compact tool schemas (:func:`compact_tool`); everything else passes through.
+
+    Wrap only a model that reads schemas as text (an LLM); the offline engines read the full
+    ones (their bounds clamp arguments).
+    """
+
+    async def request(
+        self,
+        messages: list[ModelMessage],
+        model_settings: ModelSettings | None,
+        model_request_parameters: ModelRequestParameters,
+    ) -> ModelResponse:
+        return await self.wrapped.request(
+            messages, model_settings, compact_parameters(model_request_parameters)
+        )
+
+    @asynccontextmanager
+    async def request_stream(
+        self,
+        messages: list[ModelMessage],
+        model_settings: ModelSettings | None,
+        model_request_parameters: ModelRequestParameters,
+        run_context: RunContext[Any] | None = None,
+    ) -> AsyncIterator[StreamedResponse]:
+        parameters = compact_parameters(model_request_parameters)
+        async with self.wrapped.request_stream(messages, model_settings, parameters, run_context) as stream:
+            yield stream
