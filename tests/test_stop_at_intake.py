@@ -130,6 +130,25 @@ async def test_a_sentence_that_is_not_a_stop_is_left_to_the_kernel(api: httpx.As
     assert not any(u["data"].get("at_intake") for u in said if u["kind"] == "tool_call"), said
 
 
+async def test_a_name_the_user_gave_stops_at_intake_too(api: httpx.AsyncClient, kernel: Kernel) -> None:
+    kernel.memory.save_note("alias", "rex", "the dog", "call the dog Rex")
+    await chat(api, 'dog: call move_distance {"meters": 2}')
+    walk = await eventually(lambda: walking(api, kernel), timeout=120)
+    busy = await chat(api, f"slow {SLOW_TURN:g}")
+    await asyncio.sleep(0.5)  # the kernel's model is now inside its turn: only intake can stop now
+    stop = await chat(api, "Rex, stop!")
+    await eventually(lambda: _stopped_at_intake(api, stop), timeout=SLOW_TURN / 2)
+    assert not await handled(api, busy), "the kernel's turn ended first: the stop did not come from intake"
+    listed = (await api.get("/processes", params={"all": "true"})).json()
+    assert next(p for p in listed if p["id"] == walk["id"])["state"] == "terminated"
+    await eventually(lambda: handled(api, stop), timeout=60)
+
+
+async def _stopped_at_intake(api: httpx.AsyncClient, event_id: int) -> bool:
+    said = await updates_of(api, event_id)
+    return any(u["kind"] == "tool_call" and u["data"].get("at_intake") for u in said)
+
+
 async def _dog_held(api: httpx.AsyncClient) -> bool:
     return any("dog" in p["devices"] for p in (await api.get("/processes")).json())
 

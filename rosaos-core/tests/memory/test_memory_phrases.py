@@ -19,6 +19,7 @@ from rosaos.memory.memory_phrases import (
     RememberPlace,
     ShowSighting,
     UnknownPlace,
+    apply_preferences,
     read_memory_request,
     resolve_aliases,
 )
@@ -95,3 +96,22 @@ def test_a_command_the_engine_understands_is_not_read_as_an_alias(tmp_path: Path
     assert memory_request("call the dog Rex", store, lambda text: nothing) == RememberNote(
         "alias", "rex", "the dog"
     )
+
+
+LIKED = {"my reading light": "40 percent"}
+
+
+@pytest.mark.parametrize(
+    "said",
+    ["set my reading light", "Set my reading light please.", "put my reading light how I like it",
+     "my reading light the way I like it", "could you set my reading light"],
+)  # fmt: skip
+def test_a_preference_fills_in_the_value_a_request_leaves_out(said: str) -> None:
+    assert apply_preferences(said, LIKED) == "set my reading light to 40 percent"
+
+
+@pytest.mark.parametrize(
+    "said", ["set my reading light to 80 percent", "turn off my reading light", "set the hall light"]
+)
+def test_a_request_with_its_own_value_or_another_action_is_left_alone(said: str) -> None:
+    assert apply_preferences(said, LIKED) == said

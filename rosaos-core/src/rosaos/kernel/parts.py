@@ -248,7 +248,9 @@ async def build_parts(
     if models.local is not None:
         models.local.memory = memory
     stopper = Stopper(manager, endpoints, lambda name: world.instances[name].spec.halts)
-    stop_at_intake = StopAtIntake.for_world(stopper, world, config.models.language, updates.publish)
+    stop_at_intake = StopAtIntake.for_world(
+        stopper, world, config.models.language, updates.publish, aliases=memory.aliases
+    )
 
     async def stop_now(queued: Queued) -> None:
         """A typed or spoken "stop" acts at once, beside whatever turn the kernel is in."""

@@ -12,6 +12,10 @@ answers it. When its turn calls ``stop`` for that event, the tool's report inclu
 intake stop already did (:meth:`StopAtIntake.merged`), so the reply says what was stopped and
 which task ended, and the offline engine stays silent on the callback of the process it ended.
 A stop's other commands ("stop the dog and turn on the light") are left to the kernel.
+
+Names the user gave ("call the dog Rex") are read here as the engine reads them: "Rex, stop" is
+"the dog, stop", so it acts at intake like any other stop (the aliases are read from the memory
+store at each event, so a name given a moment ago counts).
 """
 
 from __future__ import annotations
@@ -19,7 +23,7 @@ from __future__ import annotations
 import asyncio
 import logging
 import time
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Mapping
 from typing import Any
 
 from rosaos.devices.world import World
@@ -28,6 +32,7 @@ from rosaos.intents.grammar.vocabulary import device_vocabularies
 from rosaos.intents.understanding.stop_words import DeviceRefs, read_stop
 from rosaos.kernel.stopping import StopError, StoppedDevice, Stopper, StopReport
 from rosaos.kernel.updates import UpdateKind
+from rosaos.memory.memory_phrases import resolve_aliases
 
 log = logging.getLogger(__name__)
 
@@ -41,16 +46,31 @@ KEPT_REPORTS = 64
 class StopAtIntake:
     """Runs stops at intake, and remembers each one by event id for the kernel's own ``stop``."""
 
-    def __init__(self, stopper: Stopper, refs: DeviceRefs, publish: Publish) -> None:
+    def __init__(
+        self,
+        stopper: Stopper,
+        refs: DeviceRefs,
+        publish: Publish,
+        aliases: Callable[[], Mapping[str, str]] = dict,
+    ) -> None:
         self._stopper = stopper
         self._refs = refs
         self._publish = publish
+        self._aliases = aliases
         self._stops: dict[int, asyncio.Task[StopReport | None]] = {}
 
     @classmethod
-    def for_world(cls, stopper: Stopper, world: World, language: str, publish: Publish) -> StopAtIntake:
-        """Reading stops with the world's device names, as the offline engine does (any kernel model)."""
-        return cls(stopper, DeviceRefs(device_vocabularies(world), language), publish)
+    def for_world(
+        cls,
+        stopper: Stopper,
+        world: World,
+        language: str,
+        publish: Publish,
+        aliases: Callable[[], Mapping[str, str]] = dict,
+    ) -> StopAtIntake:
+        """Reading stops with the world's device names and the user's ``aliases`` (alias → what it
+        names), as the offline engine does (any kernel model)."""
+        return cls(stopper, DeviceRefs(device_vocabularies(world), language), publish, aliases)
 
     def heard(self, event_id: int, event: object) -> None:
         """A new event was committed: if it is user text that means stop, start stopping now.
@@ -61,7 +81,7 @@ class StopAtIntake:
         if not isinstance(event, UserTypedEvent | UserSaidEvent) or event_id in self._stops:
             return
         try:
-            request = read_stop(event.payload.text, self._refs)
+            request = read_stop(resolve_aliases(event.payload.text, self._aliases()), self._refs)
         except Exception:  # the kernel's own reading will still see the event: never fail intake
             log.exception("could not read event %s as a stop", event_id)
             return

@@ -210,6 +210,31 @@ def resolve_aliases(text: str, aliases: Mapping[str, str]) -> str:
     return text
 
 
+_AS_LIKED = r"(?:\s+(?:the way i like it|how i like it|like i like it|to my liking|as usual|the usual way|like always))?"
+
+
+def apply_preferences(text: str, preferences: Mapping[str, str]) -> str:
+    """``text`` with a preference filled in where it asks for the thing and says no value.
+
+    "I like my reading light at 40 percent" is kept as a preference (``my reading light`` →
+    ``40 percent``); later "set my reading light", "put my reading light how I like it" or "my
+    reading light the way I like it" mean "set my reading light to 40 percent". A sentence that
+    says its own value ("set my reading light to 80 percent") or does something else with the
+    device ("turn off my reading light") is left as it is.
+    """
+    said = " ".join(text.lower().replace("\u2019", "'").strip(" .!?").split())
+    for key, value in preferences.items():
+        thing = re.escape(key.lower())
+        bare = re.fullmatch(
+            rf"(?:please\s+)?(?:(?:can|could|would) you\s+)?(?:set|put|adjust|make|get|do)\s+{thing}{_AS_LIKED}"
+            rf"(?:\s+please)?|{thing},?(?:\s+the way i like it|\s+how i like it|\s+as usual)(?:\s+please)?",
+            said,
+        )
+        if bare is not None:
+            return f"set {key} to {value}"
+    return text
+
+
 def _name(words: str) -> str:
     """A place name as said, with "the" kept for replies ("the kitchen")."""
     words = words.strip(" ,.'\"")

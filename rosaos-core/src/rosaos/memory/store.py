@@ -252,6 +252,10 @@ class MemoryStore:
         """Alias → what it names ("rex" → "the dog")."""
         return {note.key: note.value for note in self.notes("alias")}
 
+    def preferences(self) -> dict[str, str]:
+        """What the user likes a thing at ("my reading light" → "40 percent")."""
+        return {note.key: note.value for note in self.notes("preference")}
+
     def clear(self) -> tuple[int, int]:
         """Forget everything (sightings too); returns how many places and notes were deleted."""
         with self.connect() as db:

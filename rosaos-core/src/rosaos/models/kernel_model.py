@@ -49,7 +49,7 @@ from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.planning.follow_ups import callback_response, plan_follow_up
 from rosaos.intents.understanding.matching import IntentMatcher, MatchResult
 from rosaos.intents.understanding.stop_words import DeviceRefs
-from rosaos.memory.memory_phrases import resolve_aliases
+from rosaos.memory.memory_phrases import apply_preferences, resolve_aliases
 from rosaos.memory.store import MemoryStore
 from rosaos.models import kernel_actions
 from rosaos.models.conversation import (
@@ -106,6 +106,8 @@ class LocalIntentModel(Model):
         """What ``text`` asks for: processes to launch, or the reply instead (see ``IntentMatcher``)."""
         if self.memory is not None:  # "Rex, sit" means "the dog, sit" once someone said so
             text = resolve_aliases(text, self.memory.aliases())
+            # "set my reading light" means the 40 % the user said they like it at
+            text = apply_preferences(text, self.memory.preferences())
         return self.matcher.match(text)
 
     def handles_event(self, event: Event) -> bool:

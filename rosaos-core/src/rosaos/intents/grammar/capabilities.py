@@ -46,11 +46,14 @@ Action = Literal[
     "next",
     "previous",
     "shuffle",
+    "repeat",
+    "repeat_off",
     "move",
     "turn",
     "dock",
     "undock",
     "look",
+    "face_front",
     "say",
 ]
 """What the core knows how to say, in every language it reads: the verbs that mean each."""

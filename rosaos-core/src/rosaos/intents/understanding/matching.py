@@ -333,8 +333,9 @@ class IntentMatcher:
         return self.context.devices[device].display_name
 
     def _hides_command(self, reading: Reading) -> bool:
-        """A wildcard that swallowed a conjunction: "play jazz and turn on the lamp"."""
-        return any(len(self._splitter.split(text)) > 1 for text in reading.wildcards)
+        """A wildcard that swallowed a conjunction ("play jazz and turn on the lamp"), or one that
+        says no words of its own ("play it again": what plays, not a search for "it again")."""
+        return any(len(self._splitter.split(text)) > 1 or _says_nothing(text) for text in reading.wildcards)
 
     def _partition(self, pieces: tuple[str, ...], allow_unknown: bool, focus: Focus) -> list[Reading] | None:
         """Cut ``pieces`` (texts and separators, alternating) into the fewest clauses that all match.
@@ -452,6 +453,33 @@ class IntentMatcher:
         if fits:
             return self.context.clarify(clause, 0, 0, fits)
         return None
+
+
+_BACK_REFERENCE = frozenset(
+    [
+        "it",
+        "that",
+        "this",
+        "the",
+        "same",
+        "song",
+        "track",
+        "tune",
+        "one",
+        "again",
+        "more",
+        "time",
+        "once",
+        "over",
+        "please",
+    ]
+)
+
+
+def _says_nothing(wildcard: str) -> bool:
+    """Whether a wildcard's text only points back at what is there ("it again", "that song")."""
+    words = re.findall(r"[\w']+", wildcard.lower())
+    return bool(words) and all(word in _BACK_REFERENCE for word in words)
 
 
 def _leaned_on(reading: Reading | None) -> tuple[str, str] | None:

@@ -24,6 +24,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
+from rosaos.intents.understanding.compose.references import References
 
 STOP_PHRASES = (
     "emergency stop", "stop moving", "stop it", "hold it", "hold on", "hold up", "stand still",
@@ -154,23 +155,21 @@ class StopRequest:
 
 
 class DeviceRefs:
-    """The world's devices by the words people call them: own names first, then kinds and plurals."""
+    """The world's devices by the words people call them, for the stop and question readers.
+
+    One resolver for every reader: this is the compositional reader's
+    (:class:`~rosaos.intents.understanding.compose.references.References`: names, aliases, kinds,
+    places and description words, plurals), so "stop the light over the stairs" and "is the light
+    over the stairs on?" mean the device that "turn off the light over the stairs" does."""
 
     def __init__(self, devices: Sequence[DeviceVocabulary], language: str = "en") -> None:
         self.language = language
-        own: dict[str, set[str]] = {}
-        kinds: dict[str, set[str]] = {}
-        for device in devices:
-            for name in device.own_names(language):
-                own.setdefault(name, set()).add(device.name)
-            for name in device.spoken_names(language):
-                kinds.setdefault(name, set()).add(device.name)
-        for name, found in list(kinds.items()):
-            kinds.setdefault(_plural(name), set()).update(found)
-        self.names: dict[str, frozenset[str]] = {name: frozenset(found) for name, found in kinds.items()}
-        self.names.update({name: frozenset(found) for name, found in own.items()})
-        self._longest = sorted(self.names, key=lambda name: -len(name.split()))
-        self.order = [device.name for device in devices]
+        capabilities = {
+            device.name: file.capabilities
+            for device in devices
+            if (file := device.mapping_file()) is not None and file.capabilities is not None
+        }
+        self._references = References(devices, capabilities, language)
 
     def resolve(self, text: str) -> tuple[str, ...] | None:
         """The devices ``text`` names (all of a shared kind), or None when it is not only names."""
@@ -179,21 +178,9 @@ class DeviceRefs:
 
     def take(self, words: list[str]) -> tuple[list[str], list[str]]:
         """The devices named in ``words`` (in world order), and the words left over."""
-        found: set[str] = set()
-        rest: list[str] = []
-        index = 0
-        while index < len(words):
-            for name in self._longest:
-                size = len(name.split())
-                if words[index : index + size] == name.split():
-                    found |= self.names[name]
-                    index += size
-                    break
-            else:
-                word = words[index]
-                rest.append(word[:-2] if word.endswith("'s") else word)
-                index += 1
-        return [name for name in self.order if name in found], rest
+        tokens = [word[:-2] if word.endswith("'s") else word for word in words]
+        found, rest = self._references.take(tokens)
+        return list(found), rest
 
 
 def read_stop(text: str, refs: DeviceRefs) -> StopRequest | None:
@@ -258,14 +245,3 @@ def _negated(said: str) -> bool:
             if f" {negation} {phrase} " in text:
                 return True
     return False
-
-
-def _plural(name: str) -> str:
-    last = name.split()[-1]
-    if last.endswith(("s", "x", "ch", "sh")):
-        plural = last + "es"
-    elif last.endswith("y") and last[-2:-1] not in "aeiou":
-        plural = last[:-1] + "ies"
-    else:
-        plural = last + "s"
-    return " ".join([*name.split()[:-1], plural])

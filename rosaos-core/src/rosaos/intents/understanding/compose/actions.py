@@ -35,15 +35,45 @@ _DOCK = re.compile(
 )
 _SHUFFLE_OFF = re.compile(r"\b(?:un-?shuffle|stop shuffling|no shuffle|shuffle off|in order)\b")
 _SHUFFLE = re.compile(r"\b(?:shuffle|mix(?:\s+\w+){0,3}\s+up|mix it up|randomi[sz]e|random order)\b")
-_NEXT = re.compile(r"\b(?:skip\w*|next (?:song|track|tune|one)|another (?:song|track|tune))\b|^next$")
+_NEXT = re.compile(r"\b(?:skip\w*|next (?:song|track|tune|one|1)|another (?:song|track|tune))\b|^next$")
 _PREVIOUS = re.compile(
     r"\b(?:previous(?:\s+(?:song|track|tune))?|last (?:song|track|tune)|back (?:a|one) (?:song|track|tune)"
-    r"|go back(?:\s+to the (?:last|previous))?\s+(?:song|track|tune)|play that (?:again|one again)|replay)\b"
+    r"|go back(?:\s+to the (?:last|previous))?\s+(?:song|track|tune)|replay (?:the )?(?:last|previous)\w*)\b"
 )
 _PAUSE = re.compile(r"\bpause\w*\b")
-_RESUME = re.compile(r"\b(?:resume|unpause|un-pause|keep playing|continue playing|continue|carry on)\b")
+_PRESS = re.compile(r"\b(?:hit|press|push|tap|click|do|go)\b|\b(?:ahead|forward|on)$")
+"""Words around a transport word that add nothing: "hit pause", "skip ahead", "go back a song"."""
+_RESUME = re.compile(
+    r"\b(?:resume|unpause|un-pause|keep playing|continue playing|continue|carry on|replay)\b"
+    r"|\bpick(?:\s+\w+){0,3}?\s+back\s+up\b|\bstart(?:\s+\w+){0,3}?\s+(?:again|back\s+up)\b"
+    r"|\bkeep (?:it |the music )?going\b|\b(?:hit|press|push|tap) play\b"
+)
+_REPLAY = re.compile(
+    # "play it again", "play that song one more time", "start the song again": what is loaded,
+    # again ("again" is a tag the speech layer has already peeled off).
+    r"^(?:play|hear|(?:re)?start) (?:it|that|this|the|my)(?: (?:song|track|tune|one|music|playlist))?"
+    r"(?: (?:again|(?:1 )?more time|once more|over))?$"
+)
+_REPEAT_OFF = re.compile(
+    r"\b(?:repeat|loop)\w*\s+off\b|\b(?:turn|switch)\s+off\s+(?:the\s+)?(?:repeat|loop)\w*"
+    r"|\bno (?:more )?(?:repeat|loop)\w*|\bun-?loop\w*|\bdisable (?:the )?(?:repeat|loop)\w*"
+)
+_REPEAT = re.compile(r"\b(?:repeat|loop)\w*\b|\bon (?:a )?loop\b|\bover and over\b")
 _PLAY = re.compile(r"^(?:play|put on|queue up|throw on)\s+(?P<query>.+)$")
 _LOOK = re.compile(r"\blook\w*\b(?:\s+\w+){0,3}?\s+(?P<direction>left|right|up|down)\b")
+_LOOK_FRONT = re.compile(
+    r"\blook\w*(?:\s+\w+){0,2}?\s+(?:straight(?:\s+ahead)?|ahead|forwards?|(?:to |at )?the front|front|"
+    r"cent(?:er|re)|normal(?:ly)?)\b"
+    r"|\b(?:reset|recent(?:er|re)|cent(?:er|re)|straighten)\w*\b(?:\s+\S+){0,3}?\s+head\b"
+    r"|\bhead\s+(?:straight|forwards?|cent(?:er|re)d?)\b"
+)
+_FACE_FRONT = re.compile(
+    r"\b(?:face|turn|rotate|spin|swivel|point|twist)\w*\b(?:\s+\S+){0,4}?\s+(?:back\s+)?(?:to\s+|towards?\s+)?"
+    r"(?:the\s+)?(?:front|forwards?|ahead|straight(?:\s+ahead)?|cent(?:er|re)|middle)\b"
+    r"|\b(?:face|facing)\s+(?:forwards?|front|ahead|straight)\b"
+)
+"""Back to where the robot faces when it starts: "face forward again", "turn your body back to the
+front". Only a driver with such a pose declares ``face_front``; for the others it is no action."""
 _LEFT = re.compile(r"\b(?:left|counter-?clockwise|anti-?clockwise)\b")
 _RIGHT = re.compile(r"\b(?:right|clockwise)\b")
 _AROUND = re.compile(r"\b(?:around|round|about)\b")
@@ -55,6 +85,8 @@ _MOVE_VERB = re.compile(
     r"nudge|shuffle|wheel|get|bring|take|back|reverse|retreat)\w*\b"
 )
 _BACKWARD = re.compile(r"\b(?:back(?:\s+\w+){0,3}?\s+up|backwards?|back|reverse|retreat|away from me)\b")
+_BACK_WORDS = re.compile(r"\b(?:backwards?|back|reverse|retreat|away from me)\b")
+"""What :data:`_BACKWARD` matched, less the words between "back" and "up": "back the dog up"."""
 _FORWARD = re.compile(r"\b(?:forwards?|ahead|onwards?|closer|towards? me|straight)\b")
 _COOLER = re.compile(r"\b(?:cooler|colder|bluer|whiter|crisper|less warm|less yellow)\b")
 _WARMER = re.compile(r"\b(?:warmer|cozier|cosier|yellower|softer white|less cool|less blue|more yellow)\b")
@@ -114,7 +146,7 @@ def read_action(clause: str, colours: frozenset[str]) -> Said | None:
     quantity = find_quantity(clause)
     text = clause.replace(quantity.text, " ", 1) if quantity else clause
     size = vague_size(text)
-    plain = remove_vague(text)
+    plain = " ".join(remove_vague(text).split())
     if _UNDOCK.search(plain):
         return Said("undock", rest=_cut(plain, _UNDOCK, _MOVE_VERB))
     if _DOCK.search(plain):
@@ -126,17 +158,31 @@ def read_action(clause: str, colours: frozenset[str]) -> Said | None:
     if _PREVIOUS.search(plain):
         return Said("previous", rest=_cut(plain, _PREVIOUS))
     if _NEXT.search(plain):
-        return Said("next", rest=_cut(plain, _NEXT))
+        return Said("next", rest=_cut(plain, _NEXT, _PRESS))
+    if _REPEAT_OFF.search(plain):
+        return Said("repeat_off", rest=_cut(plain, _REPEAT_OFF, _TURN_VERB))
+    if _REPEAT.search(plain):
+        return Said("repeat", rest=_cut(plain, _REPEAT, re.compile(r"\b(?:put|set|turn|on)\b")))
     if _PAUSE.search(plain):
-        return Said("pause", rest=_cut(plain, _PAUSE))
-    if _RESUME.search(plain):
-        return Said("resume", rest=_cut(plain, _RESUME))
+        return Said("pause", rest=_cut(plain, _PAUSE, _PRESS))
+    if _RESUME.search(plain) or _REPLAY.match(clause):
+        return Said("resume", rest=_cut(plain, _RESUME, _PRESS))
     played = _PLAY.match(clause)
     if played:
         query = re.sub(
             r"^(?:some|something|anything|a bit of|a little)\s+(?:by\s+|from\s+)?", "", played.group("query")
         )
         return Said("play", {"query": query}, rest="")
+    if _LOOK_FRONT.search(plain):
+        return Said("look", {"direction": "front"}, _cut(plain, _LOOK_FRONT))
+    if _FACE_FRONT.search(plain) and not _LEFT.search(plain) and not _RIGHT.search(plain):
+        front = re.compile(
+            r"\b(?:face|facing|turn|rotate|spin|swivel|point|twist|back|to|towards?|front|forwards?|ahead|"
+            r"straight|cent(?:er|re)|middle|body|base)\b"
+        )
+        if re.search(r"\bhead\b", plain):
+            return Said("look", {"direction": "front"}, _cut(plain, front, re.compile(r"\bhead\b")))
+        return Said("face_front", rest=_cut(plain, front))
     looked = _LOOK.search(plain)
     if looked:
         return Said("look", {"direction": looked.group("direction")}, _cut(plain, _LOOK))
@@ -205,7 +251,8 @@ def _motion(text: str, quantity: Quantity | None, size: Size) -> Said | None:
         else:
             metres = SIZES["distance"][size]
         sign = -1 if backward else 1
-        return Said("move", {"distance": sign * metres}, _cut(text, _BACKWARD, _FORWARD, _MOVE_VERB))
+        particles = [_BACK_WORDS, re.compile(r"\bup\b")] if backward else []
+        return Said("move", {"distance": sign * metres}, _cut(text, *particles, _FORWARD, _MOVE_VERB))
     return None
 
 

@@ -30,7 +30,7 @@ from rosaos.intents.grammar.capabilities import Capabilities, Capability
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.understanding.compose.actions import Said, read_action, restate
 from rosaos.intents.understanding.compose.references import Reference, References
-from rosaos.intents.understanding.compose.speech import asks, clauses, negated, normalise, says_stop
+from rosaos.intents.understanding.compose.speech import asks, clauses, negated, normalise, remark, says_stop
 from rosaos.intents.understanding.match_result import MatchResult, build_result
 from rosaos.intents.understanding.readings import RANK_DRIVER, Focus, Reading, ReadingContext
 
@@ -44,6 +44,14 @@ _TOO_LOUD = re.compile(r"\b(?:too|so|very|way too|really) loud\b|\bcan'?t hear m
 _TOO_QUIET = re.compile(r"\b(?:too|so|very|really) quiet\b|\bcan'?t hear (?:it|the music|anything)\b")
 
 
+_SWAP = re.compile(
+    r"\b(?:swap|switch|flip|trade|exchange|reverse)\b(?P<what>.*?)\b(?:around|round|over)$"
+    r"|\b(?:swap|exchange|trade)\b(?P<rest>.*)$"
+    r"|\bthe (?:on|lit) (?:one|1) off\b.*\bthe (?:off|unlit|dark) (?:one|1) on\b"
+    r"|\bthe (?:off|unlit|dark) (?:one|1) on\b.*\bthe (?:on|lit) (?:one|1) off\b"
+)
+"""Two devices trading states: "swap the lights", "switch them around", "turn the on one off and
+the off one on". Each of two on/off devices is toggled, which trades their states."""
 _COMMENT = re.compile(r"^(?:it'?s|it is|that'?s|that is|this is|i'?m|i am|we'?re|so|wow|man|god|gosh)\b")
 
 
@@ -52,6 +60,9 @@ class _Clause:
     text: str
     said: Said | None
     reference: Reference
+    about: tuple[str, ...] = ()
+    """For a remark, the devices it is about: "it" in the next clause means them ("the kitchen
+    light is too bright, dim it")."""
 
 
 class Composer:
@@ -88,6 +99,9 @@ class Composer:
         plain = normalise(text)
         if negated(plain) or asks(plain) or says_stop(plain):
             return None
+        swapped = _SWAP.search(" ".join(clauses(plain)))
+        if swapped is not None:
+            return self._swap(text, swapped.group("what") or swapped.group("rest") or "", focus)
         pieces = [piece for piece in clauses(plain) if piece]
         if not pieces:
             return None
@@ -111,9 +125,10 @@ class Composer:
                 reading = self._reading(again, last.said, clause.reference, before, focus)
             elif clause.said is None:
                 reading = literal(clause.text, focus) if clause.reference.named else None
-                if reading is None and (not clause.reference.named or _COMMENT.match(clause.text)):
-                    if complete and not _COMMENT.match(clause.text):
+                if reading is None and (not clause.reference.named or _commentary(clause.text)):
+                    if complete and not _commentary(clause.text):
                         return None  # "… and some jazz": maybe a command the templates read
+                    before = clause.about or before
                     continue  # commentary around a command: "ugh, it's so bright, ..."
             else:
                 reading = self._reading(clause.text, clause.said, clause.reference, before, focus)
@@ -129,6 +144,11 @@ class Composer:
         return build_result(self.context, text, readings, focus is not None)
 
     def _clause(self, text: str) -> _Clause:
+        if remark(text):
+            # "the baby is napping", "I'm heading out": why, not what. Its words are neither an
+            # action ("out") nor a device this world lacks ("baby").
+            about = self.references.resolve(text)
+            return _Clause(text, None, Reference(), () if about.unknown else about.devices)
         said = read_action(text, self.colours)
         reference = self.references.resolve(said.rest if said else text)
         return _Clause(text, said, reference)
@@ -215,6 +235,32 @@ class Composer:
                     return None  # out of the device's range: the engine refuses, never clips
         return PlanStep(device=device, tool=capability.tool, args=args)
 
+    def _swap(self, text: str, phrase: str, focus: Focus) -> MatchResult | None:
+        """Two devices trade on and off: each is toggled. Which two: those ``phrase`` names, else
+        the only two that switch; more than two ask which."""
+        said = Said("toggle")
+        reference = self.references.resolve(phrase)
+        if reference.unknown:
+            return None
+        named = list(reference.devices) if reference.named else list(self.capabilities)
+        able = [
+            device
+            for device in named
+            if self._capability(device, said) and (focus is None or device in focus)
+        ]
+        if len(able) > 2:
+            return build_result(self.context, text, [self.context.clarify(text, 0, RANK_DRIVER, able)], False)
+        if len(able) != 2:
+            return None
+        calls = {
+            device: [step]
+            for device in able
+            if (capability := self._capability(device, said)) is not None
+            and (step := self._step(device, capability, said)) is not None
+        }
+        reading = Reading(text, RANK_DRIVER, len(text), calls=calls)
+        return build_result(self.context, text, [reading], focus is not None)
+
     def _need(self, text: str, focus: Focus) -> Reading | None:
         """A need or a complaint → the action that meets it, on the one device that fits."""
         if _NEED_LIGHT.search(text):
@@ -240,6 +286,11 @@ class Composer:
         if len(able) > 1:
             return self.context.clarify(text, 0, RANK_DRIVER, fitting or able)
         return None
+
+
+def _commentary(clause: str) -> bool:
+    """A clause that comments rather than commands: dropped beside a command."""
+    return _COMMENT.match(clause) is not None or remark(clause)
 
 
 def _again(command: _Clause, devices: str) -> str:

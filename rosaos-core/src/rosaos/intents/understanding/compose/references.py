@@ -127,6 +127,11 @@ _PRONOUNS = frozenset({"it", "them", "that", "this", "those", "these", "one", "h
 _EXCEPT = re.compile(
     r"\b(?:except(?:\s+for)?|but(?:\s+not)?|other than|apart from|besides|save for|excluding|not)\b"
 )
+_GLUE = frozenset(
+    {"the", "a", "an", "my", "our", "your", "this", "that", "these", "those", "its", "their", "his", "her",
+     "of", "in", "on", "over", "above", "under", "below", "near", "next", "beside", "by", "with", "and"}
+)  # fmt: skip
+"""Words inside a device phrase that name nothing themselves ("the light over the stairs")."""
 _WORD = re.compile(r"[a-z][a-z0-9'-]*")
 MIN_PREFIX = 4
 
@@ -203,6 +208,25 @@ class References:
             rest = tuple(device for device in kept.devices if device not in removed.devices)
             return Reference(rest, plural=True, named=True)
         return self._resolve(tokens, group)
+
+    def take(self, tokens: list[str]) -> tuple[tuple[str, ...], list[str]]:
+        """The devices ``tokens`` name, and the tokens that are not part of naming them.
+
+        For readers that find a device phrase among other words (a stop: "okay dog, halt"; a
+        question: "is the light over the stairs on"). A phrase needs a noun or a device's own
+        name ("the kitchen" alone is a place, not a device); one that names a device this world
+        lacks names none, and all its words are left over."""
+        naming = [token for token in tokens if self._naming(token)]
+        rest = [token for token in tokens if not self._naming(token) and token not in _GLUE]
+        if not any(singular(token) in self._nouns for token in naming):
+            return (), [token for token in tokens if token not in _GLUE]
+        reference = self.resolve(" ".join(token for token in tokens if token not in rest))
+        if reference.unknown or not reference.devices:
+            return (), [token for token in tokens if token not in _GLUE]
+        return reference.devices, rest
+
+    def _naming(self, token: str) -> bool:
+        return singular(token) in self._nouns or token in _GROUP or self._known_word(token)
 
     def _has_plural(self, tokens: list[str]) -> bool:
         return any(singular(token) in self._nouns and singular(token) != token for token in tokens)

@@ -45,7 +45,8 @@ _TAGS = (
     "could you", "can you", "won't you", "will ya", "would ya", "could ya", "can ya", "ok", "okay",
     "if you can", "if you could", "if you don't mind", "when you get a chance", "when you can", "yeah",
     "mate", "buddy", "dude", "man", "then", "already", "again", "as well", "too",
-    "thanks a lot", "thanks so much", "would you kindly", "k", "pls", "plz",
+    "thanks a lot", "thanks so much", "thank you so much", "thank you very much", "thanks very much",
+    "much appreciated", "would you kindly", "k", "pls", "plz",
 )  # fmt: skip
 
 
@@ -64,7 +65,8 @@ _SPLIT = re.compile(
     re.IGNORECASE,
 )
 _NEGATION = re.compile(
-    r"\b(?:don't|dont|do not|never|no need to|not|won't|shouldn't|mustn't|didn't|doesn't|nothing|"
+    # "I don't like this one, skip it": a feeling about what plays, the reason for a command.
+    r"\b(?:(?:don't|dont|do not)(?!\s+(?:really\s+)?(?:like|love|enjoy|care for|dig)\b)|never|no need to|not|won't|shouldn't|mustn't|didn't|doesn't|nothing|"
     r"no more|forget it|never mind|nevermind|cancel)\b",
     re.IGNORECASE,
 )
@@ -73,12 +75,35 @@ _QUESTION = re.compile(
     r"isn't|aren't|(?:do|did|have)\s+(?:you|i|we|they|it|any))\b",
     re.IGNORECASE,
 )
+_SUBJECT = (
+    r"(?:i|i'm|im|i've|i'll|i'd|we|we're|we've|we'll|you're|he|he's|she|she's|they|they're|it|it's|its|"
+    r"there|there's|that's|everyone|everyone's|everybody|everybody's|someone|somebody|nobody|no one|"
+    r"people|guests|(?:the|my|our|his|her|their|a)\s+\w+(?:'s)?)"
+)
+_REASON = re.compile(
+    rf"\s+(?:because|cause|'cause|cuz|coz|cos|since|as|so that|so|now that|while|given that|seeing as|where|from where)"
+    rf"\s+{_SUBJECT}(?=\s|$).*$",
+    re.IGNORECASE,
+)
+_REMARK = re.compile(
+    rf"^(?:{_SUBJECT}\s+(?:\w+\s+)?(?:is|are|was|were|am|has|have|had|will|can't|cannot|won't|isn't|aren't|"
+    r"keeps?|just|got|gets?|hates?|(?:\w+ing))\b"
+    r"|(?:i'm|im|i've|i'll(?!\s+(?:have|take)\b)|(?:i'd|we'd)(?!\s+(?:like|love|prefer|rather|want)\b)|we're|we've|we'll|you're|he's|she's|they're|it's|there's|that's|everyone's|"
+    r"everybody's|someone's|somebody's|nobody's|no one's|everything's|nothing's|something's)\b"
+    r"|(?:the|my|our|his|her|their|a)\s+(?:\w+\s+)?\w+\s+(?:hurts?|aches?|sleeps|naps|works|starts|feels|looks|"
+    r"seems|sounds|smells|came|went|left|arrived|woke|fell|says|said|called|rang|knocked|is|are|was|were)\b"
+    r"|(?:this|that|these|those)\s+(?:is|are|was|were)\b"
+    r"|(?:thank you|thanks|much appreciated|appreciate it|cheers|love you|you're the best|good job|well done)\b"
+    r"|(?:i|we|they|he|she)\s+(?!want\b|need\b|would\b|wanna\b|gotta\b)\w+)",
+    re.IGNORECASE,
+)
 _STOP = re.compile(r"\b(?:stop|halt|freeze|hold it|enough|abort|emergency)\b", re.IGNORECASE)
 
 
 def normalise(text: str) -> str:
     """Lowercase, plain apostrophes, number words as digits, no end punctuation."""
     text = text.lower().replace("\u2019", "'").replace("\u2018", "'")
+    text = re.sub(r"[!?.]+\s+(?=\S)", ", ", text)  # one sentence, then another: two clauses
     text = re.sub(r"[\"“”!?.]+(?=\s|$)", " ", text)
     text = re.sub(r"\s+", " ", text).strip()
     return spell_numbers(text)
@@ -95,8 +120,28 @@ def command_words(text: str) -> str:
 
 
 def clauses(text: str) -> list[str]:
-    """``text`` cut into clauses at commas, "and", "then"; each without its own discourse."""
-    return [command_words(piece) for piece in _SPLIT.split(command_words(text))]
+    """``text`` cut into clauses at commas, "and", "then"; each without its own discourse, and
+    without the reason given for it ("…, because it's too bright": :func:`without_reason`)."""
+    return [command_words(piece) for piece in _SPLIT.split(without_reason(command_words(text)))]
+
+
+def without_reason(text: str) -> str:
+    """``text`` without a reason clause after its command: "dim it because it's late", "put the
+    lamp on so I can read". A subordinator followed by a subject starts a clause that says why;
+    what it says changes nothing of what is asked."""
+    for found in _REASON.finditer(text):
+        if re.search(r"\bas\s+\w+$", text[: found.start()]) and found.group(0).lstrip().startswith("as "):
+            continue  # "as warm as it goes": a comparison, not a reason
+        return text[: found.start()].strip()
+    return text.strip()
+
+
+def remark(clause: str) -> bool:
+    """Whether ``clause`` states something rather than asks for it: a subject and its verb ("the
+    baby is napping", "I'm heading out", "we have guests", "it's too close to the stairs").
+    Said beside a command, it is the reason for it and dropped; alone, it may be a need
+    (the reader's :meth:`~rosaos.intents.understanding.compose.reader.Composer` reads those)."""
+    return _REMARK.match(clause) is not None
 
 
 def negated(text: str) -> bool:
