@@ -11,7 +11,8 @@ anyone remembering to mark it:
   simulator (the Reachy daemon), a speech model over many recordings, or build wheels, venvs,
   the copier template.
 
-``./scripts/test --quick`` runs ``-m "not e2e and not browser and not slow"``; CI runs everything.
+``./scripts/test --quick`` runs ``-m "not e2e and not browser and not slow"``; CI runs everything,
+the modules with slow tests first (:func:`_slow_modules_first`).
 """
 
 from __future__ import annotations
@@ -40,3 +41,25 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
         module = getattr(item, "module", None)
         if module is not None and _drives_a_browser(module):
             item.add_marker(pytest.mark.browser)
+    _slow_modules_first(items)
+
+
+SLOW_TIERS = ("e2e", "browser", "slow")
+
+
+def _slow_modules_first(items: list[pytest.Item]) -> None:
+    """Put the modules with an e2e test first, then browser, then slow ones, then the rest; each
+    module's tests keep their order.
+
+    Under xdist (``--dist loadscope --no-loadscope-reorder``, see ``scripts/test``) modules are
+    handed to the workers in this order. The slow modules are few and long (a real ``rosaos up``
+    each, a minute or more for some); collected last, as ``tests/`` is, the last of them ran alone
+    while the other worker had nothing left, and xdist's own reordering (most tests first) put them
+    last too. Longest first leaves the many short modules to fill in around them.
+    """
+    rank: dict[str, int] = {}
+    for item in items:
+        name = getattr(getattr(item, "module", None), "__name__", "")
+        tier = next((i for i, t in enumerate(SLOW_TIERS) if item.get_closest_marker(t)), len(SLOW_TIERS))
+        rank[name] = min(rank.get(name, tier), tier)
+    items.sort(key=lambda item: rank[getattr(getattr(item, "module", None), "__name__", "")])

@@ -66,7 +66,7 @@ sim = { on = true, brightness = 60 }
 async def scripted_kernel(home: Path, world: str = TWO_LIGHTS) -> AsyncIterator[Kernel]:
     """A kernel whose kernel and process models are the scripted ``FunctionModel``s of
     ``kernel_scripts.py`` (the workers import it from this folder)."""
-    from kernel_scripts import kernel_model
+    from .kernel_scripts import kernel_model
 
     async with running_kernel(
         home,

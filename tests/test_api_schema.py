@@ -17,8 +17,9 @@ from typing import Any
 import httpx
 import pytest
 import schemathesis
-from cli_process import ROSAOS, line_matching
 from hypothesis import HealthCheck, given, settings
+
+from .cli_process import ROSAOS, line_matching
 
 EXAMPLES = 100
 

@@ -15,12 +15,13 @@ from typing import Any
 import httpx
 import pytest
 import pytest_asyncio
-from e2e_support import device_state, eventually, kernel_api, running_kernel
 from rich.console import Console
 
 from rosaos.frontends.chat import send_and_wait
 from rosaos.kernel.api.kernel_client import KernelClient
 from rosaos.kernel.runtime import Kernel
+
+from .e2e_support import device_state, eventually, kernel_api, running_kernel
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 

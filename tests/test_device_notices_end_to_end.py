@@ -14,7 +14,6 @@ from typing import Any
 
 import pytest
 import pytest_asyncio
-from e2e_support import eventually
 
 from rosaos.bench.sim_world import SimDevices
 from rosaos.config import load_config
@@ -23,6 +22,8 @@ from rosaos.devices.world import build_world
 from rosaos.kernel.runtime import Kernel
 from rosaos.notices.notice_board import NoticeBoard
 from rosaos.plugins import load_drivers
+
+from .e2e_support import eventually
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 

@@ -7,9 +7,9 @@ import signal
 from pathlib import Path
 from typing import Any
 
-from e2e_support import eventually, kernel_api, running_kernel
-
 from rosaos.devices.run_files import read_runtime_file
+
+from .e2e_support import eventually, kernel_api, running_kernel
 
 WORLD = '[kernel]\npool_size = 0\nfork_server = false\n[devices.kitchen_light]\ndriver = "tapo"\n'
 

@@ -15,11 +15,12 @@ import socket
 from pathlib import Path
 
 import httpx
-from test_orphans_after_kernel_kill import start_kernel
-from test_partition import dog  # noqa: F401  (the fixture)
 
 from rosaos.devices.client import DeviceClient
 from rosaos.drivers import DeviceError
+
+from .test_orphans_after_kernel_kill import start_kernel
+from .test_partition import dog  # noqa: F401  (the fixture)
 
 
 def free_port() -> int:

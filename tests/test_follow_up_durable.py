@@ -13,7 +13,6 @@ from typing import Any
 
 import pytest
 import pytest_asyncio
-from e2e_support import device_state, eventually, running_kernel
 
 from rosaos.intents.grammar.vocabulary import device_vocabularies
 from rosaos.intents.planning.follow_ups import plan_follow_up
@@ -21,6 +20,8 @@ from rosaos.kernel.process_ends import end_event
 from rosaos.kernel.runtime import Kernel
 from rosaos.models.kernel_model import LocalIntentModel
 from rosaos.processes.jobs import WorkerCallback
+
+from .e2e_support import device_state, eventually, running_kernel
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 

@@ -19,11 +19,12 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from cli_process import line_matching
-from test_orphans_after_kernel_kill import start
 
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.deadman import OWNER_HEADER, SILENCE_LIMIT
+
+from .cli_process import line_matching
+from .test_orphans_after_kernel_kill import start
 
 STOP_BOUND = 2.0
 """Seconds past the deadman's silence limit by which the robot must be still (issue 21's bound)."""

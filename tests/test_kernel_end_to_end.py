@@ -18,7 +18,6 @@ from typing import Any
 import httpx
 import pytest
 import pytest_asyncio
-from e2e_support import device_state, eventually, kernel_api, scripted_kernel
 from playwright.async_api import async_playwright
 
 from rosaos.kernel.runtime import Kernel, KernelError, _bind_or_explain
@@ -26,6 +25,8 @@ from rosaos.kernel.stop_tools import STOP_TOOL_NAMES
 from rosaos.kernel.tools import KERNEL_TOOL_NAMES
 from rosaos.memory.memory_tools import MEMORY_TOOL_NAMES
 from rosaos.timers.timer_tools import TIMER_TOOL_NAMES
+
+from .e2e_support import device_state, eventually, kernel_api, scripted_kernel
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 
@@ -96,7 +97,7 @@ async def test_chat_turns_on_the_kitchen_light_through_a_process(
 async def test_the_kernel_is_offered_its_process_timer_stop_and_memory_tools_and_no_device_tool(
     kernel: Kernel, api: httpx.AsyncClient
 ) -> None:
-    from kernel_scripts import KERNEL_TOOLS_SEEN
+    from .kernel_scripts import KERNEL_TOOLS_SEEN
 
     await chat(api, "slow 0")
     await eventually(lambda: settled(api))

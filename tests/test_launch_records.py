@@ -12,14 +12,14 @@ import asyncio
 from datetime import UTC, datetime
 from pathlib import Path
 
-from e2e_support import TWO_LIGHTS, device_state, kernel_api, running_kernel
-
 from rosaos.events.types import UserText, UserTypedEvent
 from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.launch_cause import LaunchCause
 from rosaos.kernel.orphans import LiveProcesses
 from rosaos.kernel.runtime import EVENTS_FILE
 from rosaos.processes.manager import ProcessInfo
+
+from .e2e_support import TWO_LIGHTS, device_state, kernel_api, running_kernel
 
 
 async def leave_a_launch_behind(data_dir: Path) -> int:

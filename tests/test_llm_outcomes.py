@@ -19,9 +19,12 @@ from typing import Any
 import httpx
 import pytest
 import pytest_asyncio
-from cli_process import ROSAOS
-from e2e_support import TWO_LIGHTS, device_state, eventually, kernel_api, running_kernel
-from scripted_llm import (
+
+from rosaos.kernel.runtime import Kernel
+
+from .cli_process import ROSAOS
+from .e2e_support import TWO_LIGHTS, device_state, eventually, kernel_api, running_kernel
+from .scripted_llm import (
     Message,
     ScriptedLLM,
     models_table,
@@ -31,8 +34,6 @@ from scripted_llm import (
     tool_call,
     tool_results,
 )
-
-from rosaos.kernel.runtime import Kernel
 
 pytestmark = [pytest.mark.e2e, pytest.mark.asyncio(loop_scope="module")]
 

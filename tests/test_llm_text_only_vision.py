@@ -24,9 +24,10 @@ from typing import Any
 import httpx
 import pytest
 import pytest_asyncio
-from cli_process import ROSAOS
-from e2e_support import kernel_api, running_kernel
-from scripted_llm import Message, models_table, say, scripted_llm, task_of, tool_call, tool_results
+
+from .cli_process import ROSAOS
+from .e2e_support import kernel_api, running_kernel
+from .scripted_llm import Message, models_table, say, scripted_llm, task_of, tool_call, tool_results
 
 pytestmark = [pytest.mark.e2e, pytest.mark.asyncio(loop_scope="module")]
 

@@ -25,7 +25,8 @@ from typing import Any
 
 import httpx
 import pytest
-from cli_process import ROSAOS, line_matching
+
+from .cli_process import ROSAOS, line_matching
 
 ROBOTS = """
 [devices.turtlebot]

@@ -16,7 +16,6 @@ from pathlib import Path
 from typing import Any
 
 import httpx
-from e2e_support import device_state, eventually, kernel_api, running_kernel
 from pydantic_ai.messages import (
     ModelMessage,
     ModelRequest,
@@ -26,6 +25,8 @@ from pydantic_ai.messages import (
     ToolReturnPart,
 )
 from pydantic_ai.models.function import AgentInfo, FunctionModel
+
+from .e2e_support import device_state, eventually, kernel_api, running_kernel
 
 WORLD = """
 [devices.turtlebot]

@@ -23,9 +23,10 @@ from typing import Any
 
 import httpx
 import pytest
-from cli_process import ROSAOS, line_matching
 
 from rosaos.devices.client import DeviceClient
+
+from .cli_process import ROSAOS, line_matching
 
 
 def start(*args: str) -> subprocess.Popen[str]:

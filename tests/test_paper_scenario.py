@@ -18,10 +18,11 @@ from typing import Any
 import httpx
 import pytest
 import pytest_asyncio
-from e2e_support import device_state, eventually, kernel_api, running_kernel
 
 from rosaos.kernel.runtime import Kernel
 from rosaos.models.select import ModelSpec
+
+from .e2e_support import device_state, eventually, kernel_api, running_kernel
 
 HERE = Path(__file__).parent
 pytestmark = pytest.mark.asyncio(loop_scope="module")
@@ -52,7 +53,7 @@ sim = { is_playing = false, catalog = [{ track = "Here Comes the Sun", artist = 
 
 @pytest_asyncio.fixture(scope="module", loop_scope="module")
 async def kernel(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Kernel]:
-    from paper_scripts import kernel_model
+    from .paper_scripts import kernel_model
 
     async with running_kernel(
         tmp_path_factory.mktemp("paper"),
@@ -69,7 +70,7 @@ async def processes(api: httpx.AsyncClient) -> list[dict[str, Any]]:
 
 
 async def test_the_paper_demonstration(kernel: Kernel) -> None:
-    from paper_scripts import SEARCH_REQUEST, SECOND_REQUEST
+    from .paper_scripts import SEARCH_REQUEST, SECOND_REQUEST
 
     async with kernel_api(kernel) as api:
         await eventually(

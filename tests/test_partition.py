@@ -21,11 +21,12 @@ from typing import Any
 
 import httpx
 import pytest
-from blackhole import blackhole
-from cli_process import line_matching
-from test_orphans_after_kernel_kill import start, start_kernel
 
 from rosaos.devices.client import DeviceClient
+
+from .blackhole import blackhole
+from .cli_process import line_matching
+from .test_orphans_after_kernel_kill import start, start_kernel
 
 STOP_BOUND = 2.0
 """The robot must be still within this many seconds of the link going quiet (the issue's bound)."""

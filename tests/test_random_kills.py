@@ -27,8 +27,9 @@ from pathlib import Path
 
 import httpx
 import pytest
-from lamp_rack import LampRack
-from test_orphans_after_kernel_kill import start_kernel
+
+from .lamp_rack import LampRack
+from .test_orphans_after_kernel_kill import start_kernel
 
 ROOMS = ["kitchen", "hall", "porch", "garage", "attic", "office"]
 KILLS = int(os.environ.get("ROSAOS_RANDOM_KILLS", "4"))

@@ -18,7 +18,6 @@ from pathlib import Path
 from typing import Any
 
 import httpx
-from e2e_support import eventually, kernel_api, running_kernel
 
 from rosaos.auth import load_or_create_token
 from rosaos.config import load_config
@@ -26,6 +25,8 @@ from rosaos.devices.client import DeviceClient
 from rosaos.devices.supervisor import DeviceSupervisor
 from rosaos.devices.world import build_world
 from rosaos.plugins import load_drivers
+
+from .e2e_support import eventually, kernel_api, running_kernel
 
 N = 60
 BUSY_SECONDS = 150

@@ -10,8 +10,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from e2e_support import kernel_api, running_kernel
-from test_memory_llm_kernel import chat
+from .e2e_support import kernel_api, running_kernel
+from .test_memory_llm_kernel import chat
 
 WORLD = """
 [devices.turtlebot]

@@ -20,9 +20,10 @@ from typing import Any
 import httpx
 import pytest
 import pytest_asyncio
-from e2e_support import device_state, eventually, kernel_api, scripted_kernel
 
 from rosaos.kernel.runtime import Kernel
+
+from .e2e_support import device_state, eventually, kernel_api, scripted_kernel
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 

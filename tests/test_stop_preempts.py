@@ -17,10 +17,11 @@ from typing import Any
 import httpx
 import pytest
 import pytest_asyncio
-from cli_process import ROSAOS
-from e2e_support import device_state, eventually, kernel_api, running_kernel
 
 from rosaos.kernel.runtime import Kernel
+
+from .cli_process import ROSAOS
+from .e2e_support import device_state, eventually, kernel_api, running_kernel
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 

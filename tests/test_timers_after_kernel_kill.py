@@ -22,7 +22,8 @@ from typing import Any
 
 import httpx
 import pytest
-from cli_process import ROSAOS, line_matching
+
+from .cli_process import ROSAOS, line_matching
 
 
 def until(check: Callable[[], Any], timeout: float = 60.0, what: str = "condition") -> Any:

@@ -18,7 +18,6 @@ from typing import Any
 
 import numpy as np
 import pytest
-from e2e_support import device_state, eventually, running_kernel
 
 from rosaos.frontends.voice.bargein import BargeIn
 from rosaos.frontends.voice.pipeline import Heard, KernelHandoff, VoicePipeline
@@ -28,6 +27,8 @@ from rosaos.frontends.voice.stt import MoonshineSTT, wav_bytes
 from rosaos.frontends.voice.vad import Segmenter, SileroClassifier
 from rosaos.frontends.voice.wake import WakeGate
 from rosaos.kernel.api.kernel_client import KernelClient
+
+from .e2e_support import device_state, eventually, running_kernel
 
 pytestmark = pytest.mark.skipif(
     shutil.which("espeak-ng") is None, reason="espeak-ng is not installed: apt-get install espeak-ng"

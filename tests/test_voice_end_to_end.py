@@ -20,11 +20,12 @@ from typing import Any
 import httpx
 import pytest
 import pytest_asyncio
-from e2e_support import device_state, eventually, kernel_api, running_kernel
-from voice_e2e_support import rosaos_voice
 
 from rosaos.kernel.runtime import Kernel
 from rosaos.plugins import load_drivers
+
+from .e2e_support import device_state, eventually, kernel_api, running_kernel
+from .voice_e2e_support import rosaos_voice
 
 pytestmark = [
     pytest.mark.asyncio(loop_scope="module"),

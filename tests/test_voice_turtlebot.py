@@ -16,10 +16,11 @@ from pathlib import Path
 
 import pytest
 import pytest_asyncio
-from e2e_support import device_state, eventually, running_kernel
-from voice_e2e_support import rosaos_voice
 
 from rosaos.kernel.runtime import Kernel
+
+from .e2e_support import device_state, eventually, running_kernel
+from .voice_e2e_support import rosaos_voice
 
 pytestmark = [
     pytest.mark.asyncio(loop_scope="module"),

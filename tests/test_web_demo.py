@@ -21,12 +21,13 @@ from pathlib import Path
 
 import pytest
 import pytest_asyncio
-from cli_process import ROSAOS
-from e2e_support import device_state, eventually, running_kernel
 from playwright.async_api import Page, async_playwright
 from playwright.async_api import TimeoutError as PlaywrightTimeout
 
 from rosaos.kernel.runtime import Kernel
+
+from .cli_process import ROSAOS
+from .e2e_support import device_state, eventually, running_kernel
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 

@@ -14,10 +14,11 @@ from pathlib import Path
 
 import pytest
 import pytest_asyncio
-from e2e_support import running_kernel
 from playwright.async_api import Page, async_playwright
 
 from rosaos.kernel.runtime import Kernel
+
+from .e2e_support import running_kernel
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 

@@ -18,14 +18,15 @@ from pathlib import Path
 
 import pytest
 import pytest_asyncio
-from e2e_support import eventually, kernel_api, running_kernel
 from playwright.async_api import async_playwright
-from test_memory_llm_kernel import chat
 from typer.testing import CliRunner
 
 from rosaos.cli.root import app
 from rosaos.kernel.runtime import Kernel
 from rosaos.memory.store import MemoryStore, Place
+
+from .e2e_support import eventually, kernel_api, running_kernel
+from .test_memory_llm_kernel import chat
 
 pytestmark = [pytest.mark.e2e, pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]
 

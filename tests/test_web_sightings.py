@@ -17,11 +17,12 @@ from pathlib import Path
 import httpx
 import pytest
 import pytest_asyncio
-from e2e_support import device_state, eventually, kernel_api, running_kernel
 from playwright.async_api import async_playwright
-from test_memory_llm_kernel import chat
 
 from rosaos.kernel.runtime import Kernel
+
+from .e2e_support import device_state, eventually, kernel_api, running_kernel
+from .test_memory_llm_kernel import chat
 
 pytestmark = [pytest.mark.e2e, pytest.mark.asyncio(loop_scope="module")]
 

@@ -2,18 +2,11 @@
 
 from __future__ import annotations
 
-import os
-import sys
 from collections.abc import Iterator
 
 import pytest
 
-# Test modules import reachy_support by name (pytest's importlib mode puts no test dir on sys.path).
-HERE = os.path.dirname(__file__)
-if HERE not in sys.path:
-    sys.path.insert(0, HERE)
-
-from reachy_support import CLOUD_KEYS, FakeOpenAI, serve_fake_openai  # noqa: E402
+from .reachy_support import CLOUD_KEYS, FakeOpenAI, serve_fake_openai
 
 
 @pytest.fixture(autouse=True)

@@ -14,9 +14,10 @@ from dataclasses import dataclass
 
 import pytest
 import pytest_asyncio
-from reachy_support import BENCH_STATE, FACE_PHOTO, Robot, running_robot, sim_context
 
 from rosaos_reachy.companion import STILL, companion_mode, pattern
+
+from .reachy_support import BENCH_STATE, FACE_PHOTO, Robot, running_robot, sim_context
 
 pytestmark = [pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]
 

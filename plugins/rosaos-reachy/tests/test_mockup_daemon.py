@@ -11,11 +11,12 @@ import time
 from pathlib import Path
 
 import pytest
-from reachy_support import running_robot, sim_context
 
 from rosaos.drivers import DeviceError
 from rosaos_reachy import daemon as daemon_module
 from rosaos_reachy.daemon import SimDaemon, daemon_command
+
+from .reachy_support import running_robot, sim_context
 
 pytestmark = pytest.mark.slow
 

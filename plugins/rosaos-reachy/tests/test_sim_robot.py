@@ -15,7 +15,8 @@ from collections.abc import AsyncIterator
 import httpx
 import pytest
 import pytest_asyncio
-from reachy_support import BENCH_STATE, FACE_PHOTO, Robot, running_robot, sim_context
+
+from .reachy_support import BENCH_STATE, FACE_PHOTO, Robot, running_robot, sim_context
 
 pytestmark = [pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]
 

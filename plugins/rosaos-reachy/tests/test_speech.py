@@ -7,12 +7,13 @@ import wave
 from pathlib import Path
 
 import pytest
-from reachy_support import FakeOpenAI
 
 from rosaos.drivers import DeviceError
 from rosaos_reachy.settings import ReachySettings
 from rosaos_reachy.speech import Speaker
 from rosaos_reachy.tts import ElevenLabsTts, LocalTts, OpenAISpeechTts, TtsError, build_engines, wav_duration
+
+from .reachy_support import FakeOpenAI
 
 
 def speaker(tmp_path: Path, **settings: object) -> Speaker:

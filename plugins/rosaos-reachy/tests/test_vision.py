@@ -8,7 +8,6 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-from reachy_support import FACE_PHOTO, FakeOpenAI
 
 from rosaos.drivers import DeviceError
 from rosaos_reachy.camera import SimCamera, pixel_to_angles
@@ -16,6 +15,8 @@ from rosaos_reachy.faces import FaceDetector, FaceMemory
 from rosaos_reachy.robot import HeadPose, Posture
 from rosaos_reachy.settings import ReachySettings
 from rosaos_reachy.vision import VisionModel, load_image
+
+from .reachy_support import FACE_PHOTO, FakeOpenAI
 
 
 @pytest.fixture(scope="module")

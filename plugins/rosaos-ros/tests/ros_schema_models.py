@@ -1,7 +1,7 @@
 """Process models for the ROS tests that run a real worker job against the driver's MCP server.
 
-Imported by the worker as ``python:ros_schema_models:<factory>``; the tests put this folder on
-``sys.path``. One knows no ROS message type (it looks the type up, then publishes); two take a
+Run in the test's process as ``python:<this module's name>:<factory>`` (the name pytest gave this
+test folder's package). One knows no ROS message type (it looks the type up, then publishes); two take a
 picture, one with a profile that takes images and one text-only.
 """
 

@@ -7,7 +7,6 @@ WebSocket, and the worker's ``run_job`` (with its device session headers) with a
 from __future__ import annotations
 
 import json
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -22,11 +21,7 @@ from rosaos_ros.server import build_server
 from rosaos_ros.settings import RosSettings
 from rosaos_ros.sim.world import DiffDriveWorld
 
-HERE = str(Path(__file__).parent)
-if HERE not in sys.path:
-    sys.path.insert(0, HERE)
-
-import ros_schema_models  # noqa: E402
+from . import ros_schema_models
 
 TOKEN = "ros-device-token"
 
@@ -55,7 +50,7 @@ async def run_on_robot(
                 task=task,
                 devices=[device],
                 model=ModelSpec(
-                    model=f"python:ros_schema_models:{model}",
+                    model=f"python:{ros_schema_models.__name__}:{model}",
                     prefer_local=False,
                     vision=vision,
                     image_max_px=64,

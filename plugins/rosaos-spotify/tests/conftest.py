@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import contextlib
-import os
-import sys
 from collections.abc import Callable
 from typing import Any
 
@@ -12,11 +10,6 @@ import pytest
 
 from rosaos.testing import SimDevice, open_sim_device
 from rosaos_spotify.plugin import SPEC
-
-# Test modules import spotify_catalogs by name (pytest's importlib mode puts no test dir on sys.path).
-HERE = os.path.dirname(os.path.abspath(__file__))
-if HERE not in sys.path:
-    sys.path.insert(0, HERE)
 
 # The catalog of the bench's home world (../shared/bench/tasks/home.yaml).
 HOME_CATALOG = [

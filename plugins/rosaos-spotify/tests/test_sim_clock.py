@@ -7,12 +7,12 @@ import random
 from pathlib import Path
 from typing import Any
 
-from spotify_catalogs import ALBUMS
-
 from rosaos.drivers import DeviceContext, NoticeBoard
 from rosaos_spotify.plugin import SPEC, sim_backend
 from rosaos_spotify.settings import SpotifySettings
 from rosaos_spotify.simulator import SimPlayer, SimSettings
+
+from .spotify_catalogs import ALBUMS
 
 
 def clocked(**sim: Any) -> SimPlayer:

@@ -6,11 +6,12 @@ import random
 from typing import Any
 
 import pytest
-from spotify_catalogs import ALBUMS
 
 from rosaos.drivers import DeviceError
 from rosaos_spotify.catalog import DEFAULT_CATALOG
 from rosaos_spotify.simulator import SimPlayer, SimSettings
+
+from .spotify_catalogs import ALBUMS
 
 
 def player(**sim: Any) -> SimPlayer:

@@ -10,10 +10,10 @@ from __future__ import annotations
 import asyncio
 import os
 import socket
-import subprocess
 import sys
 import time
 from collections.abc import Awaitable, Callable
+from dataclasses import dataclass
 from pathlib import Path
 from types import ModuleType
 from typing import Annotated, Any
@@ -21,15 +21,17 @@ from typing import Annotated, Any
 import pytest
 from fastmcp import FastMCP
 from pydantic import Field, SecretStr
+from typer.testing import CliRunner
 
 from rosaos import hookimpl
+from rosaos.cli import app
 from rosaos.config import DeviceConfig, RosaosConfig
 from rosaos.devices.world import World, build_world
 from rosaos.drivers import DeviceBackend, DeviceContext, DeviceError, DeviceSettings, DriverSpec
 from rosaos.plugins import DriverRegistry, load_drivers
 
 ROSAOS = Path(sys.executable).parent / "rosaos"
-"""The console script of this venv."""
+"""The console script of this venv (for the tests that need the CLI as a process of its own)."""
 
 
 class TinySettings(DeviceSettings):
@@ -162,15 +164,20 @@ def write_config(path: Path, data_dir: Path, body: str) -> Path:
     return path
 
 
-def rosaos(
-    *args: str, env: dict[str, str] | None = None, timeout: float = 60
-) -> subprocess.CompletedProcess[str]:
-    """Run the ``rosaos`` console script; ``env`` adds to the (test-isolated) environment."""
-    return subprocess.run(
-        [str(ROSAOS), *args],
-        env=os.environ | (env or {}),
-        capture_output=True,
-        text=True,
-        timeout=timeout,
-        check=False,
-    )
+@dataclass(frozen=True)
+class CliRun:
+    """What a ``rosaos`` command returned and printed."""
+
+    returncode: int
+    stdout: str
+    stderr: str
+
+
+def rosaos(*args: str, env: dict[str, str] | None = None) -> CliRun:
+    """Run a ``rosaos`` command in this process with typer's ``CliRunner``; ``env`` adds to the
+    (test-isolated) environment. These tests check what a command prints and returns, which needs
+    no process of its own (the ``served`` fixture and the pty tests start real ones)."""
+    result = CliRunner().invoke(app, list(args), env=env)
+    if result.exception is not None and not isinstance(result.exception, SystemExit):
+        raise result.exception
+    return CliRun(result.exit_code, result.stdout, result.stderr)

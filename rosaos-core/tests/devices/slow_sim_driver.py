@@ -1,7 +1,7 @@
 """The ``slowsim`` driver for the health-check tests: a simulator as slow as its ``sim`` table says.
 
-Installed through an entry point by the ``slowsim`` fixture (``test_health.py``), the way pip
-installs a driver, so ``load_drivers()`` in the commands finds it. ``sim`` keys:
+Installed by the ``slowsim`` fixture (``test_health.py``) the way pip installs a driver (copied
+into a site dir, with an entry point), so ``load_drivers()`` in the commands finds it. ``sim`` keys:
 
 - ``start_seconds``: how long ``start`` takes; ``-1``: it never finishes;
 - ``answer_seconds``: how long ``get_state`` takes; ``-1``: it never answers.

@@ -7,11 +7,12 @@ from collections.abc import AsyncIterator
 from pathlib import Path
 
 import pytest
-from devices_support import closed_port_url, drivers_for_tests, world_of
 
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.serve import ServedDevice, open_device, serve_http
 from rosaos.drivers import DeviceError
+
+from .devices_support import closed_port_url, drivers_for_tests, world_of
 
 TOKEN = "test-token"
 

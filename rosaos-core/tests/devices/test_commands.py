@@ -1,6 +1,7 @@
 """``rosaos devices list``, ``rosaos devices check`` and ``rosaos serve-device``, as a user runs them.
 
-The CLI runs as a subprocess where the process boundary matters; quick error paths call the
+The CLI runs as a subprocess where the process boundary matters (``serve-device``); the other
+commands run in this process through typer's ``CliRunner``, and quick error paths call the
 command functions directly. Every test has its own data dir (``$ROSAOS_DATA_DIR``) and config.
 """
 
@@ -18,11 +19,12 @@ from pathlib import Path
 
 import httpx
 import pytest
-from devices_support import ROSAOS, closed_port_url, free_port, requires_tapo, rosaos, write_config
 
 from rosaos.auth import token_path
 from rosaos.cli.device_commands import check_device, list_devices, serve_device_command
 from rosaos.plugins import load_drivers
+
+from .devices_support import ROSAOS, closed_port_url, free_port, requires_tapo, rosaos, write_config
 
 pytestmark = [pytest.mark.slow, requires_tapo]
 

@@ -8,19 +8,20 @@ start and to answer. The outcomes are asserted, never the timings.
 from __future__ import annotations
 
 import asyncio
+import importlib
 import json
 import os
 import pty
+import shutil
 import subprocess
 import time
 from collections.abc import Iterator
 from io import StringIO
 from pathlib import Path
+from types import ModuleType
 from typing import Any
 
 import pytest
-import slow_sim_driver
-from devices_support import ROSAOS, eventually, write_config
 from rich.console import Console
 
 from rosaos.auth import load_or_create_token
@@ -41,22 +42,31 @@ from rosaos.devices.supervisor import DeviceSupervisor
 from rosaos.devices.world import build_world
 from rosaos.plugins import load_drivers
 
-HERE = Path(__file__).parent
+from .devices_support import ROSAOS, eventually, write_config
+
+DRIVER_SOURCE = Path(__file__).parent / "slow_sim_driver.py"
+
+
+def installed_driver() -> ModuleType:
+    """The ``slow_sim_driver`` module as ``load_drivers`` imports it: the copy the fixture installed."""
+    return importlib.import_module("slow_sim_driver")
 
 
 @pytest.fixture
 def slowsim(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[Path]:
-    """Install the ``slowsim`` driver the way pip would (a dist-info with its entry point); the site dir."""
+    """Install the ``slowsim`` driver the way pip would (the module and a dist-info with its entry
+    point, in a site dir of its own); the site dir."""
     site = tmp_path / "site"
     dist = site / "rosaos_test_slowsim-0.1.dist-info"
     dist.mkdir(parents=True)
     (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: rosaos-test-slowsim\nVersion: 0.1\n")
     (dist / "entry_points.txt").write_text("[rosaos.drivers]\nslowsim = slow_sim_driver\n")
+    shutil.copy(DRIVER_SOURCE, site / DRIVER_SOURCE.name)
     monkeypatch.syspath_prepend(str(site))
     assert "slowsim" in load_drivers(allow={"slowsim"}).names
-    slow_sim_driver.STARTED.clear()
+    installed_driver().STARTED.clear()
     yield site
-    slow_sim_driver.STARTED.clear()
+    installed_driver().STARTED.clear()
 
 
 def slow(name: str, **sim: float) -> str:
@@ -158,7 +168,7 @@ def test_list_waits_for_rosaos_up_instead_of_starting_a_second_copy(
     row = listed(capsys, config, start_timeout=0.5)["lamp"]
     assert row["health"].startswith("starting: rosaos up is still starting lamp after 0.5 s")
     assert (row["via"], row["url"]) == ("served", None)
-    assert slow_sim_driver.STARTED == []
+    assert installed_driver().STARTED == []
 
 
 def test_list_without_checks_shows_that_rosaos_up_is_starting_it(
@@ -176,7 +186,7 @@ def test_check_reports_why_rosaos_up_cannot_start_it(
     rosaos_up_is_starting(data_dir, "lamp", status="failed", error="the lamp has no power")
     assert check_device("lamp", config) == 1
     assert "lamp: check failed: rosaos up cannot start lamp: the lamp has no power" in capsys.readouterr().err
-    assert slow_sim_driver.STARTED == []
+    assert installed_driver().STARTED == []
 
 
 async def test_check_answers_once_rosaos_up_has_started_it(
@@ -200,7 +210,7 @@ async def test_check_answers_once_rosaos_up_has_started_it(
     assert code == 0, capsys.readouterr().err
     report = json.loads(capsys.readouterr().out)
     assert (report["via"], report["url"], report["state"]) == ("served", served.url, {"started_in": 0.0})
-    assert slow_sim_driver.STARTED == ["lamp"]  # only the copy "rosaos up" serves
+    assert installed_driver().STARTED == ["lamp"]  # only the copy "rosaos up" serves
 
 
 @pytest.mark.slow  # starts device hosts (or the CLI on a terminal) as OS processes
@@ -211,7 +221,7 @@ async def test_list_while_rosaos_up_starts_waits_for_its_hosts_instead_of_starti
     monkeypatch: pytest.MonkeyPatch,
     slowsim: Path,
 ) -> None:
-    monkeypatch.setenv("PYTHONPATH", f"{slowsim}{os.pathsep}{HERE}")  # for the device host subprocess
+    monkeypatch.setenv("PYTHONPATH", str(slowsim))  # for the device host subprocess
     config = write_config(tmp_path / "rosaos.toml", data_dir, slow("lamp", start_seconds=1))
     world = build_world(load_config(config), load_drivers())
     supervisor = DeviceSupervisor(world, data_dir, load_or_create_token(data_dir), stop_grace=2)
@@ -225,7 +235,7 @@ async def test_list_while_rosaos_up_starts_waits_for_its_hosts_instead_of_starti
         assert row["url"] == supervisor.directory()["lamp"].url
     finally:
         await supervisor.stop()
-    assert slow_sim_driver.STARTED == []  # the host started it, in its own process; nothing started here
+    assert installed_driver().STARTED == []  # the host started it, in its own process; nothing started here
 
 
 # --- progress -------------------------------------------------------------------------------------
@@ -280,7 +290,7 @@ def test_on_a_terminal_the_list_shows_progress_while_devices_start(
 ) -> None:
     body = slow("lamp", start_seconds=1.5) + slow("fan")
     config = write_config(tmp_path / "rosaos.toml", data_dir, body)
-    env = os.environ | {"PYTHONPATH": f"{slowsim}{os.pathsep}{HERE}", "COLUMNS": "200"}
+    env = os.environ | {"PYTHONPATH": str(slowsim), "COLUMNS": "200"}
     output = run_on_a_terminal("devices", "list", "--config", str(config), env=env)
     assert "Checking 2 devices: 0 done · lamp starting" in output
     assert "fan queued" in output  # one slowsim instance starts at a time
@@ -294,4 +304,4 @@ def test_serve_device_refuses_an_instance_that_rosaos_up_is_starting(
     rosaos_up_is_starting(data_dir, "lamp")
     assert serve_device_command("lamp", config) == 1
     assert "lamp belongs to the running `rosaos up` (starting)" in capsys.readouterr().err
-    assert slow_sim_driver.STARTED == []
+    assert installed_driver().STARTED == []

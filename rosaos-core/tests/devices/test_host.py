@@ -11,12 +11,13 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from devices_support import drivers_for_tests, requires_tapo, world_of
 
 from rosaos.auth import load_or_create_token, token_path
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.host import HostJob
 from rosaos.drivers import DeviceError
+
+from .devices_support import drivers_for_tests, requires_tapo, world_of
 
 pytestmark = pytest.mark.slow
 

@@ -13,7 +13,6 @@ from pathlib import Path
 
 import httpx
 import pytest
-from devices_support import drivers_for_tests, world_of
 
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.latch import LATCH_FILE
@@ -22,6 +21,8 @@ from rosaos.devices.world import World
 from rosaos.drivers import DeviceError
 from rosaos.kernel.host_latch import keep_latch
 from rosaos.processes.manager import EmergencyStop
+
+from .devices_support import drivers_for_tests, world_of
 
 TOKEN = "test-token"
 

@@ -10,12 +10,13 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from devices_support import drivers_for_tests, eventually, pid_alive, plugin, requires_tapo, world_of
 
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.run_files import DeviceStatus, run_file_path
 from rosaos.devices.supervisor import DeviceSupervisor
 from rosaos.plugins import load_drivers
+
+from .devices_support import drivers_for_tests, eventually, pid_alive, plugin, requires_tapo, world_of
 
 TOKEN = "shared-host-test-token"
 FAST: dict[str, Any] = {"health_interval": 0.2, "health_timeout": 2.0, "backoff_base": 0.1, "stop_grace": 2.0}

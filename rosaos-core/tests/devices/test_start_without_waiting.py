@@ -12,11 +12,12 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from devices_support import drivers_for_tests, eventually, requires_tapo, world_of
 
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.run_files import run_file_path
 from rosaos.devices.supervisor import DeviceSupervisor
+
+from .devices_support import drivers_for_tests, eventually, requires_tapo, world_of
 
 TOKEN = "start-without-waiting-token"
 FAST: dict[str, Any] = {"health_interval": 0.2, "health_timeout": 2.0, "backoff_base": 0.1, "stop_grace": 2.0}

@@ -11,13 +11,14 @@ from dataclasses import dataclass
 from typing import Any
 
 import pytest
-from devices_support import eventually
 from fastmcp import FastMCP
 
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.devices.serve import serve_http
 from rosaos.devices.state_cache import DeviceStateCache
 from rosaos.testing.manual_clock import ManualClock
+
+from .devices_support import eventually
 
 TOKEN = "state-cache-token"
 

@@ -11,7 +11,14 @@ from typing import Any
 
 import pytest
 import pytest_asyncio
-from devices_support import (
+
+from rosaos.devices.client import DeviceClient
+from rosaos.devices.run_files import run_file_path, served_devices
+from rosaos.devices.supervisor import DeviceSupervisor
+from rosaos.devices.world import World
+from rosaos.drivers import DeviceError
+
+from .devices_support import (
     closed_port_url,
     drivers_for_tests,
     eventually,
@@ -20,12 +27,6 @@ from devices_support import (
     tapo_installed,
     world_of,
 )
-
-from rosaos.devices.client import DeviceClient
-from rosaos.devices.run_files import run_file_path, served_devices
-from rosaos.devices.supervisor import DeviceSupervisor
-from rosaos.devices.world import World
-from rosaos.drivers import DeviceError
 
 # One event loop for the module, so one supervisor can serve every test that only looks.
 pytestmark = [pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]

@@ -4,10 +4,10 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from devices_support import drivers_for_tests, world_of
-
 from rosaos.intents.grammar.vocabulary import device_vocabularies
 from rosaos.intents.understanding.matching import IntentMatcher
+
+from .devices_support import drivers_for_tests, world_of
 
 
 def test_a_placeholder_instance_is_not_offered_by_the_offline_engine(data_dir: Path) -> None:

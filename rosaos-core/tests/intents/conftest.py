@@ -2,20 +2,11 @@
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import pytest
 
-# Test modules import intents_support from this folder (pytest's importlib mode does not put it
-# on sys.path).
-HERE = str(Path(__file__).parent)
-if HERE not in sys.path:
-    sys.path.insert(0, HERE)
+from rosaos.intents.understanding.matching import IntentMatcher
 
-from intents_support import home_world  # noqa: E402
-
-from rosaos.intents.understanding.matching import IntentMatcher  # noqa: E402
+from .intents_support import home_world
 
 
 @pytest.fixture(scope="session")

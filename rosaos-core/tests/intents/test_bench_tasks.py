@@ -28,7 +28,6 @@ from typing import Any
 
 import pytest
 from fastmcp import Client
-from intents_support import BENCH_TASKS, OWN_TASKS
 from pydantic_ai import Agent
 from pydantic_ai.mcp import MCPToolset
 
@@ -46,6 +45,8 @@ from rosaos.models.process_model import LocalPlanModel
 from rosaos.plugins import DriverRegistry, load_drivers
 from rosaos.processes.jobs import GrantedDevice
 from rosaos.processes.prompts import DEFAULT_PROCESS_PROMPT, process_system_prompt
+
+from .intents_support import BENCH_TASKS, OWN_TASKS
 
 READ_ONLY_TOOLS = {"get_state"}
 # Task files that no implementation can pass as written; reported to the bench's owner.

@@ -12,7 +12,6 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from intents_support import INTENTS
 
 from rosaos.config import DeviceConfig
 from rosaos.intents.grammar.intents_file import load_intents_file
@@ -21,6 +20,8 @@ from rosaos.intents.understanding.compose.quantities import find_quantity, spell
 from rosaos.intents.understanding.compose.speech import clauses, normalise
 from rosaos.intents.understanding.matching import IntentMatcher
 from rosaos.plugins import load_drivers
+
+from .intents_support import INTENTS
 
 
 def _calls(result: Any) -> list[tuple[str, str, dict[str, Any]]]:

@@ -11,7 +11,6 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from intents_support import home_world
 
 from rosaos.config import DeviceConfig
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary, sources_from_config
@@ -20,6 +19,8 @@ from rosaos.intents.understanding.matching import IntentMatcher
 from rosaos.intents.understanding.questions import Question, read_question
 from rosaos.intents.understanding.stop_words import DeviceRefs, StopRequest, read_stop
 from rosaos.plugins import load_drivers
+
+from .intents_support import home_world
 
 
 def _calls(result: Any) -> list[tuple[str, str, dict[str, Any]]]:

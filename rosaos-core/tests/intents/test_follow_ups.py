@@ -5,9 +5,7 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from engine_turns import EngineKernel, callback
 from fastmcp import FastMCP
-from intents_support import home_world
 from pydantic_ai import Agent
 from pydantic_ai.mcp import MCPToolset
 
@@ -15,6 +13,9 @@ from rosaos.events.plan import Plan
 from rosaos.events.types import Event
 from rosaos.intents.planning.follow_ups import plan_follow_up, unmet_output
 from rosaos.models.kernel_model import LocalIntentModel
+
+from .engine_turns import EngineKernel, callback
+from .intents_support import home_world
 
 WHEN_FOUND = "Turn on the kitchen light, and when you find someone turn off the bedroom light"
 

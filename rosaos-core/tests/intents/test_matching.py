@@ -5,10 +5,11 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from intents_support import bulb, speaker
 
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.understanding.matching import IntentMatcher, MatchResult
+
+from .intents_support import bulb, speaker
 
 
 def calls(result: MatchResult) -> list[tuple[str, str, dict[str, Any]]]:

@@ -4,14 +4,15 @@ from __future__ import annotations
 
 from typing import Any
 
-from engine_turns import EngineKernel, callback, event
 from fastmcp import FastMCP
-from intents_support import home_world
 
 from rosaos.events.plan import Plan
 from rosaos.events.types import DeviceNotice
 from rosaos.models.kernel_model import LocalIntentModel
 from rosaos.notices.notice_text import render_notice
+
+from .engine_turns import EngineKernel, callback, event
+from .intents_support import home_world
 
 BATTERY = DeviceNotice(
     device="turtlebot",

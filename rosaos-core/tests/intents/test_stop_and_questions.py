@@ -4,11 +4,12 @@ not a list of sentences (:mod:`rosaos.intents.understanding.stop_words`, ``quest
 from __future__ import annotations
 
 import pytest
-from intents_support import home_world
 
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.understanding.questions import Question, read_question
 from rosaos.intents.understanding.stop_words import DeviceRefs, StopRequest, read_stop
+
+from .intents_support import home_world
 
 WORLD = [
     *home_world(),

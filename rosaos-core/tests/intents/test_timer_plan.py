@@ -8,15 +8,16 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from engine_turns import EngineKernel, event, said
 from fastmcp import FastMCP
-from intents_support import home_world
 
 from rosaos.events.plan import Plan
 from rosaos.kernel.event_store import EventStore
 from rosaos.models.kernel_model import LocalIntentModel
 from rosaos.timers.timer_book import TimerBook, fired_event
 from rosaos.timers.timer_tools import add_timer_tools
+
+from .engine_turns import EngineKernel, event, said
+from .intents_support import home_world
 
 
 class TimerKernel(EngineKernel):

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
-from intents_support import BULB
-
 from rosaos.config import DeviceConfig
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary, sources_from_config, strip_article
 from rosaos.plugins import DriverRegistry
+
+from .intents_support import BULB
 
 
 def test_the_instance_name_is_spoken_with_spaces_and_by_its_kind() -> None:

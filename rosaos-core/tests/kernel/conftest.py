@@ -9,7 +9,6 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import socket
-import sys
 from collections.abc import AsyncIterator
 from pathlib import Path
 
@@ -26,14 +25,8 @@ from rosaos.memory.sightings import SightingLog
 from rosaos.memory.store import MemoryStore
 from rosaos.timers.timer_book import TimerBook
 
-# Test modules import kernel_support from this folder (pytest's importlib mode does not put it
-# on sys.path).
-HERE = str(Path(__file__).parent)
-if HERE not in sys.path:
-    sys.path.insert(0, HERE)
-
-from kernel_support import ORIGIN, TestRuntime, eventually, kitchen_light  # noqa: E402
-from web_support import page  # noqa: E402, F401  (the Chromium fixture of the web page tests)
+from .kernel_support import ORIGIN, TestRuntime, eventually, kitchen_light
+from .web_support import page  # noqa: F401  (the Chromium fixture of the web page tests)
 
 
 @pytest.fixture

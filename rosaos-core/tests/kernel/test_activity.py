@@ -11,7 +11,6 @@ from typing import Any
 import httpx
 import pytest
 from fastapi import FastAPI
-from kernel_support import AUTH, TOKEN, TestRuntime, kitchen_light
 
 from rosaos.cli.log_command import log_command, parse_since
 from rosaos.events.callback import WorkerCallback
@@ -24,6 +23,8 @@ from rosaos.kernel.loop import render_event
 from rosaos.kernel.process_ends import end_event
 from rosaos.kernel.updates import UpdateStream
 from rosaos.receipts import Receipt, SafetyDecision
+
+from .kernel_support import AUTH, TOKEN, TestRuntime, kitchen_light
 
 
 def receipt(tool: str, started: float, device: str = "turtlebot", **fields: Any) -> Receipt:

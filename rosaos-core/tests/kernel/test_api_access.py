@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import httpx
 import pytest
-from kernel_support import AUTH, ORIGIN, TOKEN, TestRuntime
+
+from .kernel_support import AUTH, ORIGIN, TOKEN, TestRuntime
 
 PROTECTED = [
     ("GET", "/processes"),

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 import httpx
-from kernel_support import AUTH, Process, TestRuntime
 
 from rosaos.plugins import load_drivers
+
+from .kernel_support import AUTH, Process, TestRuntime
 
 
 def lamp_card() -> dict[str, object]:

@@ -6,11 +6,12 @@ from typing import Any
 
 import httpx
 import pytest
-from kernel_support import AUTH, TestRuntime
 
 from rosaos.events.types import UserText
 from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.intake import Queued
+
+from .kernel_support import AUTH, TestRuntime
 
 
 async def test_chat_commits_a_user_typed_event_and_answers_202(

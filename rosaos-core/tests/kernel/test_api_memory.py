@@ -7,10 +7,11 @@ import time
 from pathlib import Path
 
 import httpx
-from kernel_support import AUTH, TestRuntime
 
 from rosaos.memory.store import Place
 from rosaos.receipts import Receipt
+
+from .kernel_support import AUTH, TestRuntime
 
 JPEG = b"\xff\xd8\xff\xe0 a sighting's picture"
 

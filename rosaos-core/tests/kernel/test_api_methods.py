@@ -5,7 +5,8 @@ from __future__ import annotations
 import httpx
 import pytest
 from fastapi import FastAPI
-from kernel_support import TestRuntime
+
+from .kernel_support import TestRuntime
 
 
 @pytest.mark.parametrize(

@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import httpx
-from kernel_support import AUTH, Process, TestRuntime
+
+from .kernel_support import AUTH, Process, TestRuntime
 
 
 async def test_processes_lists_the_running_ones_with_their_devices(

@@ -5,7 +5,8 @@ from __future__ import annotations
 from datetime import UTC, datetime, timedelta
 
 import httpx
-from kernel_support import AUTH, TestRuntime
+
+from .kernel_support import AUTH, TestRuntime
 
 
 async def test_timers_are_listed_soonest_first_and_cancelled_by_id(

@@ -9,9 +9,10 @@ from typing import Any
 
 import httpx
 import pytest
-from kernel_support import AUTH, eventually
 
 from rosaos.kernel.updates import UpdateStream
+
+from .kernel_support import AUTH, eventually
 
 SSE = {**AUTH, "Accept": "text/event-stream"}
 

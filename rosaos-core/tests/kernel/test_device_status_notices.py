@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import asyncio
 
-from kernel_support import eventually
-
 from rosaos.kernel.device_status import DeviceStatusUpdates
 from rosaos.kernel.updates import UpdateStream
+
+from .kernel_support import eventually
 
 WINDOW = 0.2
 

@@ -16,7 +16,6 @@ from typing import Any
 
 import httpx
 import pytest
-from kernel_support import eventually
 from pydantic_ai.messages import (
     ModelMessage,
     ModelRequest,
@@ -33,6 +32,8 @@ from rosaos.config import load_config
 from rosaos.devices.world import World
 from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.runtime import EMERGENCY_STOP_KEY, Kernel, events_path
+
+from .kernel_support import eventually
 
 pytestmark = pytest.mark.slow
 

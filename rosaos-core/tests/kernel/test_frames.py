@@ -9,9 +9,10 @@ from pathlib import Path
 
 import httpx
 import pytest
-from kernel_support import AUTH, TestRuntime
 
 from rosaos.receipts import Receipt
+
+from .kernel_support import AUTH, TestRuntime
 
 JPEG = b"\xff\xd8\xff\xe0fake-jpeg\xff\xd9"
 

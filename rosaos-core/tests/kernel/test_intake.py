@@ -2,14 +2,14 @@
 
 from __future__ import annotations
 
-from kernel_support import eventually
-
 from rosaos.events.types import UserText, UserTypedEvent, WorkerCallbackEvent
 from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.intake import Intake, Queued
 from rosaos.kernel.process_ends import end_event
 from rosaos.kernel.updates import UpdateStream
 from rosaos.processes.jobs import WorkerCallback
+
+from .kernel_support import eventually
 
 
 def typed(text: str, key: str | None = None) -> UserTypedEvent:

@@ -10,9 +10,10 @@ from pathlib import Path
 
 import httpx
 import pytest
-from kernel_support import TOKEN
 
 from rosaos.cli.open_command import open_command
+
+from .kernel_support import TOKEN
 
 
 @pytest.fixture

@@ -7,11 +7,11 @@ import contextlib
 from collections.abc import AsyncIterator
 from pathlib import Path
 
-from kernel_support import eventually
-
 from rosaos.events.types import UserText, UserTypedEvent
 from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.updates import Update, UpdateStream
+
+from .kernel_support import eventually
 
 
 async def take(stream: AsyncIterator[Update], count: int) -> list[Update]:

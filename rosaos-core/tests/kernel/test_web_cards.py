@@ -15,12 +15,13 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from kernel_support import TestRuntime
 from playwright.async_api import Page
-from web_support import ARTIFACTS, card, desk
 
 from rosaos.drivers import DeviceContext
 from rosaos.receipts import Receipt
+
+from .kernel_support import TestRuntime
+from .web_support import ARTIFACTS, card, desk
 
 
 async def test_each_card_kind_draws_its_declaration(page: Page, runtime: TestRuntime) -> None:

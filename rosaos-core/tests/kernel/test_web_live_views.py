@@ -6,12 +6,13 @@ from __future__ import annotations
 from datetime import UTC, datetime, timedelta
 from typing import Any
 
-from kernel_support import TestRuntime, eventually
 from playwright.async_api import Page
-from web_support import ARTIFACTS, card, desk
 
 from rosaos.confirmations.confirmation_desk import ConfirmationRequest
 from rosaos.kernel.updates import UpdateStream
+
+from .kernel_support import TestRuntime, eventually
+from .web_support import ARTIFACTS, card, desk
 
 
 async def test_the_map_follows_the_robot_and_shows_its_dock_trail_and_people(

@@ -13,11 +13,12 @@ from datetime import UTC, datetime
 
 import httpx
 import pytest
-from kernel_support import AUTH, Process, TestRuntime, eventually
 from playwright.async_api import Page, async_playwright
 
 from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.updates import UpdateStream
+
+from .kernel_support import AUTH, Process, TestRuntime, eventually
 
 CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
 STABLE_IDS = [

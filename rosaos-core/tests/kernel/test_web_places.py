@@ -8,13 +8,14 @@ import json
 import time
 
 import pytest
-from kernel_support import TestRuntime
 from playwright.async_api import Page
 from typer.testing import CliRunner
-from web_support import desk
 
 from rosaos.cli.root import app
 from rosaos.memory.store import Place
+
+from .kernel_support import TestRuntime
+from .web_support import desk
 
 
 def place(name: str, x: float, y: float) -> Place:

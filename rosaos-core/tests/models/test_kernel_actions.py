@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import engine_turns
-from intents_support import home_world
 from pydantic_ai.messages import (
     ModelMessage,
     ModelRequest,
@@ -19,6 +17,9 @@ from rosaos.models.conversation import event_request
 from rosaos.models.kernel_actions import help_text
 from rosaos.models.kernel_model import LocalIntentModel
 from rosaos.notices.notice_plan import SILENCE
+
+from ..intents import engine_turns
+from ..intents.intents_support import home_world
 
 TOOLS = ["launch_process", "terminate_process", "stop", "device_state"]
 MODEL = LocalIntentModel(home_world())

@@ -7,15 +7,16 @@ from __future__ import annotations
 from typing import Any
 
 import pytest
-from engine_turns import EngineKernel, callback, error, notice, said
 from fastmcp import FastMCP
 from fastmcp.exceptions import ToolError
-from intents_support import home_world
 from pydantic_ai import Agent
 from pydantic_ai.messages import ToolCallPart
 
 from rosaos.events.plan import Plan
 from rosaos.models.kernel_model import LocalIntentModel
+
+from ..intents.engine_turns import EngineKernel, callback, error, notice, said
+from ..intents.intents_support import home_world
 
 
 class Kernel(EngineKernel):

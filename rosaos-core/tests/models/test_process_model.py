@@ -6,7 +6,6 @@ from pathlib import Path
 from typing import Any
 
 import pytest
-from intents_support import build_device_server
 from pydantic_ai import Agent
 from pydantic_ai.mcp import MCPToolset
 from pydantic_ai.messages import ToolCallPart
@@ -16,6 +15,8 @@ from rosaos.events.plan import Plan, PlanAnswer, PlanStep
 from rosaos.models.process_model import NO_PLAN_REPLY, LocalPlanModel, resolve_tool
 from rosaos.processes.jobs import GrantedDevice
 from rosaos.processes.prompts import DEFAULT_PROCESS_PROMPT, process_system_prompt
+
+from ..intents.intents_support import build_device_server
 
 
 def granted(name: str, driver: str = "bulb") -> GrantedDevice:

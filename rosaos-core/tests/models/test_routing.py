@@ -7,7 +7,6 @@ from typing import Any
 
 import pytest
 from fastmcp import FastMCP
-from intents_support import build_device_server, home_world
 from pydantic_ai import Agent
 from pydantic_ai.mcp import MCPToolset
 from pydantic_ai.messages import ModelMessage, ModelResponse, TextPart
@@ -17,6 +16,8 @@ from rosaos.events.types import Event, UserText
 from rosaos.models.kernel_model import LocalIntentModel
 from rosaos.models.process_model import LocalPlanModel
 from rosaos.models.routing import KernelRouter, RoutingModel, process_model_for
+
+from ..intents.intents_support import build_device_server, home_world
 
 
 def answering_llm(text: str = "the LLM answered") -> FunctionModel:

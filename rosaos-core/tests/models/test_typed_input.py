@@ -11,14 +11,15 @@ import ast
 from pathlib import Path
 
 import pytest
-from engine_turns import callback, said, timer_fired
-from intents_support import home_world
 from pydantic_ai.messages import TextPart, ToolCallPart
 
 import rosaos
 from rosaos.kernel.event_text import render_event
 from rosaos.models.conversation import event_request
 from rosaos.models.kernel_model import LocalIntentModel
+
+from ..intents.engine_turns import callback, said, timer_fired
+from ..intents.intents_support import home_world
 
 PACKAGE = Path(rosaos.__file__).parent
 ENGINE_PACKAGES = ("models", "intents")

@@ -9,9 +9,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import sys
 from collections.abc import AsyncIterator
-from pathlib import Path
 from typing import Any
 
 import pytest
@@ -24,13 +22,7 @@ from starlette.routing import Route
 
 from rosaos.devices.serve import bind_socket, serve_http
 
-# Test modules import processes_support, and in-process worker tests import process_test_models,
-# from this folder (pytest's importlib mode does not put it on sys.path).
-HERE = str(Path(__file__).parent)
-if HERE not in sys.path:
-    sys.path.insert(0, HERE)
-
-from processes_support import (  # noqa: E402
+from .processes_support import (
     KERNEL_TOKEN,
     TOKEN,
     KernelStandIn,

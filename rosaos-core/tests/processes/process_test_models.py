@@ -1,7 +1,8 @@
-"""Models for worker tests, imported by real worker subprocesses as ``python:process_test_models:<name>``.
+"""Models for worker tests, imported by jobs as ``python:<this module's name>:<name>`` (``model_spec``).
 
 Each factory returns a pydantic-ai ``FunctionModel`` that plays one scripted part: use a device,
-hang, block the event loop, die, fail. The tests put this folder on the workers' ``PYTHONPATH``.
+hang, block the event loop, die, fail. Worker subprocesses import it by the
+name pytest gave it (``processes_support.IMPORT_ROOT``).
 """
 
 from __future__ import annotations

@@ -26,28 +26,38 @@ from rosaos.events.callback import WorkerCallback
 from rosaos.models.select import ModelSpec
 from rosaos.processes.jobs import GrantedDevice, WorkerJob
 
-HERE = Path(__file__).parent
 TOKEN = "device-token"
 KERNEL_TOKEN = "kernel-token"
 _process_ids = itertools.count(1)
 
 
+IMPORT_ROOT = Path(__file__).parents[__package__.count(".") + 1]
+"""Where this folder's package name starts: pytest imports test folders as packages named from
+the rootdir (``rosaos-core.tests.processes``), and worker subprocesses import them from here."""
+
+
+def module_name(name: str) -> str:
+    """The importable name of this folder's module ``name``, the same in the tests and in workers."""
+    return f"{__package__}.{name}"
+
+
 def model_spec(name: str) -> ModelSpec:
-    """A model from ``process_test_models`` (this folder is on the workers' PYTHONPATH)."""
-    return ModelSpec(model=f"python:process_test_models:{name}")
+    """A model from ``process_test_models``: in-process jobs find the module the tests imported,
+    worker subprocesses import it by the same name (:data:`IMPORT_ROOT` is on their PYTHONPATH)."""
+    return ModelSpec(model=f"python:{module_name('process_test_models')}:{name}")
 
 
 PYCACHE = Path(tempfile.gettempdir()) / "rosaos-test-worker-pycache"
 
 
 def worker_env() -> dict[str, str]:
-    """Environment for worker subprocesses: this folder on PYTHONPATH, so they find the test models.
+    """Environment for worker subprocesses: :data:`IMPORT_ROOT` on PYTHONPATH, so they find the test models.
 
     These tests start a dozen workers. Where bytecode writing is turned off
     (PYTHONDONTWRITEBYTECODE), each would compile pydantic-ai from source again, so their bytecode
     goes to a cache of their own instead; an ordinary install has it precompiled anyway.
     """
-    paths = [str(HERE), os.environ.get("PYTHONPATH", "")]
+    paths = [str(IMPORT_ROOT), os.environ.get("PYTHONPATH", "")]
     env = {"PYTHONPATH": os.pathsep.join(path for path in paths if path)}
     if os.environ.get("PYTHONDONTWRITEBYTECODE"):
         env |= {"PYTHONDONTWRITEBYTECODE": "", "PYTHONPYCACHEPREFIX": str(PYCACHE)}

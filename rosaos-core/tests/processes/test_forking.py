@@ -15,24 +15,26 @@ from collections.abc import AsyncIterator
 
 import pytest
 import pytest_asyncio
-from processes_support import (
+
+from rosaos.models.select import ModelSpec
+from rosaos.processes.forking import ForkServer, preload_modules
+from rosaos.processes.manager import ProcessManager
+from rosaos.processes.pool import WorkerPool
+
+from .processes_support import (
     Endings,
     KernelStandIn,
     LoopbackDevice,
     eventually,
     make_job,
     model_spec,
+    module_name,
     parent_pid,
     pid_alive,
     process_running,
     wait_until_dead,
     worker_env,
 )
-
-from rosaos.models.select import ModelSpec
-from rosaos.processes.forking import ForkServer, preload_modules
-from rosaos.processes.manager import ProcessManager
-from rosaos.processes.pool import WorkerPool
 
 pytestmark = [pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]
 
@@ -251,7 +253,9 @@ async def test_stop_leaves_no_fork_server_and_no_forked_worker_alive(kernel: Ker
 
 async def test_fork_server_refuses_to_fork_after_a_module_started_a_thread(kernel: KernelStandIn) -> None:
     endings = Endings()
-    pool = WorkerPool(size=0, env=worker_env(), on_ended=endings.record, preload=["starts_a_thread"])
+    pool = WorkerPool(
+        size=0, env=worker_env(), on_ended=endings.record, preload=[module_name("starts_a_thread")]
+    )
     await pool.start()
     try:
         assert "started threads (started-at-import)" in (fork_server(pool).unusable or "")
@@ -276,7 +280,7 @@ async def test_process_manager_has_the_fork_server_import_its_model_ahead(kernel
         pool=pool,
         on_ended=Endings().record,
     )
-    assert pool.preload == ["process_test_models"]
+    assert pool.preload == [module_name("process_test_models")]
 
 
 @pytest.mark.parametrize(

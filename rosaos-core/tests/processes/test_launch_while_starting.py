@@ -13,11 +13,12 @@ import asyncio
 import dataclasses
 
 import pytest
-from processes_support import KERNEL_TOKEN, Endings, KernelStandIn, LoopbackDevice, model_spec, worker_env
 
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.processes.manager import LaunchRefused, ProcessManager
 from rosaos.processes.pool import WorkerPool
+
+from .processes_support import KERNEL_TOKEN, Endings, KernelStandIn, LoopbackDevice, model_spec, worker_env
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 

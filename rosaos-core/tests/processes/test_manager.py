@@ -14,7 +14,13 @@ from datetime import UTC, datetime
 
 import pytest
 import pytest_asyncio
-from processes_support import (
+
+from rosaos.devices.endpoints import DeviceEndpoint
+from rosaos.events.callback import WorkerCallback
+from rosaos.processes.manager import EmergencyStop, LaunchRefused, ProcessManager
+from rosaos.processes.pool import WorkerPool
+
+from .processes_support import (
     KERNEL_TOKEN,
     Endings,
     KernelStandIn,
@@ -23,11 +29,6 @@ from processes_support import (
     pid_alive,
     worker_env,
 )
-
-from rosaos.devices.endpoints import DeviceEndpoint
-from rosaos.events.callback import WorkerCallback
-from rosaos.processes.manager import EmergencyStop, LaunchRefused, ProcessManager
-from rosaos.processes.pool import WorkerPool
 
 pytestmark = [pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]
 

@@ -12,7 +12,10 @@ from pathlib import Path
 
 import pytest
 import pytest_asyncio
-from processes_support import (
+
+from rosaos.processes.pool import PoolError, WorkerPool
+
+from .processes_support import (
     Endings,
     KernelStandIn,
     LoopbackDevice,
@@ -21,8 +24,6 @@ from processes_support import (
     pid_alive,
     worker_env,
 )
-
-from rosaos.processes.pool import PoolError, WorkerPool
 
 pytestmark = [pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]
 

@@ -6,10 +6,11 @@ from collections.abc import AsyncIterator
 
 import pytest
 import pytest_asyncio
-from processes_support import Endings, KernelStandIn, LoopbackDevice, make_job, worker_env
 
 from rosaos.processes.capacity import LEAST, default_max_workers
 from rosaos.processes.pool import WorkerPool
+
+from .processes_support import Endings, KernelStandIn, LoopbackDevice, make_job, worker_env
 
 pytestmark = [pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]
 

@@ -6,7 +6,13 @@ import asyncio
 
 import pytest
 from fastmcp import Context, FastMCP
-from processes_support import (
+
+from rosaos.cli.process_commands import progress_text
+from rosaos.devices.serve import serve_http
+from rosaos.processes.manager import ProcessManager
+from rosaos.processes.pool import WorkerPool
+
+from .processes_support import (
     KERNEL_TOKEN,
     TOKEN,
     Endings,
@@ -16,11 +22,6 @@ from processes_support import (
     model_spec,
     worker_env,
 )
-
-from rosaos.cli.process_commands import progress_text
-from rosaos.devices.serve import serve_http
-from rosaos.processes.manager import ProcessManager
-from rosaos.processes.pool import WorkerPool
 
 pytestmark = pytest.mark.slow
 

@@ -12,12 +12,13 @@ import signal
 import sys
 
 import pytest
-from processes_support import Endings, KernelStandIn, make_job
 from pydantic import ValidationError
 
 from rosaos.processes.jobs import WorkerCallback
 from rosaos.processes.protocol import WORKER_MESSAGE, Done, Progress, encode
 from rosaos.processes.watcher import Watcher, Worker
+
+from .processes_support import Endings, KernelStandIn, make_job
 
 STAND_IN = KernelStandIn(url="http://127.0.0.1:9")
 

@@ -6,7 +6,6 @@ from typing import Annotated, Any
 
 import pytest
 from fastmcp import FastMCP
-from processes_support import TOKEN, KernelStandIn, LoopbackDevice, make_job
 from pydantic import Field
 
 from rosaos.devices.serve import serve_http
@@ -14,6 +13,8 @@ from rosaos.drivers import DeviceError
 from rosaos.models.select import ModelSpec
 from rosaos.processes.worker import run_job
 from rosaos.receipts import REDACTED, safety_report, secret_args_meta
+
+from .processes_support import TOKEN, KernelStandIn, LoopbackDevice, make_job, module_name
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 
@@ -44,7 +45,7 @@ async def test_every_call_gets_a_receipt_with_secrets_redacted(kernel: KernelSta
     async with serve_http(build_guarded_device(), TOKEN) as served:
         door = LoopbackDevice("door", served.url, {})
         job = make_job(kernel, "calls_each_scripted_tool", [door])
-        model = ModelSpec(model="python:receipts_test_models:calls_each_scripted_tool")
+        model = ModelSpec(model=f"python:{module_name('receipts_test_models')}:calls_each_scripted_tool")
         callback = await run_job(job.model_copy(update={"model": model}))
     # The refused move was never made good: the process fails (processes/tool_calls.py), and its
     # receipts still say what each call did.

@@ -10,12 +10,21 @@ import json
 from typing import Any
 
 import pytest
-from processes_support import TOKEN, KernelStandIn, LoopbackDevice, build_test_device, make_job, model_spec
 
 from rosaos.devices.serve import serve_http
 from rosaos.events.plan import Plan, PlanStep
 from rosaos.models.select import ModelSpec
 from rosaos.processes.worker import SESSIONS, run_job
+
+from .processes_support import (
+    TOKEN,
+    KernelStandIn,
+    LoopbackDevice,
+    build_test_device,
+    make_job,
+    model_spec,
+    module_name,
+)
 
 pytestmark = pytest.mark.asyncio(loop_scope="module")
 
@@ -210,7 +219,9 @@ async def test_model_that_cannot_be_imported_is_an_error(kernel: KernelStandIn) 
     job = make_job(kernel, "unused").model_copy(update={"model": model_spec("no_such_factory")})
     callback = await run_job(job)
     assert callback.status == "error"
-    assert (callback.error or "").startswith("cannot import model 'process_test_models:no_such_factory'")
+    assert (callback.error or "").startswith(
+        f"cannot import model '{module_name('process_test_models')}:no_such_factory'"
+    )
 
 
 async def test_a_warm_worker_keeps_its_device_session_for_the_next_job(

@@ -1,20 +1,12 @@
-"""Fixtures for the voice tests. Test modules import voice_support from this folder (pytest's
-importlib mode does not put it on sys.path)."""
+"""Fixtures for the voice tests; test modules import ``voice_support`` from this folder relatively."""
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import pytest
 
-HERE = str(Path(__file__).parent)
-if HERE not in sys.path:
-    sys.path.insert(0, HERE)
+from rosaos.frontends.voice.sources import Samples, read_wav
 
-from voice_support import ESPEAK, speak  # noqa: E402
-
-from rosaos.frontends.voice.sources import Samples, read_wav  # noqa: E402
+from .voice_support import ESPEAK, speak
 
 
 @pytest.fixture(scope="session")

@@ -6,11 +6,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from voice_support import chunks_of, needs_espeak, silence, speak
 
 from rosaos.frontends.voice.bargein import SILENCE_DB, BargeIn, BargeInSettings, level_db
 from rosaos.frontends.voice.sources import SAMPLE_RATE, Samples, read_wav
 from rosaos.frontends.voice.vad import SileroClassifier
+
+from .voice_support import chunks_of, needs_espeak, silence, speak
 
 pytestmark = needs_espeak
 ROBOT_SAYS = "Here is the weather for the whole week, day by day, starting with Monday morning."

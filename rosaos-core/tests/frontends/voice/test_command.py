@@ -6,7 +6,6 @@ from pathlib import Path
 
 import pytest
 from typer.testing import CliRunner
-from voice_support import tone
 
 from rosaos.cli import app
 from rosaos.config import load_config
@@ -14,6 +13,8 @@ from rosaos.devices.serve import bind_socket
 from rosaos.frontends.voice.command import _line
 from rosaos.frontends.voice.pipeline import Heard
 from rosaos.frontends.voice.stt import wav_bytes
+
+from .voice_support import tone
 
 
 @pytest.fixture(autouse=True)

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from voice_support import chunks_of, pattern
 
 from rosaos.frontends.voice.early import EarlyTranscriber
 from rosaos.frontends.voice.sources import Samples
@@ -17,6 +16,8 @@ from rosaos.frontends.voice.vad import (
     SileroClassifier,
     SpeechSegment,
 )
+
+from .voice_support import chunks_of, pattern
 
 
 def segments(samples: Samples, drafts: bool = True) -> list[SpeechSegment]:

@@ -13,7 +13,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from voice_support import chunks_of, needs_espeak, silence, speak
 
 from rosaos.config import DeviceConfig
 from rosaos.frontends.voice.end_of_turn import EngineJudge, TurnJudge, command_of, is_whole_command
@@ -23,6 +22,8 @@ from rosaos.frontends.voice.vad import Segmenter, SileroClassifier, SpeechSegmen
 from rosaos.intents.grammar.vocabulary import sources_from_config
 from rosaos.intents.understanding.matching import IntentMatcher
 from rosaos.plugins import load_drivers
+
+from .voice_support import chunks_of, needs_espeak, silence, speak
 
 pytestmark = needs_espeak
 WAKE = ["hello"]

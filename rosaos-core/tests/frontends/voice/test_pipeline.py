@@ -7,13 +7,14 @@ from typing import Any
 
 import numpy as np
 import pytest
-from voice_support import pattern
 
 from rosaos.frontends.voice.pipeline import Heard, KernelHandoff, VoicePipeline, idempotency_key
 from rosaos.frontends.voice.sources import SAMPLE_RATE, AudioChunk, Samples, VoiceError
 from rosaos.frontends.voice.vad import EnergyClassifier, Segmenter
 from rosaos.frontends.voice.wake import WakeGate
 from rosaos.kernel.api.kernel_client import KernelUnavailable
+
+from .voice_support import pattern
 
 
 def test_the_idempotency_key_is_stable_for_the_same_utterance() -> None:

@@ -12,7 +12,6 @@ from typing import Any
 
 import numpy as np
 import pytest
-from voice_support import tone
 
 from rosaos.frontends.voice.sources import (
     SAMPLE_RATE,
@@ -26,6 +25,8 @@ from rosaos.frontends.voice.sources import (
     resample,
 )
 from rosaos.frontends.voice.stt import wav_bytes
+
+from .voice_support import tone
 
 
 def write_wav(path: Path, frames: np.ndarray, rate: int, fmt: int = 1, extensible: bool = False) -> Path:

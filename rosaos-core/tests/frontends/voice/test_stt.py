@@ -14,7 +14,6 @@ import pytest_asyncio
 import uvicorn
 from fastapi import FastAPI, Request
 from fastapi.responses import JSONResponse
-from voice_support import chunks_of, needs_espeak, speak, tone
 
 from rosaos.config import VoiceConfig
 from rosaos.devices.serve import bind_socket
@@ -28,6 +27,8 @@ from rosaos.frontends.voice.stt import (
 )
 from rosaos.frontends.voice.vad import Segmenter, SileroClassifier
 from rosaos.frontends.voice.wake import WakeGate, normalize
+
+from .voice_support import chunks_of, needs_espeak, speak, tone
 
 KEY = "test-key"
 

@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from voice_support import chunks_of, needs_espeak, pattern, tone
 
 from rosaos.frontends.voice.sources import SAMPLE_RATE, Samples
 from rosaos.frontends.voice.vad import EnergyClassifier, Segmenter, SileroClassifier, SpeechSegment
+
+from .voice_support import chunks_of, needs_espeak, pattern, tone
 
 FRAME = 0.03  # the energy classifier's frame
 
