@@ -46,7 +46,9 @@ async def test_a_robot_that_goes_away_mid_call_gives_a_clear_error_quickly(
     assert "dropped" in error and "reconnects by itself" in error
     assert noticed < 1.5
     assert "unreachable" in unreachable and "rosbridge" in unreachable
-    assert answered < 0.5
+    # Answered from the bridge's own state, not after a connect timeout (seconds): 1.5 s leaves room
+    # for a loaded CI machine, where 0.5 s was once missed by 70 ms at load 25.
+    assert answered < 1.5
     assert robot.world.stopped_by == "cmd_vel timeout"  # the driver could not send its zero twist
     assert back < 10 and state["x"] > 0
 

@@ -6,7 +6,14 @@ from typing import Annotated, Any
 
 from fastmcp import Client, FastMCP
 from pydantic import Field
-from pydantic_ai.messages import ModelMessage, ModelResponse, TextPart
+from pydantic_ai.messages import (
+    ModelMessage,
+    ModelRequest,
+    ModelResponse,
+    TextPart,
+    ToolCallPart,
+    UserPromptPart,
+)
 from pydantic_ai.models import ModelRequestParameters
 from pydantic_ai.models.function import AgentInfo, FunctionModel
 from pydantic_ai.tools import ToolDefinition
@@ -88,3 +95,27 @@ async def test_the_wrapped_model_is_sent_compact_tools() -> None:
     assert [tool.name for tool in seen] == ["launch"]
     assert "plan" not in seen[0].parameters_json_schema["properties"]
     assert "plan" in full.parameters_json_schema["properties"]
+
+
+async def test_the_engines_plan_is_taken_out_of_the_history_the_model_reads() -> None:
+    # With prefer_local, the offline engine's launches (with their plan) stay in the kernel's
+    # history; the LLM that handles the next event is sent them without it.
+    seen: list[list[ModelMessage]] = []
+
+    def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        seen.append(messages)
+        return ModelResponse(parts=[TextPart("ok")])
+
+    plan = {"steps": [{"device": "lamp", "tool": "turn_on"}], "reply": "On."}
+    launched = ModelResponse(
+        parts=[TextPart("On it."), ToolCallPart("launch", {"task": "Turn on the lamp.", "plan": plan})]
+    )
+    history: list[ModelMessage] = [ModelRequest(parts=[UserPromptPart("turn on the lamp")]), launched]
+    full = ToolDefinition(name="launch", parameters_json_schema=await schema_of(server(), "launch"))
+    await CompactToolsModel(FunctionModel(respond)).request(
+        history, None, ModelRequestParameters(function_tools=[full])
+    )
+    sent = seen[0][1]
+    assert isinstance(sent, ModelResponse) and isinstance(sent.parts[1], ToolCallPart)
+    assert sent.parts[1].args_as_dict() == {"task": "Turn on the lamp."}
+    assert isinstance(launched.parts[1], ToolCallPart) and "plan" in launched.parts[1].args_as_dict()

@@ -23,6 +23,7 @@ from starlette.types import ASGIApp
 
 from rosaos.auth import BearerAuthMiddleware, HostOriginGuard, bound_hosts
 from rosaos.devices.deadman import HeardMiddleware, deadman_of, running_deadman
+from rosaos.devices.host_notices import HOST_BOARDS, with_host_notices
 from rosaos.devices.latch import add_latch
 from rosaos.devices.world import DeviceInstance
 from rosaos.drivers import SETS, DeviceBackend, DeviceError, no_safe_stop
@@ -105,13 +106,18 @@ def add_notice_route(server: FastMCP, board: NoticeBoard) -> None:
 def device_http_app(server: FastMCP, token: str, allowed_hosts: Iterable[str] = ()) -> ASGIApp:
     """The ASGI app for a device: MCP at ``/mcp``; ``/health`` open; everything else needs the token.
 
+    ``POST /host/notices`` reads every board this process serves at once
+    (:mod:`rosaos.devices.host_notices`).
+
     Only loopback and ``allowed_hosts`` may appear in ``Host``, and a browser only from the same
     origin (:class:`~rosaos.auth.HostOriginGuard`)."""
     mcp_app: ASGIApp = server.http_app(path=MCP_PATH)
     deadman = deadman_of(server)
     if deadman is not None:  # behind the token: only an authenticated request counts as heard
         mcp_app = HeardMiddleware(mcp_app, deadman)
-    guarded = BearerAuthMiddleware(_with_health(mcp_app), token=token, open_paths=[HEALTH_PATH])
+    guarded = BearerAuthMiddleware(
+        _with_health(with_host_notices(mcp_app, token)), token=token, open_paths=[HEALTH_PATH]
+    )
     return HostOriginGuard(guarded, allowed_hosts=allowed_hosts)
 
 
@@ -212,6 +218,8 @@ async def serve_http(
     uv_server = _QuietServer(config)
     task = asyncio.create_task(uv_server.serve(sockets=[sock]))
     served = ServedDevice(url_for(sock), uv_server, task, _BOARDS.get(server))
+    if served.notices is not None:
+        HOST_BOARDS.add(served.notices, token)
     try:
         while not uv_server.started:
             if task.done():
@@ -220,5 +228,7 @@ async def serve_http(
             await asyncio.sleep(0.01)
         yield served
     finally:
+        if served.notices is not None:
+            HOST_BOARDS.remove(served.notices)
         await served.stop()
         sock.close()

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 
 from fastmcp import FastMCP
 from pydantic_ai import Agent
@@ -75,6 +75,23 @@ def kernel_prompt(devices: Iterable[DeviceEndpoint], template: str | None = None
     if "{devices}" in text:
         return text.replace("{devices}", listing)
     return f"{text.rstrip()}\n\nDevices:\n{listing}\n"
+
+
+class KernelPrompt:
+    """:func:`kernel_prompt` for the current device map, built again only when the map changes.
+
+    The kernel's device directory hands out the same map until a device changes, and the prompt
+    is asked for on every event: at 300 lamps, listing them all each time was a walk over every
+    device per event."""
+
+    def __init__(self, template: str | None = None) -> None:
+        self._template = template
+        self._built: tuple[Mapping[str, DeviceEndpoint], str] | None = None
+
+    def __call__(self, devices: Mapping[str, DeviceEndpoint]) -> str:
+        if self._built is None or self._built[0] is not devices:
+            self._built = (devices, kernel_prompt(devices.values(), self._template))
+        return self._built[1]
 
 
 def build_kernel_agent(model: Model, tools: FastMCP) -> Agent[None, str]:

@@ -49,6 +49,7 @@ class DeviceDirectory:
                 attached_prompt=spec.attached_prompt,
                 on_request_tools=tuple(spec.on_request_tools),
                 on_request_pattern=spec.on_request_pattern,
+                host=self._hosting.host_of(name),
             )
         self._cached = (version, endpoints)
         return endpoints

@@ -56,17 +56,25 @@ class LiveProcess(BaseModel):
 
 
 class LiveProcesses:
-    """The store's list of running processes (the ``live_processes`` value)."""
+    """The store's list of running processes (the ``live_processes`` value).
+
+    The store is the truth across a crash; this kernel is its only writer, so it reads it once and
+    then keeps a copy, each record also kept as it is written. A launch or an end then parses and
+    validates one record, not every live process and every remembered cause (at a burst of 300
+    commands that was most of the kernel's work per event)."""
 
     def __init__(self, store: EventStore) -> None:
         self._store = store
         self._lock = asyncio.Lock()  # launches and ends interleave at awaits
+        self._live: dict[int, LiveProcess] | None = None
+        self._written: dict[str, dict[str, Any]] = {}  # the same, as stored
+        self._kept_causes: dict[str, Any] | None = None
 
     async def launched(self, info: ProcessInfo, cause: LaunchCause | None = None) -> None:
         """Remember a process that is being launched, and what launched it: call before it starts."""
         async with self._lock:
             live = await self._read()
-            live[info.id] = LiveProcess(
+            process = LiveProcess(
                 id=info.id,
                 task=info.task,
                 devices=info.devices,
@@ -76,12 +84,15 @@ class LiveProcesses:
                 event_id=cause.event_id if cause else None,
                 step=cause.step if cause else None,
             )
+            live[info.id] = process
+            self._written[str(info.id)] = process.model_dump(mode="json")
             if cause is not None:
                 causes = await self._causes()
                 causes[_cause_key(cause)] = info.id
-                kept = dict(list(causes.items())[-CAUSES_KEPT:])
-                await self._store.set_value(LAUNCH_CAUSES_KEY, kept)
-            await self._write(live)
+                while len(causes) > CAUSES_KEPT:
+                    del causes[next(iter(causes))]
+                await self._store.set_value(LAUNCH_CAUSES_KEY, causes)
+            await self._write()
 
     async def launched_for(self, cause: LaunchCause) -> int | None:
         """The process a launch with this cause started before, if the store remembers one."""
@@ -89,21 +100,26 @@ class LiveProcesses:
         return process_id if isinstance(process_id, int) else None
 
     async def _causes(self) -> dict[str, Any]:
-        stored = await self._store.get_value(LAUNCH_CAUSES_KEY)
-        return dict(stored) if isinstance(stored, dict) else {}
+        if self._kept_causes is None:
+            stored = await self._store.get_value(LAUNCH_CAUSES_KEY)
+            self._kept_causes = dict(stored) if isinstance(stored, dict) else {}
+        return self._kept_causes
 
     async def ended(self, process_id: int) -> None:
         """Forget a process whose end was recorded."""
         async with self._lock:
             live = await self._read()
             if live.pop(process_id, None) is not None:
-                await self._write(live)
+                self._written.pop(str(process_id), None)
+                await self._write()
 
     async def left(self) -> list[LiveProcess]:
         """The processes the store lists as running: at start-up, those a dead kernel left."""
         return sorted((await self._read()).values(), key=lambda p: p.id)
 
     async def _read(self) -> dict[int, LiveProcess]:
+        if self._live is not None:
+            return self._live
         stored = await self._store.get_value(LIVE_PROCESSES_KEY) or {}
         live = {}
         for raw in stored.values() if isinstance(stored, dict) else []:
@@ -113,12 +129,12 @@ class LiveProcesses:
                 log.error("ignoring an unreadable live process record: %r", raw)
                 continue
             live[process.id] = process
+            self._written[str(process.id)] = process.model_dump(mode="json")
+        self._live = live
         return live
 
-    async def _write(self, live: Mapping[int, LiveProcess]) -> None:
-        await self._store.set_value(
-            LIVE_PROCESSES_KEY, {str(key): value.model_dump(mode="json") for key, value in live.items()}
-        )
+    async def _write(self) -> None:
+        await self._store.set_value(LIVE_PROCESSES_KEY, self._written)
 
 
 async def recover_orphans(

@@ -30,7 +30,7 @@ from rosaos.devices.supervisor import DeviceSupervisor
 from rosaos.devices.world import World
 from rosaos.events.plan import Plan
 from rosaos.kernel.activity import ActivityLog
-from rosaos.kernel.agent import build_kernel_agent, kernel_prompt
+from rosaos.kernel.agent import KernelPrompt, build_kernel_agent
 from rosaos.kernel.device_directory import DeviceDirectory
 from rosaos.kernel.device_status import DeviceStatusUpdates
 from rosaos.kernel.emergency_stop import EmergencyStopControl, stored_emergency_stop
@@ -261,13 +261,12 @@ async def build_parts(
     add_stop_tools(
         tools, stopper, manager, endpoints, lambda report: stop_at_intake.merged(current.event_id, report)
     )
+    prompt = KernelPrompt(kernel.kernel_prompt)
     loop = KernelLoop(
         store,
         updates,
         build_kernel_agent(models.kernel, tools),
-        instructions=lambda: (
-            kernel_prompt(endpoints().values(), kernel.kernel_prompt) + memory_summary(memory)
-        ),
+        instructions=lambda: prompt(endpoints()) + memory_summary(memory),
         model=models.for_event,
         history_budget=kernel.history_messages,
         current=current,

@@ -7,8 +7,9 @@ from the typed signatures: the MCP servers validate calls with them, and the off
 their bounds. :class:`CompactToolsModel` changes only what a model is sent:
 
 - a parameter marked :data:`ENGINE_ONLY` (``launch_process``'s ``plan``: the offline engine's
-  exact calls, 3 KB of nested schema) is left out; a model that sent one anyway is still
-  validated by the server;
+  exact calls, 3 KB of nested schema) is left out, and so is its value in the calls of the
+  history (with ``prefer_local``, the engine's launches stay in the history the LLM reads next);
+  a model that sent one anyway is still validated by the server;
 - an optional parameter written as ``anyOf: [X, null]`` with ``default: null`` becomes X, left
   out of ``required``: a model omits it the same way;
 - ``title`` keys are dropped, and so are the length bounds of free text (``minLength: 1``, a
@@ -27,7 +28,7 @@ from contextlib import asynccontextmanager
 from typing import Any
 
 from pydantic_ai import RunContext
-from pydantic_ai.messages import ModelMessage, ModelResponse
+from pydantic_ai.messages import ModelMessage, ModelResponse, ToolCallPart
 from pydantic_ai.models import ModelRequestParameters, StreamedResponse
 from pydantic_ai.models.wrapper import WrapperModel
 from pydantic_ai.settings import ModelSettings
@@ -124,6 +125,48 @@ def compact_parameters(parameters: ModelRequestParameters) -> ModelRequestParame
     )
 
 
+def engine_only_arguments(parameters: ModelRequestParameters) -> dict[str, frozenset[str]]:
+    """Per tool, the names of its :data:`ENGINE_ONLY` parameters (from the full schemas)."""
+    found: dict[str, frozenset[str]] = {}
+    for tool in parameters.function_tools:
+        properties = tool.parameters_json_schema.get("properties", {})
+        names = frozenset(
+            name for name, prop in properties.items() if isinstance(prop, dict) and prop.get(ENGINE_ONLY)
+        )
+        if names:
+            found[tool.name] = names
+    return found
+
+
+def without_engine_only_arguments(
+    messages: list[ModelMessage], engine_only: dict[str, frozenset[str]]
+) -> list[ModelMessage]:
+    """``messages`` with the engine-only arguments taken out of their tool calls (the input is not changed)."""
+    if not engine_only:
+        return messages
+    result: list[ModelMessage] = []
+    for message in messages:
+        if isinstance(message, ModelResponse) and any(
+            isinstance(part, ToolCallPart) and part.tool_name in engine_only for part in message.parts
+        ):
+            parts = [
+                _without(part, engine_only[part.tool_name])
+                if isinstance(part, ToolCallPart) and part.tool_name in engine_only
+                else part
+                for part in message.parts
+            ]
+            message = dataclasses.replace(message, parts=parts)
+        result.append(message)
+    return result
+
+
+def _without(call: ToolCallPart, names: frozenset[str]) -> ToolCallPart:
+    args = call.args_as_dict()
+    if not names & args.keys():
+        return call
+    return dataclasses.replace(call, args={key: value for key, value in args.items() if key not in names})
+
+
 class CompactToolsModel(WrapperModel):
     """An LLM that is sent compact tool schemas (:func:`compact_tool`); everything else passes through.
 
@@ -137,6 +180,7 @@ class CompactToolsModel(WrapperModel):
         model_settings: ModelSettings | None,
         model_request_parameters: ModelRequestParameters,
     ) -> ModelResponse:
+        messages = without_engine_only_arguments(messages, engine_only_arguments(model_request_parameters))
         return await self.wrapped.request(
             messages, model_settings, compact_parameters(model_request_parameters)
         )
@@ -149,6 +193,7 @@ class CompactToolsModel(WrapperModel):
         model_request_parameters: ModelRequestParameters,
         run_context: RunContext[Any] | None = None,
     ) -> AsyncIterator[StreamedResponse]:
+        messages = without_engine_only_arguments(messages, engine_only_arguments(model_request_parameters))
         parameters = compact_parameters(model_request_parameters)
         async with self.wrapped.request_stream(messages, model_settings, parameters, run_context) as stream:
             yield stream

@@ -175,22 +175,34 @@ class NoticeBoard:
             notices = [notice for notice in self._notices if notice.seq > start]
             return NoticeBatch(board=self.board, next=self._seq, notices=notices)
 
+    @property
+    def closed(self) -> bool:
+        """The server is stopping: long polls are answered at once."""
+        return self._closed
+
+    def watch(self, event: asyncio.Event) -> None:
+        """Set ``event`` (once) at the next post or when the board closes."""
+        with self._lock:
+            self._waiters.append((asyncio.get_running_loop(), event))
+
+    def unwatch(self, event: asyncio.Event) -> None:
+        with self._lock:
+            self._waiters = [w for w in self._waiters if w[1] is not event]
+
     async def wait_after(self, seq: int, board: str | None = None, wait: float = 0.0) -> NoticeBatch:
         """Like :meth:`after`, but waits up to ``wait`` seconds for one to arrive (long poll)."""
         batch = self.after(seq, board)
         if batch.notices or wait <= 0 or self._closed:
             return batch
         event = asyncio.Event()
-        with self._lock:
-            self._waiters.append((asyncio.get_running_loop(), event))
+        self.watch(event)
         try:
             async with asyncio.timeout(min(wait, MAX_WAIT)):
                 await event.wait()
         except TimeoutError:
             pass
         finally:
-            with self._lock:
-                self._waiters = [w for w in self._waiters if w[1] is not event]
+            self.unwatch(event)
         return self.after(seq, board)
 
 

@@ -41,6 +41,11 @@ class LeaseTable:
 
     def __init__(self) -> None:
         self._leases: dict[int, list[Lease]] = {}
+        self._by_device: dict[str, list[Lease]] = {}
+        """The same leases by device: a grant looks its devices up, it does not walk every lease."""
+        self._attached: tuple[Mapping[str, DeviceEndpoint], list[str]] | None = None
+        """The always-attached devices of the last device map (the kernel's is rebuilt only when a
+        device changes): a burst of grants does not walk a hundred devices each."""
 
     def acquire(
         self,
@@ -82,9 +87,7 @@ class LeaseTable:
                     "choose another device, or try again once it is healthy"
                 )
         implicit = [
-            name
-            for name, device in devices.items()
-            if device.always_attached and device.grantable and name not in wanted
+            name for name in self._always_attached(devices) if devices[name].grantable and name not in wanted
         ]
         granted = wanted + implicit
 
@@ -101,11 +104,25 @@ class LeaseTable:
             raise LeaseRefused("\n".join(problems), holders=held)
 
         self._leases[process_id] = [Lease(name, process_id, task) for name in granted]
+        for lease in self._leases[process_id]:
+            self._by_device.setdefault(lease.device, []).append(lease)
         return granted
 
     def release(self, process_id: int) -> list[str]:
         """Release every device ``process_id`` holds; returns their names. Releasing twice is fine."""
-        return [lease.device for lease in self._leases.pop(process_id, [])]
+        released = self._leases.pop(process_id, [])
+        for lease in released:
+            remaining = [held for held in self._by_device.get(lease.device, []) if held is not lease]
+            if remaining:
+                self._by_device[lease.device] = remaining
+            else:
+                self._by_device.pop(lease.device, None)
+        return [lease.device for lease in released]
+
+    def _always_attached(self, devices: Mapping[str, DeviceEndpoint]) -> list[str]:
+        if self._attached is None or self._attached[0] is not devices:
+            self._attached = (devices, [name for name, device in devices.items() if device.always_attached])
+        return self._attached[1]
 
     def held_by(self, process_id: int) -> list[str]:
         """The devices ``process_id`` holds, in grant order (empty when it holds none)."""
@@ -122,11 +139,8 @@ class LeaseTable:
     def _exclusive_holder(self, name: str, device: DeviceEndpoint) -> Lease | None:
         if device.concurrency != "exclusive":
             return None
-        for leases in self._leases.values():
-            for lease in leases:
-                if lease.device == name:
-                    return lease
-        return None
+        leases = self._by_device.get(name)
+        return leases[0] if leases else None
 
 
 def _headline(task: str, limit: int = 80) -> str:

@@ -39,6 +39,14 @@ def test_world_phrases_hold_names_aliases_rooms_and_catalog_entries() -> None:
         ("Ah, knock the turtle, but", "Ah, knock the turtlebot"),
         ("Drive the Turtle Moth forward one meter.", "Drive the turtlebot forward one meter."),
         ("Play something by Claude Debusy", "Play something by Claude debussy"),
+        # Bent into other words: matched by how they sound (consonants in order), not by letters.
+        ("Send the total not back to its dock.", "Send the turtlebot back to its dock."),
+        ("Turn the total button 90 degrees.", "Turn the turtlebot 90 degrees."),
+        (
+            "And knock the turtle out and turn the lamp blue.",
+            "And knock the turtlebot and turn the lamp blue.",
+        ),
+        ("Play Clara blue", "Play Clair de Lune"),
     ],
 )
 def test_near_misses_of_long_names_are_mended(heard: str, mended: str) -> None:
@@ -52,6 +60,12 @@ def test_near_misses_of_long_names_are_mended(heard: str, mended: str) -> None:
         "Make the dog walk forward.",
         "Send the turtlebot back to its dock.",
         "Turn the music up and tell me a story.",
+        "Turn the turtlebot 90 degrees to the left.",
+        "Make the dog walk forward and play Here Comes the Sun.",
+        "Set the floor lamp to warm white.",
+        "Play something by Claude Debussy.",
+        "Tell the drone to take off.",
+        "Turn the total lights down.",
     ],
 )
 def test_right_sentences_are_left_alone(right: str) -> None:

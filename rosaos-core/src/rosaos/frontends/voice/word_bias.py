@@ -43,6 +43,8 @@ MIN_LETTERS = 3
 """Shorter beginnings ("t", "do") are too common to mean a word of this world."""
 NOT_BIASED = frozenset({"the", "and", "for", "off", "you", "your", "with", "from", "its", "all", "some"})
 """Common words (from catalog titles, or "off" against "on") a bonus would only put in wrongly."""
+SMALL_WORDS = NOT_BIASED | {"a", "an", "at", "by", "in", "is", "it", "me", "my", "of", "on", "to", "up"}
+"""Words a mended name never begins or ends with: "to the left" is no "turtlebot"."""
 MIN_NAME_LETTERS = 6
 """Only names this long are mended from near misses: shorter ones ("dog") have too many neighbours."""
 
@@ -77,6 +79,18 @@ class Bias:
             if len(word) >= MIN_NAME_LETTERS
         )
         """Words :meth:`correct` mends toward: the long words of names, rooms and titles."""
+        spaced = {normalize(phrase).replace(" ", "") for phrase in phrases if " " in normalize(phrase)}
+        self.sounds = {
+            sound(phrase): phrase
+            for phrase in (*phrases, *self.names)
+            if len(sound(phrase)) >= MIN_SOUNDS
+            and (
+                " " in normalize(phrase) or normalize(phrase) not in spaced
+            )  # "livingroomlamp" is a spelling
+            and not set(normalize(phrase).split()) <= self.words - self.names
+        }
+        """How each name, room and title sounds (:func:`sound`), for mending what was misheard as other words."""
+        self.known = self.words | self.names | NOT_BIASED
         self._prefixes = frozenset(
             word[:end] for word in self.words for end in range(MIN_LETTERS, len(word) + 1)
         )
@@ -109,37 +123,94 @@ class Bias:
         out: list[str] = []
         i = 0
         while i < len(words):
-            for size in (3, 2, 1):
-                window = words[i : i + size]
-                if len(window) < size:
-                    continue
-                name = self._near_name(window)
-                if name is not None:
-                    tail = window[-1][len(window[-1].rstrip(".,!?;:")) :]  # keep the punctuation
-                    out.append(name + tail)
-                    i += size
-                    break
+            found = [
+                (match[0], size, match[1])
+                for size in (3, 2, 1)
+                if i + size <= len(words)
+                and SMALL_WORDS.isdisjoint({normalize(words[i]), normalize(words[i + size - 1])})
+                for match in [self._near_name(words[i : i + size])]
+                if match is not None
+            ]
+            if found:
+                _, size, name = min(
+                    found, key=lambda match: (match[0], -match[1])
+                )  # closest; then most words
+                last = words[i + size - 1]
+                out.append(name + last[len(last.rstrip(".,!?;:")) :])  # keep the punctuation
+                i += size
             else:
                 out.append(words[i])
                 i += 1
         return " ".join(out)
 
-    def _near_name(self, window: list[str]) -> str | None:
-        """The name ``window`` is a near miss of, if any (not when it already is one)."""
+    def _near_name(self, window: list[str]) -> tuple[int, str] | None:
+        """The name ``window`` is a near miss of, and how near, if any (not when it already is one).
+
+        By letters first ("turtle moth", "Debusy"), then by sound ("total not", "Clara blue"); a
+        sound match must begin with a word that is not this world's ("the dock", "turtlebot 90"
+        stay), and hold no number.
+        """
         plain = [normalize(word) for word in window]
-        if len(window) > 1 and any(word in self.words or word in self.names for word in plain[1:]):
-            return None  # "the dock": words of this world in their own right stay apart
         letters = "".join(plain).replace(" ", "")
-        if letters in self.names or (len(window) == 1 and plain[0] in self.words):
+        if letters in self.names or plain[0] in self.names or any(c.isdigit() for c in letters):
+            return None  # already a name, or a name and what follows it ("turtlebot 90")
+        if len(window) == 1 and plain[0] in self.words:
             return None
-        best: tuple[int, str] | None = None
-        for name in self.names:
-            if abs(len(name) - len(letters)) > 2:
-                continue
-            distance = _edits(letters, name)
-            if distance <= max(1, len(name) // 4) and (best is None or distance < best[0]):
-                best = (distance, name)
-        return best[1] if best else None
+        if len(window) == 1 or not any(word in self.words or word in self.names for word in plain[1:]):
+            for name in self.names:  # "the dock": words of this world in their own right stay apart
+                distance = _edits(letters, name) if abs(len(name) - len(letters)) <= 2 else len(name)
+                if distance <= max(1, len(name) // 4):
+                    return distance, name
+        if plain[0] in self.known or not self.names.isdisjoint(plain):
+            return None
+        heard = sound(" ".join(plain))
+        matches = [
+            (_edits(heard, key), phrase)
+            for key, phrase in self.sounds.items()
+            if abs(len(key) - len(heard)) <= 1 and _edits(heard, key) <= (1 if len(key) < 6 else 2)
+        ]
+        return min((match for match in matches if self._word_for_word(plain, match[1])), default=None)
+
+    def _word_for_word(self, plain: list[str], phrase: str) -> bool:
+        """A phrase of as many words as was heard must sound alike word by word.
+
+        "garage light" is not "kitchen light" (the whole sounds close, "garage" and "kitchen" do not).
+        """
+        words = normalize(phrase).split()
+        if len(words) != len(plain) or len(words) == 1:
+            return True
+        return all(_edits(sound(a), sound(b)) <= 1 for a, b in zip(plain, words, strict=True))
+
+
+def sound(text: str) -> str:
+    """A rough key of how ``text`` sounds, to match what a recognizer bent into other words.
+
+    Consonants only, with spelling variants and voicing folded together ("turtle not" →
+    ``trtlnt``, "turtlebot" → ``trtlpt``; "Clara blue" → ``klrpl``, "Clair de Lune" → ``klrtln``):
+    an engine that mishears a name keeps most of its consonants and their order.
+    """
+    words = []
+    for word in normalize(text).split():
+        for spelled, said in _SPELLINGS:
+            word = word.replace(spelled, said)
+        word = word[1:] if word.startswith("kn") else word
+        words.append("".join(letter for i, letter in enumerate(word) if i == 0 or word[i - 1] != letter))
+    return "".join(words).translate(_FOLD)
+
+
+_SPELLINGS = (
+    ("ph", "f"),
+    ("ck", "k"),
+    ("gh", ""),
+    ("sh", "s"),
+    ("ch", "k"),
+    ("th", "t"),
+    ("qu", "kw"),
+    ("x", "ks"),
+)
+_FOLD = str.maketrans("bdgvzcq", "ptkfskk", "aeiouwyh")
+MIN_SOUNDS = 4
+"""Shorter keys ("dog": ``tk``) match too many ordinary words to mend toward."""
 
 
 def _edits(a: str, b: str) -> int:
