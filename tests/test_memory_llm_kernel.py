@@ -1,7 +1,8 @@
 """An LLM kernel's memory: a scripted ``FunctionModel`` kernel saves a place and an alias with the
 memory tools, the kernel restarts, and the model sends the robot to the place with ``go_to_place``
 and names the dog by the alias it reads in its prompt's memory summary. A place saved on the
-dog's odometry is refused after it restarts from another origin.
+dog's odometry is refused after it restarts from another origin. After the turtlebot saw someone,
+"show me" is ``show_sighting``, whose picture address the kernel serves.
 
 Everything else is what ``rosaos up`` runs: event store, loop, process manager, worker
 subprocesses, the rosbridge simulators over MCP HTTP.
@@ -47,6 +48,10 @@ SCRIPT = {
     ),
     "go to the kitchen": ToolCallPart("go_to_place", {"name": "the kitchen"}),
     "go to the doghouse": ToolCallPart("go_to_place", {"name": "the doghouse"}),
+    "look for someone": ToolCallPart(
+        "launch_process", {"task": "call detect_people {}", "devices": ["turtlebot"]}
+    ),
+    "show me": ToolCallPart("show_sighting", {}),
 }
 
 
@@ -136,3 +141,23 @@ async def test_an_llm_kernel_uses_places_and_aliases_across_a_restart(tmp_path: 
         assert launched == "On it.", launched
         assert walked == "done 1 calls", walked
         assert (await device_state(kernel, "dog"))["x"] - dog["x"] > 0.9
+
+
+SEEING_WORLD = """
+[devices.turtlebot]
+driver = "ros"
+description = "TurtleBot 4 wheeled mobile robot"
+sim = { profile = "turtlebot4", x = 0.0, y = 1.0, docked = false, people = [{ x = 3.0, y = 1.0 }] }
+"""
+
+
+async def test_an_llm_kernel_shows_the_picture_of_what_a_robot_saw(tmp_path: Path) -> None:
+    async with running_kernel(tmp_path, SEEING_WORLD, **options()) as kernel, kernel_api(kernel) as api:
+        launched, done = await chat(api, "look for someone", count=2)
+        assert done == "done 1 calls", (launched, done)
+        [shown] = await chat(api, "show me")
+        assert shown.startswith("show_sighting success"), shown
+        address = re.search(r"/sightings/\d+/picture", shown)
+        assert address is not None, shown
+        picture = await api.get(address[0])
+        assert picture.status_code == 200 and picture.headers["content-type"] == "image/jpeg"

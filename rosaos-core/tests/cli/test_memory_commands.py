@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import json
+import time
 from pathlib import Path
 
 from typer.testing import CliRunner
 
 from rosaos.cli.root import app
+from rosaos.memory.sightings import SightingLog
 from rosaos.memory.store import MemoryStore
+from rosaos.receipts import Receipt
 
 runner = CliRunner()
 
@@ -62,3 +65,39 @@ def test_memory_list_forget_export_and_clear(tmp_path: Path) -> None:
     assert runner.invoke(app, ["memory", "forget", "nothing", "like", "this"]).exit_code == 1
     assert runner.invoke(app, ["memory", "clear", "--yes"]).exit_code == 0
     assert store(tmp_path).notes() == []
+
+
+def test_memory_sightings_lists_them_and_memory_picture_prints_the_newest_pictures_file(
+    tmp_path: Path,
+) -> None:
+    images = tmp_path / "data" / "images"
+    images.mkdir(parents=True)
+    (images / "turtlebot-1.jpg").write_bytes(b"\xff\xd8 a picture")
+    log = SightingLog(store(tmp_path), images_dir=images)
+    person = {"x": 1.0, "y": 2.0, "frame": "odom", "anchor": "odom:turtlebot:1"}
+    with_picture, without = (
+        Receipt(device="turtlebot", tool="detect_people", ok=True, started=time.time() - age, duration=0.1,
+                result=json.dumps({"people": [person], "image": image}))
+        for age, image in ((60, "turtlebot-1.jpg"), (0, "turtlebot-deleted.jpg"))
+    )  # fmt: skip
+    [first] = log.record_receipts([with_picture])
+    [second] = log.record_receipts([without])
+
+    listed = json.loads(runner.invoke(app, ["memory", "sightings", "--json"]).output)
+    assert [(s["id"], s["picture_file"]) for s in listed] == [
+        (second.id, None),
+        (first.id, str((images / "turtlebot-1.jpg").resolve())),
+    ]
+    assert "turtlebot" in runner.invoke(app, ["memory", "sightings"]).output
+    # The newest with a picture: the second one's file was deleted.
+    newest = runner.invoke(app, ["memory", "picture"])
+    assert newest.exit_code == 0 and newest.output.strip() == str((images / "turtlebot-1.jpg").resolve())
+    gone = runner.invoke(app, ["memory", "picture", str(second.id)])
+    assert gone.exit_code == 1 and f"sighting {second.id} has no picture" in gone.output
+    unknown = runner.invoke(app, ["memory", "picture", "99"])
+    assert unknown.exit_code == 1 and "no sighting 99" in unknown.output
+
+
+def test_memory_picture_without_any_sighting_says_how_to_list_them(tmp_path: Path) -> None:
+    result = runner.invoke(app, ["memory", "picture"])
+    assert result.exit_code == 1 and "rosaos memory sightings" in result.output

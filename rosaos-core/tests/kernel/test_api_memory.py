@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import time
+from pathlib import Path
 
 import httpx
 
@@ -11,6 +12,8 @@ from rosaos.memory.store import Place
 from rosaos.receipts import Receipt
 
 from .kernel_support import AUTH, TestRuntime
+
+JPEG = b"\xff\xd8\xff\xe0 a sighting's picture"
 
 
 def detection(at: float, x: float, y: float) -> Receipt:
@@ -128,3 +131,32 @@ async def test_memory_routes_need_the_token(client: httpx.AsyncClient) -> None:
     assert (await client.patch("/places/the kitchen", json={"name": "x"})).status_code == 401
     assert (await client.delete("/places/the kitchen")).status_code == 401
     assert (await client.get("/sightings", params={"limit": 0}, headers=AUTH)).status_code == 422
+
+
+def save_picture(path: Path) -> None:
+    path.parent.mkdir(exist_ok=True)
+    path.write_bytes(JPEG)
+
+
+async def test_a_sightings_picture_is_served_behind_the_token_and_the_host_check(
+    client: httpx.AsyncClient, runtime: TestRuntime, images_dir: Path
+) -> None:
+    save_picture(images_dir / "turtlebot-1.jpg")
+    [seen] = runtime.sightings.record_receipts([detection(time.time(), 1.0, 1.0)])
+    picture = await client.get(f"/sightings/{seen.id}/picture", headers=AUTH)
+    assert picture.status_code == 200
+    assert picture.headers["content-type"] == "image/jpeg" and picture.content == JPEG
+    assert (await client.get(f"/sightings/{seen.id}/picture")).status_code == 401
+    foreign = await client.get(f"/sightings/{seen.id}/picture", headers={**AUTH, "Host": "evil.example:8765"})
+    assert foreign.status_code == 421 and "is not served here" in foreign.json()["detail"]
+
+
+async def test_an_unknown_sighting_or_one_whose_picture_is_gone_is_404_saying_why(
+    client: httpx.AsyncClient, runtime: TestRuntime, images_dir: Path
+) -> None:
+    [seen] = runtime.sightings.record_receipts([detection(time.time(), 1.0, 1.0)])
+    unknown = await client.get(f"/sightings/{seen.id + 1}/picture", headers=AUTH)
+    assert unknown.status_code == 404 and "GET /sightings lists them" in unknown.json()["detail"]
+    gone = await client.get(f"/sightings/{seen.id}/picture", headers=AUTH)
+    assert gone.status_code == 404 and "has no picture" in gone.json()["detail"]
+    assert (await client.get("/sightings/0/picture", headers=AUTH)).status_code == 422

@@ -17,6 +17,7 @@ from rosaos.memory.memory_phrases import (
     RecallSightings,
     RememberNote,
     RememberPlace,
+    ShowSighting,
     UnknownPlace,
     apply_preferences,
     read_memory_request,
@@ -62,6 +63,10 @@ KNOWN = {"kitchen", "charging corner"}
         ("Where did you last see someone?", RecallSightings()),
         ("has anyone been in the kitchen today?", RecallSightings("the kitchen", today=True)),
         ("forget what you saw", ForgetSightings()),
+        ("Show me", ShowSighting()),
+        ("show me the picture please", ShowSighting()),
+        ("let me see them", ShowSighting()),
+        ("show me a dance", None),  # the Reachy's
         ("turn on the kitchen light", None),
     ],
 )

@@ -25,6 +25,7 @@ memory_app = typer.Typer(
     no_args_is_help=True,
 )
 if TYPE_CHECKING:
+    from rosaos.memory.sightings import SightingLog
     from rosaos.memory.store import MemoryStore
 
 PlaceArgument = Annotated[str, typer.Argument(help="The place's name, e.g. 'the kitchen'.")]
@@ -39,6 +40,16 @@ def _store(config: Path | None) -> MemoryStore:
     except ConfigError as error:
         typer.echo(f"error: {error}", err=True)
         raise typer.Exit(2) from None
+
+
+def _sightings(config: Path | None) -> SightingLog:
+    from rosaos.config import load_config
+    from rosaos.memory.sightings import SightingLog
+
+    settings = load_config(config)  # _store already said what is wrong with a bad config
+    return SightingLog(
+        _store(config), settings.memory.sightings_days, images_dir=settings.data_dir / "images"
+    )
 
 
 def _fail(error: Exception) -> typer.Exit:
@@ -177,6 +188,55 @@ def memory_forget(
         )
     for note in gone:
         typer.echo(f"forgot: {note.said}")
+
+
+@memory_app.command("sightings")
+def memory_sightings(config: ConfigOption = None, json_output: JsonOption = False) -> None:
+    """List what the robots saw, newest first: id, what, when, robot, nearest place, picture file."""
+    from rosaos.memory.sightings import ago
+
+    log = _sightings(config)
+    seen = log.recent(limit=500)
+    if json_output:
+        rows = [s.model_dump(mode="json") | {"picture_file": _file(log.picture(s))} for s in seen]
+        typer.echo(json.dumps(rows, indent=2))
+        return
+    if not seen:
+        typer.echo(f"nothing seen in the last {log.keep_days:g} days")
+        return
+    table = Table("id", "what", "when", "robot", "place", "picture")
+    for s in seen:
+        table.add_row(str(s.id), s.what, ago(s.at), s.device, s.place or "", _file(log.picture(s)) or "")
+    terminal().print(table)
+
+
+@memory_app.command("picture")
+def memory_picture(
+    sighting_id: Annotated[
+        int | None, typer.Argument(help="The sighting's id (`rosaos memory sightings`); default: the newest.")
+    ] = None,
+    config: ConfigOption = None,
+) -> None:
+    """Print the file path of a sighting's picture ("show me", from the shell)."""
+    log = _sightings(config)
+    found = log.get(sighting_id) if sighting_id is not None else log.with_picture()
+    if found is None:
+        which = f"sighting {sighting_id}" if sighting_id is not None else "sighting with a picture"
+        raise _fail(
+            ValueError(f"no {which} in the last {log.keep_days:g} days; `rosaos memory sightings` lists them")
+        )
+    path = log.picture(found)
+    if path is None:
+        raise _fail(
+            ValueError(
+                f"sighting {found.id} has no picture on this machine (none was taken, or it was deleted)"
+            )
+        )
+    typer.echo(str(path.resolve()))
+
+
+def _file(path: Path | None) -> str | None:
+    return str(path.resolve()) if path is not None else None
 
 
 @memory_app.command("clear")

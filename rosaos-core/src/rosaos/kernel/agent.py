@@ -39,7 +39,8 @@ and degrees, never radians.
 its action now, and say how late if it is late.
 - Places: remember_place, go_to_place (never a made-up go_to), list_places, forget_place. What \
 people tell you ("call the dog Rex": alias rex, the dog): remember, recall, forget. Who was seen: \
-recall_sightings, forget_sightings.
+recall_sightings, forget_sightings; "show me": show_sighting, and put its picture address in \
+the reply.
 - A step that waits on another's outcome ("search for a person, and if found turn the lamp \
 green"): launch only the first, with then="<next step>" and only its devices. On its callback \
 (then='...' on the first line) launch the next only if status=ok and the output shows it (found: true); tell the user \

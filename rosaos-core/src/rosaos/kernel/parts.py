@@ -219,7 +219,12 @@ async def build_parts(
     await devices.settle(owed)
     # Opened before orphan recovery: a process end it queues records its sightings.
     memory = MemoryStore.open(data_dir)
-    sightings = SightingLog(memory, config.memory.sightings_days)
+    origins = {
+        n: (d.map_origin.x, d.map_origin.y, d.map_origin.yaw)
+        for n, d in config.devices.items()
+        if d.map_origin
+    }
+    sightings = SightingLog(memory, config.memory.sightings_days, origins, data_dir / "images")
     # Side effects of an event's arrival: registered here, before anything can queue an event
     # (orphan recovery below is the first). The intake runs them once the event is committed and
     # published, whether or not a kernel turn is running (kernel/intake.py). A per-event action

@@ -28,6 +28,7 @@ MEMORY_TOOL_NAMES = (
     "forget",
     "recall_sightings",
     "forget_sightings",
+    "show_sighting",
 )
 
 _NUMBER = r"(?:minus |negative |-)?\d+(?:\.\d+)?"
@@ -63,6 +64,10 @@ _LAST_SEEN = re.compile(
 )
 _BEEN_IN = re.compile(
     r"^(?:has|have) (?:anyone|anybody|someone|somebody) been (?:in|at|near) (?P<place>.+?)(?P<today> today)?$"
+)
+_SHOW = re.compile(
+    r"^(?:(?:please )?show me|let me see)(?: (?:the |that |a |your )?(?:picture|photo|image|pic)"
+    r"| (?:him|her|them|it|that|who (?:you saw|it was)))?(?: please)?$"
 )
 _FORGET_SEEN = re.compile(r"^forget (?:what|everything|who) (?:you(?:'ve| have)? )?(?:saw|seen)$")
 _RECALL = re.compile(
@@ -128,6 +133,11 @@ class ForgetSightings:
 
 
 @dataclass(frozen=True)
+class ShowSighting:
+    """ "Show me" (after "where did you last see someone?"): the newest sighting's picture."""
+
+
+@dataclass(frozen=True)
 class UnknownPlace:
     """ "Go to X" with no place X: the reply names the places there are."""
 
@@ -145,6 +155,7 @@ MemoryRequest = (
     | UnknownPlace
     | RecallSightings
     | ForgetSightings
+    | ShowSighting
 )
 
 
@@ -164,6 +175,8 @@ def read_memory_request(text: str, places: Collection[str]) -> MemoryRequest | N
         return RecallSightings(_name(found["place"]), bool(found["today"]))
     if _FORGET_SEEN.match(said):
         return ForgetSightings()
+    if _SHOW.match(said):
+        return ShowSighting()
     if found := _REMEMBER_AT.match(said):
         yaw = math.radians(_number(found["yaw"])) if found["yaw"] else None
         return RememberPlace(_name(found["name"]), _number(found["x"]), _number(found["y"]), yaw)

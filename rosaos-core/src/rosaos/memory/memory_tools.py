@@ -5,7 +5,9 @@ engine and an LLM kernel use the same ones:
 
 - ``remember_place``, ``list_places``, ``forget_place``, ``go_to_place`` (it launches a process
   that calls the robot's ``go_to`` with the place's frame anchor; the callback says how it went);
-- ``remember``, ``recall``, ``forget``: facts, aliases and preferences.
+- ``remember``, ``recall``, ``forget``: facts, aliases and preferences;
+- ``recall_sightings``, ``show_sighting`` ("show me": the picture's address, which the page shows),
+  ``forget_sightings``: what the robots saw.
 """
 
 from __future__ import annotations
@@ -66,6 +68,28 @@ def add_memory_tools(
         return {
             "sightings": [s.model_dump(mode="json") | {"ago": ago(s.at)} for s in found],
             "kept_days": sightings.keep_days,
+        }
+
+    @server.tool(annotations=READ_ONLY)
+    async def show_sighting(
+        sighting_id: Annotated[int | None, Field(ge=1, description="Default: the newest.")] = None,
+    ) -> dict[str, Any]:
+        """Show a sighting's picture on the page: put the returned ``picture`` address in your reply."""
+        # /sightings/{id}/picture on the kernel: the page shows the picture under the reply that
+        # names it (sighting_pictures.js); the picture itself never goes to the model.
+        found = sightings.get(sighting_id) if sighting_id else sightings.with_picture()
+        if found is None:
+            which = f"sighting {sighting_id}" if sighting_id else "sighting with a picture"
+            raise ToolError(
+                f"I have no {which} in the last {sightings.keep_days:g} days; recall_sightings lists them"
+            )
+        if sightings.picture(found) is None:
+            raise ToolError(
+                f"sighting {found.id} has no picture on this machine (none was taken, or it was deleted)"
+            )
+        return found.model_dump(mode="json") | {
+            "ago": ago(found.at),
+            "picture": f"/sightings/{found.id}/picture",
         }
 
     @server.tool(annotations=DELETES)

@@ -28,6 +28,7 @@ from rosaos.memory.memory_phrases import (
     RecallSightings,
     RememberNote,
     RememberPlace,
+    ShowSighting,
     UnknownPlace,
     read_memory_request,
     resolve_aliases,
@@ -107,6 +108,8 @@ def _calls(
         return _call(tools, "recall_sightings", args)
     if isinstance(request, ForgetSightings):
         return _call(tools, "forget_sightings", {})
+    if isinstance(request, ShowSighting):
+        return _call(tools, "show_sighting", {})
     if isinstance(request, Recall):
         return _call(tools, "recall", {"about": request.about} if request.about else {})
     assert isinstance(request, Forget)
@@ -156,6 +159,9 @@ def _reply(outcome: ToolOutcome) -> str:
         return _recalled(result)
     if tool == "recall_sightings" and isinstance(result, dict):
         return _seen(result["sightings"], args, result.get("kept_days", 7))
+    if tool == "show_sighting" and isinstance(result, dict):
+        seen = f"{result['what']} {_where(result)}, {result['ago']}, seen by the {result['device']}"
+        return f"Here is the picture of the {seen}: {result['picture']} (on the page)."
     if tool == "forget_sightings" and isinstance(result, dict):
         return f"Forgotten: {result['forgotten']} sightings."
     if tool == "forget" and isinstance(result, list):
@@ -169,17 +175,21 @@ def _seen(sightings: list[dict[str, Any]], args: dict[str, Any], kept_days: floa
     if not sightings:
         return f"No, nobody was seen in {place}{when}." if place else f"I haven't seen anyone{when}."
     last = sightings[0]
-    if last.get("place"):
-        where = f"in {last['place']}"
-    elif last.get("x") is not None:
-        where = f"at x {last['x']:.1f}, y {last['y']:.1f} ({last.get('frame') or 'odom'} frame)"
-    else:
-        where = "somewhere I can't place"
-    seen = f"{where}, {last['ago']}, seen by the {last['device']}"
+    seen = f"{_where(last)}, {last['ago']}, seen by the {last['device']}"
     if place:
         more = f" ({len(sightings)} times)" if len(sightings) > 1 else ""
         return f"Yes: last {seen}{more}."
     return seen[0].upper() + seen[1:] + "."
+
+
+def _where(sighting: dict[str, Any]) -> str:
+    if sighting.get("place"):
+        return f"in {sighting['place']}"
+    if sighting.get("frame") == "fixed":  # a face the Reachy saw: where the Reachy stands
+        return f"in front of the {sighting['device']}"
+    if sighting.get("x") is not None:
+        return f"at x {sighting['x']:.1f}, y {sighting['y']:.1f} ({sighting.get('frame') or 'odom'} frame)"
+    return "somewhere I can't place"
 
 
 def _recalled(result: dict[str, Any]) -> str:

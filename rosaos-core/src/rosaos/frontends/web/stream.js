@@ -4,6 +4,7 @@ import { $, api, errorText, page, setConnection, SignedOut, sleep, timeOf } from
 import { timelineUpdate } from "./timeline.js";
 import { timersUpdate } from "./timers.js";
 import { setMarkedText, titled } from "./words.js";
+import { showSightingPicture } from "./sighting_pictures.js";
 
 const POLL_MS = 1000;
 const MAX_LINES = 300; // keep the DOM small: older chat and event lines are dropped
@@ -182,6 +183,7 @@ function appendChatLine(update, line) {
     item.append(more);
   }
   appendKeepingScroll(log, item);
+  if (line.role === "kernel") showSightingPicture(item, line.text); // "show me": the picture it names
 }
 
 /** A chat line's Details: bring its processes into view in Activity and mark them. */

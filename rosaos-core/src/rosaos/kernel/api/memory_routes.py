@@ -5,21 +5,25 @@ Places are saved by saying so to the kernel (``POST /chat``) or with ``rosaos pl
 renames and deletes them here (``PATCH`` and ``DELETE /places/{name}``), with the same rules as
 ``rosaos places rename`` and ``delete``: an unknown place is 404, a name another place has is 409,
 an empty or too long name 422. Sightings come from the robots' cameras, and "forget what you saw"
-clears them. Each place and sighting keeps the frame its coordinates are in and the device whose frame
-that is, so the page can draw it where that device's own pose is drawn (its ``map_origin``).
+clears them; ``GET /sightings/{id}/picture`` serves the picture of one ("show me"), only ever a
+picture file inside the images folder, whatever name a device's result gave. Each place and
+sighting keeps the frame its coordinates are in and the device whose frame that is, so the page
+can draw it where that device's own pose is drawn (its ``map_origin``).
 """
 
 from __future__ import annotations
 
+import asyncio
 import time
 from typing import Annotated
 
-from fastapi import HTTPException, Query
+from fastapi import HTTPException, Query, Request
 from fastapi import Path as FastPath
+from fastapi.responses import FileResponse
 from pydantic import BaseModel, ConfigDict, Field
 
 from rosaos.kernel.api.routes import Runtime, protected
-from rosaos.memory.sightings import Sighting
+from rosaos.memory.sightings import Sighting, picture_path
 from rosaos.memory.store import (
     NAME_MAX,
     MemoryRequestError,
@@ -101,3 +105,34 @@ async def list_sightings(
         now=time.time(),
         keep_days=runtime.sightings.keep_days,
     )
+
+
+@protected.get(
+    "/sightings/{sighting_id}/picture",
+    response_class=FileResponse,
+    responses={
+        200: {"content": {"image/jpeg": {}, "image/png": {}}},
+        404: {"description": "No such picture"},
+    },
+)
+async def sighting_picture(
+    sighting_id: Annotated[int, FastPath(ge=1, description="The sighting's id, from GET /sightings.")],
+    request: Request,
+    runtime: Runtime,
+) -> FileResponse:
+    """The picture a sighting was made from ("show me"): a JPEG or PNG from the images folder."""
+    sighting = runtime.sightings.get(sighting_id)
+    if sighting is None:
+        raise HTTPException(
+            404,
+            f"no sighting {sighting_id}: it was forgotten or is older than the keep window; GET /sightings lists them",
+        )
+    images = getattr(request.app.state, "images_dir", None)
+    path = None
+    if images is not None and sighting.image is not None:
+        path = await asyncio.to_thread(picture_path, images, sighting.image)
+    if path is None:
+        raise HTTPException(
+            404, f"sighting {sighting_id} has no picture on this machine (none was taken, or it was deleted)"
+        )
+    return FileResponse(path, headers={"Cache-Control": "private, max-age=3600"})
