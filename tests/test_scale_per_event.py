@@ -107,12 +107,6 @@ async def calls_per_command(home: Path, n: int) -> dict[str, float]:
     return {where: calls / COMMANDS for where, calls in kernel_calls(profile).items()}
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="406e326 (issue 20) reads stops at intake with compose/references.py's References, whose "
-    "take() compares each word with every word of every device (_unknown_before, _known_word, "
-    "_has_word): 9,158 calls per command at 10 lamps, 57,164 at 80. Remove this mark when it is O(1).",
-)
 async def test_the_kernels_calls_per_command_do_not_grow_with_the_number_of_devices(tmp_path: Path) -> None:
     few = await calls_per_command(tmp_path / "few", FEW)
     many = await calls_per_command(tmp_path / "many", MANY)

@@ -186,8 +186,8 @@ class DeviceRefs:
 def read_stop(text: str, refs: DeviceRefs) -> StopRequest | None:
     """What ``text`` asks to stop, or None when it does not mean stop (see the module docstring)."""
     said = " ".join(_words(text))
-    if not said or _negated(said):
-        return None
+    if not said or _negated(said) or not _count_stops(said):
+        return None  # no stop word: not a stop, and no device lookup on every event that is not
     clauses: list[tuple[str, str, list[str]]] = []  # (kind, clause, devices): stop, name or other
     for clause in filter(None, (piece.strip() for piece in _CLAUSES.split(said))):
         found, rest = refs.take(_strip_stops(clause.split()))

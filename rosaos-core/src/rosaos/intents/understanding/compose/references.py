@@ -134,6 +134,7 @@ _GLUE = frozenset(
 """Words inside a device phrase that name nothing themselves ("the light over the stairs")."""
 _WORD = re.compile(r"[a-z][a-z0-9'-]*")
 MIN_PREFIX = 4
+_REMEMBERED_WORDS = 4096
 
 
 @dataclass(frozen=True)
@@ -194,6 +195,17 @@ class References:
             words = {singular(word) for word in _WORD.findall(text.lower())} - _FUNCTION_WORDS
             self._known.append(_Known(device.name, frozenset(nouns), frozenset(words | nouns)))
         self._nouns = frozenset(noun for known in self._known for noun in known.nouns)
+        # Word → devices, so a lookup costs the word's length, not the number of devices (issue 27:
+        # the readers run on every event). ``_exact`` holds each known word, ``_prefixes`` every
+        # prefix of MIN_PREFIX letters or more: together they answer :func:`alike` for all devices.
+        self._exact: dict[str, set[str]] = {}
+        self._prefixes: dict[str, set[str]] = {}
+        for known in self._known:
+            for own in map(singular, known.words):
+                self._exact.setdefault(own, set()).add(known.name)
+                for end in range(MIN_PREFIX, len(own) + 1):
+                    self._prefixes.setdefault(own[:end], set()).add(known.name)
+        self._said: dict[str, frozenset[str]] = {}
 
     def resolve(self, phrase: str) -> Reference:
         """The devices ``phrase`` names (see :class:`Reference`)."""
@@ -244,9 +256,7 @@ class References:
             and token not in _GROUP
             and not token[0].isdigit()
         ]
-        modifiers = [
-            token for _, token in others if any(self._has_word(known, token) for known in self._known)
-        ]
+        modifiers = [token for _, token in others if self._known_word(token)]
         if heads and self._unknown_before(tokens, heads, others):
             return Reference(unknown=True, named=True)
         if not heads and not modifiers:
@@ -275,7 +285,7 @@ class References:
 
     def _unknown_before(self, tokens: list[str], heads: list[int], others: list[tuple[int, str]]) -> bool:
         """A word right before a noun that no device has: a device this world lacks."""
-        unknown = {index for index, token in others if not any(self._has_word(k, token) for k in self._known)}
+        unknown = {index for index, token in others if not self._known_word(token)}
         for head in heads:
             index = head - 1
             while (
@@ -302,8 +312,22 @@ class References:
         return False
 
     def _known_word(self, token: str) -> bool:
-        return any(self._has_word(known, token) for known in self._known)
+        return bool(self._devices_with(token))
 
-    @staticmethod
-    def _has_word(known: _Known, word: str) -> bool:
-        return any(alike(word, own) for own in known.words)
+    def _has_word(self, known: _Known, word: str) -> bool:
+        return known.name in self._devices_with(word)
+
+    def _devices_with(self, word: str) -> frozenset[str]:
+        """The devices with a word :func:`alike` ``word``, from the indexes (remembered per word)."""
+        found = self._said.get(word)
+        if found is None:
+            said = singular(word)
+            names = set(self._exact.get(said, ()))
+            if len(said) >= MIN_PREFIX:
+                names |= self._prefixes.get(said, set())  # a known word that starts with it
+                for end in range(MIN_PREFIX, len(said)):  # a known word it starts with
+                    names |= self._exact.get(said[:end], set())
+            if len(self._said) >= _REMEMBERED_WORDS:
+                self._said.clear()  # bounded: what people type is not
+            found = self._said[word] = frozenset(names)
+        return found
