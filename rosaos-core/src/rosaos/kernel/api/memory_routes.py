@@ -116,7 +116,12 @@ async def list_sightings(
     },
 )
 async def sighting_picture(
-    sighting_id: Annotated[int, FastPath(ge=1, description="The sighting's id, from GET /sightings.")],
+    sighting_id: Annotated[
+        int,
+        FastPath(
+            ge=1, le=2**63 - 1, description="The sighting's id, from GET /sightings (SQLite's integer range)."
+        ),
+    ],
     request: Request,
     runtime: Runtime,
 ) -> FileResponse:
