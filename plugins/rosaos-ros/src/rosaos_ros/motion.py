@@ -130,6 +130,9 @@ class MotionController:
         if self.busy == "drive" and self._drive is not None:
             self._drive.end("renewed", "replaced by a newer drive command before its deadline")
             self._drive = command
+            # The watchdog is armed for the old command's deadline until the loop's next tick; a
+            # tick that comes late on a busy machine would stop the renewed drive (CI, 2026-11-26).
+            self.deadman.arm(min(command.deadline, now + HEARTBEAT))
         else:
             await self.stop("replaced by a drive command")
             self._drive = command

@@ -23,12 +23,19 @@ IdempotencyKey = Annotated[str, Field(min_length=1, max_length=200)]
 Source = Annotated[str, Field(min_length=1, max_length=100, pattern=SOURCE_PATTERN)]
 
 
+NOT_BLANK = r"[^\s\x1c-\x1f\x85]"
+"""A character that is whitespace to no one: not to JSON Schema's regex (ECMAScript), pydantic's
+(Rust) or Python's ``str.strip``, which also strips U+001C-U+001F and U+0085. A published
+``minLength: 1`` alone let "\u0085" through the schema and then failed once stripped (CI,
+2026-11-26, schemathesis)."""
+
+
 class UserText(BaseModel):
     """What the user said or typed: one sentence or a few, never blank."""
 
     model_config = ConfigDict(extra="forbid", str_strip_whitespace=True)
 
-    text: str = Field(min_length=1, max_length=4000)
+    text: str = Field(min_length=1, max_length=4000, pattern=NOT_BLANK)
 
 
 class DeviceNotice(BaseModel):

@@ -16,7 +16,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from rosaos.config import MapOrigin
 from rosaos.confirmations.confirmation_desk import ConfirmationDesk
 from rosaos.events.plan import Plan
-from rosaos.events.types import IdempotencyKey, Source
+from rosaos.events.types import NOT_BLANK, IdempotencyKey, Source
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.login_codes import LoginCodes
 from rosaos.kernel.event_store import EventStore
@@ -116,7 +116,7 @@ class SayRequest(BaseModel):
     model_config = ConfigDict(extra="forbid", str_strip_whitespace=True)
 
     text: str = Field(
-        min_length=1, max_length=4000, pattern=r"\S", description="Stripped; must not be blank."
+        min_length=1, max_length=4000, pattern=NOT_BLANK, description="Stripped; must not be blank."
     )
     idempotency_key: IdempotencyKey | None = None
     source: Source | None = Field(default=None, description="Defaults to 'chat' or 'stt'.")
@@ -128,7 +128,7 @@ class UnderstandRequest(BaseModel):
     model_config = ConfigDict(extra="forbid", str_strip_whitespace=True)
 
     text: str = Field(
-        min_length=1, max_length=4000, pattern=r"\S", description="Stripped; must not be blank."
+        min_length=1, max_length=4000, pattern=NOT_BLANK, description="Stripped; must not be blank."
     )
 
 
