@@ -33,7 +33,7 @@ from typing import Any
 from rosaos.drivers import DeviceError
 from rosaos_ros.deadman import DeadmanWatchdog
 from rosaos_ros.messages import wrap_angle
-from rosaos_ros.state import RobotStateCache
+from rosaos_ros.state import Odometry, RobotStateCache
 
 log = logging.getLogger("rosaos_ros.motion")
 
@@ -267,40 +267,56 @@ class MotionController:
         result.detail = f"ran open loop for {duration:.1f} s (the profile has no odometry)"
         return result
 
+    async def _odometry(self) -> Odometry:
+        """Odometry no older than :data:`ODOMETRY_MAX_AGE`, for a closed loop.
+
+        A stale reading is not yet a dead base driver: on a busy machine the odometry stream can
+        pause for longer than the loop's bound. The robot then stands still (a zero twist) and
+        waits up to :data:`~rosaos_ros.state.FIRST_MESSAGE_WAIT` for a fresh reading; only after
+        that is the motion refused, so a blind robot never drives on its last reading.
+        """
+        try:
+            return self.state.latest_odometry(ODOMETRY_MAX_AGE)
+        except DeviceError:
+            if self.state.odometry is None or self.state.profile.odom is None:
+                raise
+        self._zero()
+        await self.state.wait_for_messages(since=time.monotonic() - ODOMETRY_MAX_AGE, sources={"odom"})
+        return self.state.latest_odometry(ODOMETRY_MAX_AGE)
+
     async def _move_loop(self, meters: float, speed: float) -> MotionResult:
-        start = self.state.latest_odometry(ODOMETRY_MAX_AGE)
+        start = await self._odometry()
         heading, began = start.yaw, time.monotonic()
         timeout = abs(meters) / speed * 2 + 1.5
 
-        def travelled() -> float:
-            odom = self.state.latest_odometry(ODOMETRY_MAX_AGE)
+        def travelled(odom: Odometry) -> float:
             return (odom.x - start.x) * math.cos(heading) + (odom.y - start.y) * math.sin(heading)
 
-        while abs(remaining := meters - travelled()) > DISTANCE_TOLERANCE:
+        while abs(remaining := meters - travelled(odom := await self._odometry())) > DISTANCE_TOLERANCE:
             if time.monotonic() - began > timeout:
                 return MotionResult(
                     "move_distance",
                     "timed out",
-                    f"moved {travelled():.3f} m of {meters:g} m in {timeout:.0f} s; something may block the robot",
+                    f"moved {travelled(odom):.3f} m of {meters:g} m in {timeout:.0f} s; something may block the robot",
                     time.monotonic() - began,
                 )
             linear = math.copysign(min(speed, max(MIN_LINEAR, LINEAR_GAIN * abs(remaining))), remaining)
-            drift = wrap_angle(heading - self.state.latest_odometry(ODOMETRY_MAX_AGE).yaw)
+            drift = wrap_angle(heading - odom.yaw)
             angular = max(-self._max_heading_rate, min(self._max_heading_rate, HEADING_GAIN * drift))
             self.deadman.arm(time.monotonic() + HEARTBEAT)
             self._send_twist(linear, angular)
             await asyncio.sleep(self.period)
         self._zero()
-        detail = f"moved {travelled():.3f} m {'forward' if meters >= 0 else 'backward'} (asked {meters:g} m)"
+        detail = f"moved {travelled(await self._odometry()):.3f} m {'forward' if meters >= 0 else 'backward'} (asked {meters:g} m)"
         return MotionResult("move_distance", "done", detail, time.monotonic() - began)
 
     async def _rotate_loop(self, radians: float, speed: float) -> MotionResult:
         began = time.monotonic()
-        last_yaw = self.state.latest_odometry(ODOMETRY_MAX_AGE).yaw
+        last_yaw = (await self._odometry()).yaw
         turned = 0.0
         timeout = abs(radians) / speed * 2 + 1.5
         while True:
-            yaw = self.state.latest_odometry(ODOMETRY_MAX_AGE).yaw
+            yaw = (await self._odometry()).yaw
             turned += wrap_angle(yaw - last_yaw)  # unwrapped, so a full turn or more works
             last_yaw = yaw
             remaining = radians - turned

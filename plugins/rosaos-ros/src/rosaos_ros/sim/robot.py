@@ -36,6 +36,9 @@ class SimulatedRobot:
         self.graph = graph
         self.world = DiffDriveWorld.from_state(state, profile.sim.hardware_limits)
         self._ticks = 0
+        self.odometry_stalled_until = 0.0
+        """Monotonic time until which the base publishes no odometry: a stalled base driver, or a
+        busy machine. Physics go on; a test sets it to see what a closed loop does while blind."""
         self._declare()
 
     def _declare(self) -> None:
@@ -95,7 +98,8 @@ class SimulatedRobot:
         """Advance the world by ``dt`` and publish what is due."""
         self.world.step(dt, now)
         self._ticks += 1
-        self._publish_odometry()
+        if now >= self.odometry_stalled_until:
+            self._publish_odometry()
         if self._ticks % STATE_EVERY == 0:
             self._publish_dock_status()
             self._publish_battery()
