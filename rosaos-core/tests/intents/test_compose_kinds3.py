@@ -245,3 +245,32 @@ def test_whoa_before_a_request_is_no_stop_and_make_it_stop_is_one(
     said: str, stop: StopRequest | None, refs: DeviceRefs
 ) -> None:
     assert read_stop(said, refs) == stop
+
+
+@pytest.mark.parametrize(
+    ("said", "calls"),
+    [
+        ("make the lounge cosy", [("sofa_lamp", "set_color_temp", {"kelvin": 2700}), ("sofa_lamp", "set_brightness", {"brightness": 40})]),
+        ("movie night in the lounge", [("sofa_lamp", "set_brightness", {"brightness": 20})]),
+    ],
+)  # fmt: skip
+def test_a_scene_sets_the_devices_of_the_place_it_names(
+    said: str, calls: list[Call], home: IntentMatcher
+) -> None:
+    assert _calls(home.match(said)) == calls
+
+
+def test_a_scene_with_no_place_and_lights_in_several_rooms_asks_which(home: IntentMatcher) -> None:
+    assert home.match("make it cosy in here").kind == "clarify"
+
+
+@pytest.mark.parametrize(
+    ("said", "text"),
+    [
+        ("have Reachy say good night to everyone", "good night to everyone"),
+        ("Reachy, let everyone know the pizza's here", "the pizza's here"),
+        ("get reachy to tell everybody that Lunch is ready", "Lunch is ready"),
+    ],
+)
+def test_words_to_say_are_said_as_written(said: str, text: str, lab: IntentMatcher) -> None:
+    assert _calls(lab.match(said)) == [("reachy", "speak", {"text": text})]

@@ -45,6 +45,14 @@ _PREVIOUS = re.compile(
     r"|go back(?:\s+to the (?:last|previous))?\s+(?:song|track|tune)|replay (?:the )?(?:last|previous)\w*)\b"
 )
 _PAUSE = re.compile(r"\bpause\w*\b")
+_AUDIENCE = r"(?:everyone|everybody|every1|the room|them|us|people|all|the \w+|y'?all)"
+_SAY = re.compile(
+    r"^(?:(?:have|get|make|let|ask)\s+(?P<who>.+?)\s+(?:to\s+)?)?"
+    rf"(?:say(?:\s+to\s+{_AUDIENCE})?|tell\s+{_AUDIENCE}|announce|let\s+{_AUDIENCE}\s+know|inform\s+{_AUDIENCE}"
+    r"|shout|call out|give\s+(?:a|an)\s+(?=shout|announcement))(?:\s+that)?\s+(?P<text>.+)$"
+)
+"""Words to say out loud, and who says them: "have Reachy say good night", "let everyone know the
+pizza's here", "announce that dinner is ready"."""
 _PRESS = re.compile(r"\b(?:hit|press|push|tap|click|do|go)\b|\b(?:ahead|forward|on)$")
 """Words around a transport word that add nothing: "hit pause", "skip ahead", "go back a song"."""
 _RESUME = re.compile(
@@ -209,6 +217,9 @@ def read_action(clause: str, colours: frozenset[str], genres: frozenset[str] = f
         return Said("pause", rest=_cut(plain, _PAUSE, _PRESS))
     if _RESUME.search(plain) or _REPLAY.match(clause):
         return Said("resume", rest=_cut(plain, _RESUME, _PRESS))
+    spoken = _SAY.match(clause)
+    if spoken:
+        return Said("say", {"text": spoken.group("text")}, rest=spoken.group("who") or "")
     played = _PLAY.match(clause)
     if played and (clause.startswith(_PLAY_VERBS) or _genre(played.group("query"), genres)):
         query = re.sub(

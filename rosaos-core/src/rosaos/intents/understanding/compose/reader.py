@@ -30,6 +30,7 @@ from rosaos.intents.grammar.capabilities import Capabilities, Capability
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.understanding.compose.actions import Said, read_action, restate
 from rosaos.intents.understanding.compose.references import Reference, References
+from rosaos.intents.understanding.compose.scenes import Scene, read_scene
 from rosaos.intents.understanding.compose.speech import asks, clauses, negated, normalise, remark, says_stop
 from rosaos.intents.understanding.match_result import MatchResult, build_result
 from rosaos.intents.understanding.readings import RANK_DRIVER, Focus, Reading, ReadingContext
@@ -114,6 +115,13 @@ class Composer:
         parsed = self._addressed(parsed)
         parsed = [_as_said(clause, text) for clause in parsed]
         commands = [clause for clause in parsed if clause.said is not None]
+        if not commands or all(
+            clause.said and clause.said.action == "colour_temperature" for clause in commands
+        ):
+            scene = read_scene(plain)
+            set_scene = self._scene(scene, plain, focus) if scene is not None else None
+            if set_scene is not None:
+                return build_result(self.context, text, [set_scene], focus is not None)
         if not commands:
             need = self._need(plain, focus)
             return build_result(self.context, text, [need], focus is not None) if need else None
@@ -328,6 +336,25 @@ class Composer:
         reading = Reading(text, RANK_DRIVER, len(text), calls=calls)
         return build_result(self.context, text, [reading], focus is not None)
 
+    def _scene(self, scene: Scene, text: str, focus: Focus) -> Reading | None:
+        """Every device that can take part in ``scene``, in the place ``text`` names if any."""
+        place = self.references.resolve(text)
+        calls: dict[str, list[PlanStep]] = {}
+        for said in scene.actions:
+            for device in self.capabilities:
+                capability = self._capability(device, said)
+                if capability is None or (focus is not None and device not in focus):
+                    continue
+                if place.named and not place.unknown and device not in place.devices:
+                    continue
+                step = self._step(device, capability, said)
+                if step is not None:
+                    calls.setdefault(device, []).append(step)
+        if len(calls) > 1 and not (place.named and not place.unknown):
+            # "movie night" with lights in three rooms: which room is a real question.
+            return self.context.clarify(text, 0, RANK_DRIVER, list(calls))
+        return Reading(text, RANK_DRIVER, len(text), calls=calls) if calls else None
+
     def _need(self, text: str, focus: Focus) -> Reading | None:
         """A need or a complaint → the action that meets it, on the one device that fits."""
         if _NEED_LIGHT.search(text):
@@ -391,17 +418,19 @@ def _driver_amount(reading: Reading, template: Reading | None) -> Reading:
 
 
 def _as_said(clause: _Clause, text: str) -> _Clause:
-    """``clause`` with a free-text query in the user's own words ("Take Five", "Here Comes the
-    Sun"): the reader works on lowercase and digits, a music search on what was said."""
+    """``clause`` with a free-text query or text to say in the user's own words ("Take Five",
+    "Here Comes the Sun"): the reader works on lowercase and digits, a search or a voice on
+    what was said."""
     said = clause.said
-    if said is None or not isinstance(query := said.values.get("query"), str):
+    meaning = "query" if "query" in (said.values if said else {}) else "text"
+    if said is None or not isinstance(query := said.values.get(meaning), str):
         return clause
     words, size = text.split(), len(query.split())
     for start in range(len(words)):
         for end in range(start + max(1, size - 3), min(len(words), start + size + 3) + 1):
             window = " ".join(words[start:end]).strip(" ,.!?;:\"'")
             if normalise(window) == query:
-                values = {**said.values, "query": window}
+                values = {**said.values, meaning: window}
                 return replace(
                     clause, text=clause.text.replace(query, window), said=replace(said, values=values)
                 )
