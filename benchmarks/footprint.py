@@ -114,24 +114,40 @@ def wait_all_healthy(data_dir: Path, started: float) -> float | None:
     return None
 
 
-def role(pid: int, hosts: dict[int, str]) -> str:
-    """What a process of the tree is, read from its command line."""
-    argv = Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace").split("\0")
-    line = " ".join(argv)
+def command_line(pid: int) -> str:
+    return " ".join(Path(f"/proc/{pid}/cmdline").read_bytes().decode(errors="replace").split("\0"))
+
+
+def parent(pid: int) -> int:
+    return int(Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1])
+
+
+def is_fork_server(pid: int, kernel: int) -> bool:
+    """Started as ``python -m rosaos.processes.forkserver``, or forked from the kernel (the zygote
+    of ``rosaos.processes.zygote``: the kernel's child with the kernel's command line)."""
+    if pid == kernel:
+        return False
+    line = command_line(pid)
+    return "rosaos.processes.forkserver" in line or (parent(pid) == kernel and line == command_line(kernel))
+
+
+def role(pid: int, hosts: dict[int, str], kernel: int) -> str:
+    """What a process of the tree is, read from its command line and its parent."""
+    line = command_line(pid)
+    if pid == kernel:
+        return "kernel (rosaos up)"
     if "rosaos.processes.worker" in line:
         return "worker"
-    if "rosaos.processes.forkserver" in line:
-        # Workers are forked from the fork server and keep its command line: tell them by parent.
-        parent = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1]
-        parent_line = Path(f"/proc/{parent}/cmdline").read_bytes().decode(errors="replace")
-        return "worker (forked)" if "rosaos.processes.forkserver" in parent_line else "fork server"
+    # Workers are forked from the fork server and keep its command line: tell them by parent.
+    if is_fork_server(parent(pid), kernel):
+        return "worker (forked)"
+    if is_fork_server(pid, kernel):
+        return "fork server"
     if "rosaos.devices.host" in line:
         return f"device host {hosts.get(pid, '?')}"
     if "reachy" in line.lower() and "daemon" in line.lower():
         return "reachy daemon"
-    if "rosaos" in line and " up" in line:
-        return "kernel (rosaos up)"
-    return Path(argv[0]).name or "other"
+    return Path(line.split(" ")[0]).name or "other"
 
 
 def one_run(idle: float) -> dict[str, Any]:
@@ -163,7 +179,7 @@ def one_run(idle: float) -> dict[str, Any]:
             hosts = host_instances(Path(home) / "data")
             for pid in [up.pid, *children(up.pid)]:
                 try:
-                    processes.append({"pid": pid, "role": role(pid, hosts), **memory_kib(pid)})
+                    processes.append({"pid": pid, "role": role(pid, hosts, up.pid), **memory_kib(pid)})
                 except OSError:  # ended between the listing and the read
                     continue
         finally:
