@@ -49,10 +49,11 @@ _AUDIENCE = r"(?:everyone|everybody|every1|the room|them|us|people|all|the \w+|y
 _SAY = re.compile(
     r"^(?:(?:have|get|make|let|ask)\s+(?P<who>.+?)\s+(?:to\s+)?)?"
     rf"(?:say(?:\s+to\s+{_AUDIENCE})?|tell\s+{_AUDIENCE}|announce|let\s+{_AUDIENCE}\s+know|inform\s+{_AUDIENCE}"
-    r"|shout|call out|give\s+(?:a|an)\s+(?=shout|announcement))(?:\s+that)?\s+(?P<text>.+)$"
+    r"|shout|call out|give\s+(?:a|an)\s+(?=shout|announcement))(?:\s+that)?\s+(?!to\s)(?P<text>.+)$"
 )
 """Words to say out loud, and who says them: "have Reachy say good night", "let everyone know the
-pizza's here", "announce that dinner is ready"."""
+pizza's here", "announce that dinner is ready". "Tell the drone to take off" is an order to
+someone, not words to say."""
 _PRESS = re.compile(r"\b(?:hit|press|push|tap|click|do|go)\b|\b(?:ahead|forward|on)$")
 """Words around a transport word that add nothing: "hit pause", "skip ahead", "go back a song"."""
 _RESUME = re.compile(
