@@ -185,6 +185,12 @@ def _answer(
     return [TextPart(f"{names[0].upper()}{names[1:]} does not report that.")]
 
 
+def state_answer(question: Question, device: str, state: dict[str, Any]) -> str | None:
+    """What the offline kernel answers ``question`` about ``device`` in ``state``, nobody holding
+    it (for checks that run no kernel: the bench tasks' plan test)."""
+    return _about(question, {"device": device, "state": state, "held_by": []})
+
+
 def _about(question: Question, reading: dict[str, Any]) -> str | None:
     """One device's answer to ``question``, or None when its state does not say."""
     name, state = _spoken(reading["device"]), reading.get("state")

@@ -82,7 +82,10 @@ _NEGATION = re.compile(
 )
 _QUESTION = re.compile(
     r"^(?:is|are|was|were|what|what's|whats|how|where|who|why|when|which|does|has|am|should|shall|"
-    r"isn't|aren't|(?:do|did|have)\s+(?:you|i|we|they|it|any))\b",
+    r"isn't|aren't|(?:do|did|have)\s+(?:you|i|we|they|it|any))\b"
+    # an indirect question: "tell me whether the light is off", "I wonder if the robot docked"
+    r"|^(?:tell\s+me|let\s+me\s+know|i\s+wonder|i'm\s+wondering|any\s+idea|check|know)\s+"
+    r"(?:if|whether|what|which|where|how|who|when)\b|\bwhether\b",
     re.IGNORECASE,
 )
 _SUBJECT = (
