@@ -75,6 +75,8 @@ description = "Ceiling light in the kitchen"
 sim = { on = false }
 """
 STAGES = ("vad_end_of_speech", "stt_wait", "post_to_state_changed", "total")
+DRAFT_STAGES = ("draft_transcribed", "draft_judged")
+"""Early transcription: when the final utterance's draft was transcribed and judged, after speech."""
 MODES = {"early": True, "after_vad": False}
 """Early transcription on (the default) and off."""
 
@@ -176,6 +178,8 @@ async def one_run(
             marks["transcribed"], marks["text"] = now, heard.text
             marks["stt_compute"], marks["early"] = heard.data["stt_seconds"], heard.data["early"]
             poller.append(asyncio.create_task(poll_state()))
+        elif heard.kind == "draft":
+            marks.setdefault("drafts", []).append({**heard.data, "draft_text": heard.text})
         elif heard.kind == "sent":
             marks["accepted"] = now
         elif heard.kind in ("ignored", "error"):
@@ -199,7 +203,21 @@ async def one_run(
         await asyncio.wait_for(changed.wait(), timeout=60)
     assert source.began is not None
     spoken_end = source.began + marks["end"]
+    # The judged draft of the final utterance: when its transcript and the judge's answer came,
+    # in seconds after the end of speech (the turn can end by meaning only after both).
+    last = next((d for d in reversed(marks.get("drafts", [])) if d["end"] == marks["end"]), None)
+    draft = (
+        {
+            "draft_transcribed": last["transcribed_at"] - last["end"],
+            "draft_judged": last["judged_at"] - last["end"],
+            "draft_whole": bool(last["whole"]),
+            "draft_transcript": last["draft_text"],
+        }
+        if last is not None
+        else {}
+    )
     return {
+        **draft,
         "transcript": marks["text"],
         "speech_seconds": marks["speech_seconds"],
         "vad_end_of_speech": marks["detected"] - spoken_end,
@@ -214,7 +232,9 @@ async def one_run(
 
 def summary(runs: list[dict[str, Any]]) -> dict[str, dict[str, float]]:
     out = {}
-    for stage in (*STAGES, "post_accepted", "stt_compute"):
+    for stage in (*STAGES, "post_accepted", "stt_compute", *DRAFT_STAGES):
+        if not all(stage in run for run in runs):
+            continue  # the draft stages: early transcription only, and a draft may be missing
         values = [float(run[stage]) for run in runs]
         ordered = sorted(values)
         out[stage] = {
@@ -241,15 +261,24 @@ def report(results: dict[str, Any]) -> None:
         table = Table(title=f"End of utterance → Tapo sim state changed (ms), {title}, {len(runs)} runs")
         for column in ("stage", "p50", "p95", "min", "max"):
             table.add_column(column, justify="left" if column == "stage" else "right")
-        for stage in (*STAGES[:3], "post_accepted", STAGES[3], "stt_compute"):
+        for stage in (*DRAFT_STAGES, *STAGES[:3], "post_accepted", STAGES[3], "stt_compute"):
+            if stage not in summary_:
+                continue
             row = summary_[stage]
             label = {
+                "draft_transcribed": "(draft transcribed, after speech)",
+                "draft_judged": "(draft judged a whole command or not, after speech)",
                 "post_accepted": "  of which POST /stt → 202 Accepted",
                 "stt_wait": "STT wait after the VAD",
                 "stt_compute": "(STT compute, the engine's own time)",
             }.get(stage, stage.replace("_", " "))
             table.add_row(label, *(f"{row[k] * 1000:.0f}" for k in ("p50", "p95", "min", "max")))
         console.print(table)
+        if mode == "early":
+            whole = sum(bool(run.get("draft_whole")) for run in runs)
+            console.print(
+                f"drafts judged a whole command (the turn may end by meaning): {whole} of {len(runs)}"
+            )
     for condition, figures in results["accuracy"].items():
         console.print(
             f"{condition}: word error rate {figures['word_error_rate']:.3f}, command error rate "

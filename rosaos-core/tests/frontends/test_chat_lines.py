@@ -34,3 +34,21 @@ def test_a_device_notice_is_a_line_and_other_events_are_not() -> None:
 def test_a_reply_with_escapes_is_shown_without_them() -> None:
     line = format_update({"kind": "kernel_reply", "text": "Done\x1b[2J: light on"})
     assert line == "rosaos: Done: light on"
+
+
+def test_a_process_report_reads_as_words_not_as_the_models_header() -> None:
+    ok = {
+        "kind": "worker_callback",
+        "payload": {"process_id": 3, "status": "ok", "output": "Done: light on."},
+    }
+    text = "[Process callback] process=3 status=ok output=Done: light on."
+    assert (
+        format_update({"kind": "event", "text": text, "data": ok})
+        == "  · process 3 reported: Done: light on."
+    )
+    failed = {
+        "kind": "worker_callback",
+        "payload": {"process_id": 4, "status": "failed", "output": None, "error": "lamp\x1b[2J unreachable"},
+    }
+    line = format_update({"kind": "event", "text": "[Process callback] ...", "data": failed})
+    assert line == "  · process 4 ended failed: lamp unreachable"

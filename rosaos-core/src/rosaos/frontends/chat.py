@@ -57,9 +57,19 @@ def format_update(update: dict[str, Any]) -> str | None:
         return f"rosaos: {text}"
     if kind in ("process_launched", "process_ended", "notice", "error"):
         return f"  · {text}"
-    if kind == "event" and update.get("data", {}).get("kind") in ("worker_callback", "device_notice"):
+    data = update.get("data", {})
+    if kind == "event" and data.get("kind") == "worker_callback":
+        return f"  · {_callback_line(data.get('payload', {}))}"
+    if kind == "event" and data.get("kind") == "device_notice":
         return f"  · {text}"
     return None
+
+
+def _callback_line(payload: dict[str, Any]) -> str:
+    """A process's report in words: the ``[Process callback] process=1 status=ok`` header is for models."""
+    said = printable(str(payload.get("error") or payload.get("output") or "")).strip()
+    verb = "reported" if payload.get("status") == "ok" else f"ended {payload.get('status', 'unknown')}"
+    return f"process {payload.get('process_id', '?')} {verb}" + (f": {said}" if said else "")
 
 
 @dataclass

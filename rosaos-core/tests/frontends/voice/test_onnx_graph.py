@@ -1,4 +1,4 @@
-"""The Moonshine rewrite: the same numbers as the wheel's models, in a fraction of the memory."""
+"""The Moonshine rewrite: the wheel's models' numbers (the decoder's to int8 rounding), in a fraction of the memory."""
 
 from __future__ import annotations
 
@@ -62,12 +62,18 @@ def test_the_rewritten_models_compute_what_the_wheels_models_compute(tmp_path: P
     rewritten = converted([folder / name for name in SOURCES])
     original = first_steps(session(folder / SOURCES[0], True), session(folder / SOURCES[1], True), audio)
     ours = first_steps(session(rewritten[0], False), session(rewritten[1], False), audio)
-    for before, after in zip(original, ours, strict=True):
-        assert after.shape == before.shape
-        # (x @ q)·s + sum(x)·b instead of x @ (q·s + b): equal up to float rounding.
-        assert np.allclose(after, before, rtol=1e-3, atol=1e-3), float(np.abs(after - before).max())
+    hidden_before, hidden_after = original[0], ours[0]
+    # The encoder: (x @ q)·s + sum(x)·b instead of x @ (q·s + b), equal up to float rounding.
+    assert hidden_after.shape == hidden_before.shape
+    assert np.allclose(hidden_after, hidden_before, rtol=1e-3, atol=1e-3)
     for before, after in zip(original[1:], ours[1:], strict=True):
-        assert int(np.argmax(after[0, -1])) == int(np.argmax(before[0, -1]))
+        # The decoder multiplies int8 by int8 (its activations quantized to a byte per step): the
+        # logits move by a fraction of a unit on a range of ±12, and the ranking at the top holds.
+        assert after.shape == before.shape
+        assert float(np.abs(after - before).max()) < 1.0
+        top_before, top_after = np.argsort(before[0, -1])[-5:], np.argsort(after[0, -1])[-5:]
+        assert top_after[-1] == top_before[-1]
+        assert set(top_after) == set(top_before)
 
 
 def test_the_rewrite_is_made_once_and_then_reused(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:

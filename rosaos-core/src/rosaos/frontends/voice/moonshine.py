@@ -1,8 +1,9 @@
 """Moonshine base (English) on the official onnxruntime wheel: the offline speech-to-text engine.
 
 The weights are the ones the ``moonshine-cpp`` wheel ships (ORT-format encoder and merged decoder,
-and its tokenizer), rewritten once into ONNX that dequantizes each int8 weight only where it is
-used (:mod:`rosaos.frontends.voice.onnx_graph`: 414 → 233 MiB peak, half the CPU time). Only its
+and its tokenizer), rewritten once into ONNX that uses each int8 weight only where it is read
+(:mod:`rosaos.frontends.voice.onnx_graph`: 414 → 233 MiB peak; the decoder multiplies in int8,
+a fifth of the time a step took with float copies of its weights). Only its
 data files are read: its own ``libmoonshine.so`` was built for CPUs
 with AVX-512 and dies with SIGILL on the many that lack it (AMD before Zen 4, most laptops), so
 the package is never imported. onnxruntime picks its kernels by CPU feature at run time.

@@ -3,16 +3,22 @@
 Why: the weights in the moonshine-cpp wheel are int8, turned into float32 by ``Cast``/``Mul``/
 ``Add`` nodes at the top of each graph. In the merged decoder those nodes feed an ``If`` (cached
 branch or not), so all 41 M weights (165 MB of float32) are alive at once on every decoder step,
-and the arena keeps that much for good: most of the voice process's memory. Moved into the
-branch, next to the ``MatMul`` that reads it, each float copy lives only until that product is
-done, so the arena holds about one weight's worth instead of all of them. The arithmetic is the
-same node for node, so the transcripts are too.
+and the arena keeps that much for good: most of the voice process's memory. Moved next to the
+product that reads it, each weight is used as it is stored:
+
+- in the decoder (one token a step, so its products are a row times a matrix, bound by how many
+  bytes are read) ``DynamicQuantizeMatMul`` multiplies the int8 weights by the activations
+  rounded to a byte: no float copy of any weight, and a step takes a fifth of the time it did
+  with a float copy made per product (issue 25: the transcript has to be ready within the short
+  end-of-turn pause). The embedding table the logits read transposed is transposed once, here;
+- in the encoder (many rows at once, bound by arithmetic) each weight is cast to float just
+  before its product and freed after it: byte-rounded activations there cost words.
 
 ORT format cannot be edited by onnxruntime itself, so this reads the flatbuffer with the reader
-that ships in the onnxruntime wheel and writes the ONNX protobuf by hand (a few message types; no
-``onnx`` package). It runs once, in a child process (the conversion holds the model three times
-over for a moment, which the voice process should not), and the result is cached by the source
-files' size and time.
+that ships in the onnxruntime wheel and writes the ONNX protobuf by hand (:mod:`.onnx_proto`;
+no ``onnx`` package). It runs once, in a child process (the conversion holds the model three
+times over for a moment, which the voice process should not), and the result is cached by the
+source files' size and time.
 """
 
 from __future__ import annotations
@@ -20,7 +26,6 @@ from __future__ import annotations
 import hashlib
 import math
 import os
-import struct
 import subprocess
 import sys
 from collections.abc import Iterable, Iterator
@@ -29,86 +34,22 @@ from typing import Any
 
 import platformdirs
 
+from rosaos.frontends.voice.onnx_proto import (
+    attribute_proto,
+    bytes_field,
+    int8_tensor_proto,
+    int_field,
+    ort_flatbuffers,
+    plain_node,
+    tensor_proto,
+    value_info,
+)
 from rosaos.frontends.voice.sources import VoiceError
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 4
 """Part of the cache key: bump it when the rewrite changes."""
 DEQUANTIZE_OPS = ("Cast", "Mul", "Add")
 """The chain that turns an int8 initializer into float32: ``Add(Mul(Cast(q), scale), offset)``."""
-
-
-def _fbs() -> Any:
-    """The ORT-format flatbuffer reader inside the onnxruntime wheel (not a public module)."""
-    import onnxruntime
-
-    folder = Path(onnxruntime.__file__).parent / "tools" / "ort_format_model"
-    if str(folder) not in sys.path:
-        sys.path.append(str(folder))  # appended: its types.py must not shadow the standard library's
-    import ort_flatbuffers_py.fbs as fbs  # type: ignore[import-not-found]
-
-    return fbs
-
-
-# --- protobuf, by hand -------------------------------------------------------------------------
-
-
-def _varint(value: int) -> bytes:
-    value &= (1 << 64) - 1  # negative int64s are ten bytes of two's complement
-    out = bytearray()
-    while True:
-        byte = value & 0x7F
-        value >>= 7
-        if value:
-            out.append(byte | 0x80)
-        else:
-            out.append(byte)
-            return bytes(out)
-
-
-def _int(field: int, value: int) -> bytes:
-    return _varint(field << 3) + _varint(value)
-
-
-def _bytes(field: int, value: bytes | str) -> bytes:
-    data = value.encode() if isinstance(value, str) else value
-    return _varint(field << 3 | 2) + _varint(len(data)) + data
-
-
-def _float(field: int, value: float) -> bytes:
-    return _varint(field << 3 | 5) + struct.pack("<f", value)
-
-
-def _tensor(tensor: Any) -> bytes:
-    """An ORT ``Tensor`` as an ONNX ``TensorProto``."""
-    out = b"".join(_int(1, tensor.Dims(j)) for j in range(tensor.DimsLength()))
-    out += _int(2, tensor.DataType()) + _bytes(8, tensor.Name())
-    out += b"".join(_bytes(6, tensor.StringData(j)) for j in range(tensor.StringDataLength()))
-    if not tensor.RawDataIsNone():
-        out += _bytes(9, tensor.RawDataAsNumpy().tobytes())
-    return out
-
-
-def _value_info(value: Any) -> bytes:
-    """A graph input or output: name, element type and shape (fixed sizes and named ones)."""
-    out = _bytes(1, value.Name())
-    info = value.Type()
-    if info is None or info.ValueType() != 1:  # only tensors cross these graphs' borders
-        return out
-    tensor = _fbs().TensorTypeAndShape.TensorTypeAndShape()
-    table = info.Value()
-    tensor.Init(table.Bytes, table.Pos)
-    dims = b""
-    shape = tensor.Shape()
-    for j in range(shape.DimLength() if shape is not None else 0):
-        dimension = shape.Dim(j).Value()
-        if dimension is None or dimension.DimType() == 0:
-            dims += _bytes(1, b"")
-        elif dimension.DimType() == 1:
-            dims += _bytes(1, _int(1, dimension.DimValue()))
-        else:
-            dims += _bytes(1, _bytes(2, dimension.DimParam()))
-    kind = _int(1, tensor.ElemType()) + (_bytes(2, dims) if shape is not None else b"")
-    return out + _bytes(2, _bytes(1, kind))
 
 
 class _Writer:
@@ -122,43 +63,45 @@ class _Writer:
         self.scalar = scalar
         """Chains whose scale and offset are single numbers (per-tensor quantization)."""
         self.moved = {link.Outputs(0) for chain in chains for link in chain}
+        self.tensors: dict[bytes, Any] = {}
+        """The top graph's initializers, by name."""
+        self.extra: dict[bytes, bytes] = {}
+        """Initializers this rewrite adds (``TensorProto`` s by name): int8 weights transposed once."""
+
+    def transposed(self, weights: bytes, reader: Any) -> bytes | None:
+        """``reader`` (a ``Transpose``) of the int8 initializer ``weights``, done once here rather
+        than at every decoder step (the 13 M-weight embedding table, read again for the logits)."""
+        tensor = self.tensors.get(weights)
+        if reader.OpType() != b"Transpose" or tensor is None or tensor.DataType() != 3:  # int8
+            return None
+        name = weights + b"/transposed"
+        if name not in self.extra:
+            perm = [
+                reader.Attributes(j).Ints(k)
+                for j in range(reader.AttributesLength())
+                if reader.Attributes(j).Name() == b"perm"
+                for k in range(reader.Attributes(j).IntsLength())
+            ]
+            dims = [tensor.Dims(j) for j in range(tensor.DimsLength())]
+            values = tensor.RawDataAsNumpy().view("int8").reshape(dims).transpose(perm or None)
+            self.extra[name] = int8_tensor_proto(name, values)
+        return name
 
     def attribute(self, attribute: Any) -> bytes:
-        """An ORT ``Attribute`` as an ONNX ``AttributeProto`` (the two enums number alike)."""
-        kind = attribute.Type()
-        types = self.fbs.AttributeType.AttributeType
-        out = _bytes(1, attribute.Name()) + _int(20, kind)
-        if kind == types.FLOAT:
-            out += _float(2, attribute.F())
-        elif kind == types.INT:
-            out += _int(3, attribute.I())
-        elif kind == types.STRING:
-            out += _bytes(4, attribute.S())
-        elif kind == types.TENSOR:
-            out += _bytes(5, _tensor(attribute.T()))
-        elif kind == types.GRAPH:
-            out += _bytes(6, self.graph(attribute.G(), top=False))
-        elif kind == types.FLOATS:
-            out += b"".join(_float(7, attribute.Floats(j)) for j in range(attribute.FloatsLength()))
-        elif kind == types.INTS:
-            out += b"".join(_int(8, attribute.Ints(j)) for j in range(attribute.IntsLength()))
-        elif kind == types.STRINGS:
-            out += b"".join(_bytes(9, attribute.Strings(j)) for j in range(attribute.StringsLength()))
-        else:
-            raise VoiceError(
-                f"attribute {attribute.Name()!r} has a type ({kind}) this conversion does not know"
-            )
-        return out
+        """An ORT ``Attribute`` as an ONNX ``AttributeProto``; a branch's graph is rewritten too."""
+        return attribute_proto(attribute, lambda graph: self.graph(graph, top=False))
 
     def node(self, node: Any, inputs: list[bytes] | None = None, outputs: list[bytes] | None = None) -> bytes:
         """``node`` as a ``NodeProto``; ``inputs``/``outputs`` rename its values (and its name)."""
         inputs = inputs or [node.Inputs(j) for j in range(node.InputsLength())]
         outputs = outputs or [node.Outputs(j) for j in range(node.OutputsLength())]
         name = node.Name() + (b"" if outputs[0] == node.Outputs(0) else b"/" + outputs[0])
-        out = b"".join(_bytes(1, value) for value in inputs) + b"".join(_bytes(2, value) for value in outputs)
-        out += _bytes(3, name) + _bytes(4, node.OpType()) + _bytes(7, node.Domain() or b"")
+        out = b"".join(bytes_field(1, value) for value in inputs) + b"".join(
+            bytes_field(2, value) for value in outputs
+        )
+        out += bytes_field(3, name) + bytes_field(4, node.OpType()) + bytes_field(7, node.Domain() or b"")
         attributes = (node.Attributes(j) for j in range(node.AttributesLength()))
-        return out + b"".join(_bytes(5, self.attribute(attribute)) for attribute in attributes)
+        return out + b"".join(bytes_field(5, self.attribute(attribute)) for attribute in attributes)
 
     def dequantized(self, chain: list[Any], weights: bytes, result: bytes) -> list[bytes]:
         """``chain`` rewired to read ``weights`` and write ``result``."""
@@ -189,12 +132,14 @@ class _Writer:
             nodes = [self.node(node) for node in graph_nodes]
         else:
             nodes = _Branch(self, graph_nodes).write()
-        out = b"".join(_bytes(1, node) for node in nodes) + _bytes(2, "g")
-        out += b"".join(_bytes(5, _tensor(tensor)) for tensor in initializers)
+        out = b"".join(bytes_field(1, node) for node in nodes) + bytes_field(2, "g")
+        out += b"".join(bytes_field(5, tensor_proto(tensor)) for tensor in initializers)
+        if top:
+            out += b"".join(bytes_field(5, tensor) for tensor in self.extra.values())
         inputs = [graph.Inputs(j) for j in range(graph.InputsLength())]
-        out += b"".join(_bytes(11, _value_info(values[name])) for name in inputs if name not in constant)
+        out += b"".join(bytes_field(11, value_info(values[name])) for name in inputs if name not in constant)
         outputs = (values[graph.Outputs(j)] for j in range(graph.OutputsLength()))
-        return out + b"".join(_bytes(12, _value_info(value)) for value in outputs)
+        return out + b"".join(bytes_field(12, value_info(value)) for value in outputs)
 
 
 class _Branch:
@@ -260,7 +205,9 @@ class _Branch:
         weights = chain[0].Inputs(0)
         if anchor is not None:
             weights = self.after(weights, anchor, name)
-        if reader is not None:
+        if reader is not None and anchor is None and (once := self.writer.transposed(weights, reader)):
+            weights = once
+        elif reader is not None:
             moved = name + b"/int8"
             rest = [reader.Inputs(j) for j in range(1, reader.InputsLength())]
             self.out.append(self.writer.node(reader, [weights, *rest], [moved]))
@@ -282,24 +229,38 @@ class _Branch:
         ):
             return False
         chain = self.lazy[name][0]
-        cast, mul, add = chain
+        _cast, mul, add = chain
         result = node.Outputs(0)
-        weights = self.int8(name, anchor)
-        del self.lazy[name]
         step = result + b"/"
+        if self.writer.branching:  # the decoder: one token a step, int8 products
+            weights = self.int8(name, None)  # no float copy is made: nothing to put off
+            product = [
+                plain_node(
+                    "DynamicQuantizeMatMul",
+                    [x, weights, mul.Inputs(1)],
+                    [step + b"scaled"],
+                    domain="com.microsoft",
+                )
+            ]
+        else:
+            weights = self.int8(name, anchor)
+            product = [
+                self.writer.node(_cast, [weights], [step + b"weights"]),
+                plain_node("MatMul", [x, step + b"weights"], [step + b"product"]),
+                plain_node("Mul", [step + b"product", mul.Inputs(1)], [step + b"scaled"]),
+            ]
+        del self.lazy[name]
         self.out += [
-            self.writer.node(cast, [weights], [step + b"weights"]),
-            _plain("MatMul", [x, step + b"weights"], [step + b"product"]),
-            _plain("Mul", [step + b"product", mul.Inputs(1)], [step + b"scaled"]),
-            _plain(
+            *product,
+            plain_node(
                 "Constant",
                 [],
                 [step + b"last_axis"],
-                _bytes(5, _bytes(1, "value_ints") + _int(20, 7) + _int(8, -1)),
+                bytes_field(5, bytes_field(1, "value_ints") + int_field(20, 7) + int_field(8, -1)),
             ),
-            _plain("ReduceSum", [x, step + b"last_axis"], [step + b"sum"]),  # keepdims: [..., 1]
-            _plain("Mul", [step + b"sum", add.Inputs(1)], [step + b"offset"]),
-            _plain("Add", [step + b"scaled", step + b"offset"], [result]),
+            plain_node("ReduceSum", [x, step + b"last_axis"], [step + b"sum"]),  # keepdims: [..., 1]
+            plain_node("Mul", [step + b"sum", add.Inputs(1)], [step + b"offset"]),
+            plain_node("Add", [step + b"scaled", step + b"offset"], [result]),
         ]
         return True
 
@@ -308,24 +269,18 @@ class _Branch:
         if anchor not in self.zeros:
             zero = anchor + b"/zero"
             self.out += [
-                _plain("Shape", [anchor], [zero + b"/shape"]),
-                _plain("Sub", [zero + b"/shape", zero + b"/shape"], [zero + b"/zeros"]),
-                _plain("ReduceSum", [zero + b"/zeros"], [zero]),  # keepdims: shape [1]
+                plain_node("Shape", [anchor], [zero + b"/shape"]),
+                plain_node("Sub", [zero + b"/shape", zero + b"/shape"], [zero + b"/zeros"]),
+                plain_node("ReduceSum", [zero + b"/zeros"], [zero]),  # keepdims: shape [1]
             ]
             self.zeros[anchor] = zero
         waited = name + b"/q"
         self.out += [
-            _plain("Shape", [weights], [waited + b"/shape"]),
-            _plain("Add", [waited + b"/shape", self.zeros[anchor]], [waited + b"/target"]),
-            _plain("Reshape", [weights, waited + b"/target"], [waited]),
+            plain_node("Shape", [weights], [waited + b"/shape"]),
+            plain_node("Add", [waited + b"/shape", self.zeros[anchor]], [waited + b"/target"]),
+            plain_node("Reshape", [weights, waited + b"/target"], [waited]),
         ]
         return waited
-
-
-def _plain(op: str, inputs: list[bytes], outputs: list[bytes], attributes: bytes = b"") -> bytes:
-    """A ``NodeProto`` of the default domain, named after its first output."""
-    out = b"".join(_bytes(1, value) for value in inputs) + b"".join(_bytes(2, value) for value in outputs)
-    return out + _bytes(3, outputs[0] + b"/" + op.encode()) + _bytes(4, op) + attributes
 
 
 def _initializers(graph: Any) -> list[Any]:
@@ -363,7 +318,7 @@ def convert(source: Path, target: Path) -> None:
     branches read move into them; in a graph without a branch (the encoder) they stay, put off
     until they are needed. Either way a product with a per-tensor weight is rescaled afterwards.
     """
-    fbs = _fbs()
+    fbs = ort_flatbuffers()
     data = bytearray(source.read_bytes())
     model = fbs.InferenceSession.InferenceSession.GetRootAsInferenceSession(data, 0).Model()
     graph = model.Graph()
@@ -376,10 +331,13 @@ def convert(source: Path, target: Path) -> None:
     sizes = {t.Name(): math.prod(t.Dims(j) for j in range(t.DimsLength())) for t in _initializers(graph)}
     scalar = {c[-1].Outputs(0) for c in chains if all(sizes.get(link.Inputs(1)) == 1 for link in c[1:])}
     writer = _Writer(fbs, chains, scalar, branches)
+    writer.tensors = {tensor.Name(): tensor for tensor in _initializers(graph)}
     opsets = [model.OpsetImport(j) for j in range(model.OpsetImportLength())]
-    out = _int(1, model.IrVersion()) + _bytes(2, "rosaos")
-    out += b"".join(_bytes(8, _bytes(1, o.Domain() or b"") + _int(2, o.Version())) for o in opsets)
-    out += _bytes(7, writer.graph(graph, top=True))
+    out = int_field(1, model.IrVersion()) + bytes_field(2, "rosaos")
+    out += b"".join(
+        bytes_field(8, bytes_field(1, o.Domain() or b"") + int_field(2, o.Version())) for o in opsets
+    )
+    out += bytes_field(7, writer.graph(graph, top=True))
     partial = target.with_suffix(".partial")
     partial.write_bytes(out)
     partial.replace(target)

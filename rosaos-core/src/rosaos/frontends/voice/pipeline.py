@@ -41,6 +41,7 @@ from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
 HeardKind = Literal[
     "ready",
     "speech",
+    "draft",
     "transcript",
     "woke",
     "sent",
@@ -268,13 +269,33 @@ class VoicePipeline:
         return [segment for segment in segments if not segment.draft]
 
     async def _judge_draft(self, draft: SpeechSegment, judge: TurnJudge) -> None:
-        """A draft that is a whole command ends its turn after the short pause, not the long one."""
+        """A draft that is a whole command ends its turn after the short pause, not the long one.
+
+        Each judged draft is reported (``--json`` only) with when each step finished, in stream
+        seconds, so a turn that still waited the long pause says why: the transcript came late,
+        the judge was slow, or the draft was not a whole command.
+        """
         result = await self.transcriber.of_draft(draft)
+        transcribed = self.segmenter.now
         if result is None or not self.segmenter.holds(draft):
             return  # replaced, or the speaker went on, or the turn already ended
-        if not await is_whole_command(judge, result.text, self.gate.phrases):
-            return
-        final = self.segmenter.complete(draft)  # None: feed() ends it once the pause is long enough
+        whole = await is_whole_command(judge, result.text, self.gate.phrases)
+        judged = self.segmenter.now
+        final = self.segmenter.complete(draft) if whole else None  # None: feed() ends it later
+        self.report(
+            Heard(
+                "draft",
+                result.text,
+                {
+                    **_times(draft),
+                    "drafted_at": draft.detected_at,
+                    "transcribed_at": round(transcribed, 3),
+                    "judged_at": round(judged, 3),
+                    "stt_seconds": result.compute_seconds,
+                    "whole": whole,
+                },
+            )
+        )
         if final is not None:
             self._utterances.put_nowait(self._announce(final))
 

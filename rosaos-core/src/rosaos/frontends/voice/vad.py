@@ -258,6 +258,11 @@ class Segmenter:
         return utterance.start + (utterance.last_speech_index + 1 - utterance.pre_roll) * self.frame_seconds
 
     @property
+    def now(self) -> float:
+        """Stream seconds of the audio classified so far (a live source's clock)."""
+        return self._frame_start
+
+    @property
     def in_speech(self) -> bool:
         """Someone is speaking right now (an utterance is open)."""
         return self._utterance is not None
