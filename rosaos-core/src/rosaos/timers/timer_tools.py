@@ -7,7 +7,7 @@ as a ``[Timer fired]`` event, and its action is then launched like any command.
 
 from __future__ import annotations
 
-from datetime import UTC, datetime
+from datetime import datetime
 from typing import Annotated, Any
 
 from fastmcp import FastMCP
@@ -58,7 +58,7 @@ def add_timer_tools(server: FastMCP, book: TimerBook) -> None:
 
         Give in_seconds or at.
         """
-        now = datetime.now(UTC)
+        now = book.now()
         try:
             due = resolve_due(in_seconds, at, now)
             timer = await book.set(action, due)
@@ -69,7 +69,7 @@ def add_timer_tools(server: FastMCP, book: TimerBook) -> None:
     @server.tool(annotations={"readOnlyHint": True, "destructiveHint": False, "idempotentHint": True})
     async def list_timers() -> list[dict[str, Any]]:
         """The timers still to fire, soonest first."""
-        now = datetime.now(UTC)
+        now = book.now()
         return [timer_data(timer, now) for timer in await book.pending()]
 
     @server.tool(annotations={"readOnlyHint": False, "destructiveHint": True, "idempotentHint": True})
@@ -85,7 +85,7 @@ def add_timer_tools(server: FastMCP, book: TimerBook) -> None:
         cancel_all: bool = False,
     ) -> list[dict[str, Any]]:
         """Cancel timers; with no argument the newest ('that timer')."""
-        now = datetime.now(UTC)
+        now = book.now()
         targets = await _targets(book, timer_id, matching, cancel_all)
         cancelled = []
         for target in targets:
