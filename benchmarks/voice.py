@@ -327,7 +327,7 @@ async def main_async(options: argparse.Namespace) -> dict[str, Any]:
             await asyncio.wait_for(kernel.wait(), timeout=30)
     heard = transcripts(stt, Path(tmp_accuracy.name), not options.no_bias, options.condition)
     peak_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # before the engine is loaded
-    turns = false_early_ends(stt, Path(tmp_accuracy.name))
+    turns = await asyncio.to_thread(false_early_ends, stt, Path(tmp_accuracy.name))  # it runs its own loops
     speech = float(runs[0]["speech_seconds"])
     return {
         "machine": machine(),
