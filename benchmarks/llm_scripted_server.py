@@ -11,8 +11,9 @@ The script reads what it is sent, not rosaOS's internals: a kernel request is on
 "On it." beside the calls (as the kernel prompt asks); after its launches it acknowledges them (if
 rosaOS asks it to); on a process's callback it answers in one sentence, or launches the follow-up
 the paper's demo asks for. A process agent calls the tools its task needs (:data:`PLANS`), one per
-request, with its one-sentence report beside the call that finishes the task when that call's
-success says it all (as the process prompt asks), and a report after the results otherwise.
+request, with "Done." beside the call that finishes the task when that call's success says it
+all (as the process prompt asks since issue 22's fourth sitting; before, a sentence restating the
+task), and a one-sentence report after the results otherwise.
 rosaOS at 4416b49 ignored text beside tool calls and asked again; the script is the same for both.
 """
 
@@ -30,19 +31,16 @@ DEMO_SENTENCE = "undock the TurtleBot, search the environment for a person, and 
 LAUNCH = "launch_process"
 
 COMMANDS: dict[str, list[dict[str, Any]]] = {
-    "turn on the kitchen light": [{"task": "Turn on the kitchen light.", "devices": ["kitchen_light"]}],
-    "turn off the kitchen light": [{"task": "Turn off the kitchen light.", "devices": ["kitchen_light"]}],
-    "turn on the living room lamp": [
-        {"task": "Turn on the living room lamp.", "devices": ["living_room_lamp"]}
-    ],
-    "turn off the living room lamp": [
-        {"task": "Turn off the living room lamp.", "devices": ["living_room_lamp"]}
-    ],
-    "make the living room lamp blue": [
-        {"task": "Set the living room lamp's color to blue.", "devices": ["living_room_lamp"]}
-    ],
-    "play some jazz": [{"task": "Play some jazz.", "devices": ["spotify"]}],
-    "pause the music": [{"task": "Pause the music.", "devices": ["spotify"]}],
+    # The user's sentence is the whole task: as launch_process's schema says, the task is left out
+    # and the process gets the sentence as said (issue 22, fourth sitting; before, the kernel
+    # copied it: "Turn on the kitchen light.").
+    "turn on the kitchen light": [{"devices": ["kitchen_light"]}],
+    "turn off the kitchen light": [{"devices": ["kitchen_light"]}],
+    "turn on the living room lamp": [{"devices": ["living_room_lamp"]}],
+    "turn off the living room lamp": [{"devices": ["living_room_lamp"]}],
+    "make the living room lamp blue": [{"devices": ["living_room_lamp"]}],
+    "play some jazz": [{"devices": ["spotify"]}],
+    "pause the music": [{"devices": ["spotify"]}],
     DEMO_SENTENCE: [
         {
             "task": "Undock, then search the environment for a person and report whether you found one.",
@@ -214,10 +212,10 @@ def process_answer(messages: list[dict[str, Any]], tools: list[str]) -> dict[str
         name, args = plan[len(results)]
         tool = next((t for t in tools if t == name or t.endswith(f"_{name}")), None)
         if tool is not None:
-            # As the process prompt asks: the report beside the call that finishes the task, when
-            # the call's success says it all (a search's report depends on what it found).
+            # As the process prompt asks: "Done." beside the call that finishes the task, when the
+            # call's success says it all (a search's report depends on what it found).
             last = len(results) == len(plan) - 1 and name != "search"
-            report = f"Done: {task.strip().rstrip('.')}." if last else None
+            report = "Done." if last else None
             return {"role": "assistant", "content": report, "tool_calls": [_call(tool, args, len(results))]}
     last = _text(results[-1].get("content")) if results else ""
     if '"found": true' in last or '"found":true' in last:

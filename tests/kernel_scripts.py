@@ -10,6 +10,8 @@ calls the ``stop`` tool; ``state DEVICE`` calls ``device_state``. A worker callb
 reply ``process N: STATUS``. Timers, as an LLM would use the tools: ``timer SECONDS: DEVICES:
 TASK`` calls ``set_timer`` with the rest as its action, ``list timers`` and ``cancel timer``
 call ``list_timers`` and ``cancel_timer``; a ``[Timer fired]`` event runs its action line as above.
+A sentence that is itself a worker script (``call turn_on {}``) launches a kitchen_light process
+with no task, as a model may when the user's sentence is the whole task.
 
 Worker script (the task): lines ``call TOOL {json args}``, ``sleep SECONDS``, run in order.
 """
@@ -90,6 +92,8 @@ def kernel_model() -> FunctionModel:
         if body.startswith("slow "):
             await asyncio.sleep(float(body.split()[1]))
             return ModelResponse(parts=[TextPart(f"handled {body}")])
+        if body.startswith("call "):  # the sentence is the whole task: launch_process without one
+            return ModelResponse(parts=[ToolCallPart("launch_process", {"devices": ["kitchen_light"]})])
         calls = []
         for clause in body.split(";"):
             devices, _, task = clause.partition(":")

@@ -24,6 +24,7 @@ from rosaos.kernel.runtime import Kernel, KernelError, _bind_or_explain
 from rosaos.kernel.stop_tools import STOP_TOOL_NAMES
 from rosaos.kernel.tools import KERNEL_TOOL_NAMES
 from rosaos.memory.memory_tools import MEMORY_TOOL_NAMES
+from rosaos.models.tool_schemas import KERNEL_HIDDEN
 from rosaos.timers.timer_tools import TIMER_TOOL_NAMES
 
 from .e2e_support import device_state, eventually, kernel_api, scripted_kernel
@@ -101,10 +102,40 @@ async def test_the_kernel_is_offered_its_process_timer_stop_and_memory_tools_and
 
     await chat(api, "slow 0")
     await eventually(lambda: settled(api))
+    # Less the tools whose answer an LLM has in another form (the prompt's device list, recall).
     assert (
         set(KERNEL_TOOL_NAMES) | set(TIMER_TOOL_NAMES) | set(STOP_TOOL_NAMES) | set(MEMORY_TOOL_NAMES)
-        == KERNEL_TOOLS_SEEN
-    )
+    ) - KERNEL_HIDDEN == KERNEL_TOOLS_SEEN
+
+
+async def test_a_launch_without_a_task_gives_the_process_the_users_sentence_as_said(
+    kernel: Kernel, api: httpx.AsyncClient
+) -> None:
+    # Issue 22: copying the sentence into the task cost a local model a third of the kernel's decoding.
+    sentence = 'call set_brightness {"brightness": 37}'
+    event_id = await chat(api, sentence)
+    await eventually(lambda: _state_is(kernel, "kitchen_light", "brightness", 37))
+    await eventually(lambda: settled(api))
+    ours = [u for u in await updates_for(api) if u["event_id"] == event_id]
+    launch = next(u for u in ours if u["kind"] == "tool_call")
+    assert launch["data"]["args"] == {"devices": ["kitchen_light"]}
+    process_id = next(u for u in ours if u["kind"] == "process_launched")["data"]["process_id"]
+    ended = (await api.get("/processes", params={"all": "true"})).json()
+    process = next(p for p in ended if p["id"] == process_id)
+    assert process["task"] == sentence
+
+
+async def test_a_launch_without_a_task_for_an_event_that_is_no_sentence_of_the_user_is_refused(
+    api: httpx.AsyncClient,
+) -> None:
+    before = max((u["id"] for u in await updates_for(api)), default=0)
+    await chat(api, "timer 0.1: call turn_off {}")  # the timer's event is no sentence of the user's
+
+    async def refusal() -> str | None:
+        notices = [u["text"] for u in await updates_for(api, before) if u["kind"] == "notice"]
+        return next((text for text in notices if text.startswith("launch refused:")), None)
+
+    assert "give the task" in await eventually(refusal)
 
 
 async def test_a_second_kernel_on_the_same_port_says_what_is_running(kernel: Kernel) -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -15,6 +16,24 @@ def test_the_reachy_is_the_always_attached_shared_user_interface() -> None:
     assert SPEC.name == "reachy" and SPEC.implemented
     assert SPEC.always_attached is True and SPEC.concurrency == "shared"
     assert set(SPEC.backends) == {"sim", "real"}
+
+
+@pytest.mark.parametrize(
+    ("task", "attached"),
+    [
+        ("Turn on the kitchen light.", False),
+        ("Undock, then search the environment for a person and report whether you found one.", False),
+        ("Play some jazz.", False),
+        ("Say: the battery is low", True),
+        ("Tell the user the weather", True),
+        ("Greet whoever comes in", True),
+        ("Ask the person their name", True),
+    ],
+)
+def test_the_reachy_joins_unasked_only_a_task_that_speaks(task: str, attached: bool) -> None:
+    # Issue 22: a light switch's process does not carry the speaking tools its report needs not.
+    assert SPEC.attached_pattern is not None
+    assert (re.search(SPEC.attached_pattern, task, re.IGNORECASE) is not None) is attached
 
 
 def test_an_unknown_sim_key_is_refused_with_the_keys_there_are(tmp_path: Path) -> None:

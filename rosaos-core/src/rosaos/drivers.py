@@ -180,6 +180,12 @@ class DriverSpec(BaseModel, Generic[BackendT, SettingsT]):
     only because it is always attached (how to speak to the user). Empty: all of them."""
     attached_prompt: str | None = None
     """The device prompt that goes with :attr:`attached_tools` (short: those tools only)."""
+    attached_pattern: str | None = None
+    """For an always-attached driver: a case-insensitive regular expression of the words by which
+    a task asks for what :attr:`attached_tools` do ("say", "tell", "greet"). When set, a process
+    the kernel did not grant the device to gets it only if its task matches: a light switch's
+    report is told to the user anyway, and the speaking tools, their prompt and the device prefix
+    on every tool name cost a local model about a fifth of the request. None: every process."""
     on_request_tools: tuple[str, ...] = ()
     """Tools a process model is offered only when its task asks for them: the task names one, or
     matches :attr:`on_request_pattern` (:mod:`rosaos.processes.tool_offer`). For expert tools most

@@ -108,11 +108,13 @@ def test_the_default_prompt_tells_the_model_about_every_timer_tool_and_timer_eve
     assert "[Timer fired]" in prompt and "late" in prompt
 
 
-def test_the_default_prompt_tells_the_model_about_every_memory_tool() -> None:
+def test_the_default_prompt_tells_the_model_about_every_memory_tool_it_is_offered() -> None:
     from rosaos.memory.memory_tools import MEMORY_TOOL_NAMES
+    from rosaos.models.tool_schemas import KERNEL_HIDDEN
 
     prompt = kernel_prompt([])
-    assert all(name in prompt for name in MEMORY_TOOL_NAMES)
+    assert all(name in prompt for name in MEMORY_TOOL_NAMES if name not in KERNEL_HIDDEN)
+    assert not any(f"{name}," in prompt or f"{name})" in prompt for name in KERNEL_HIDDEN)
 
 
 def test_the_default_prompt_says_stop_preempts_and_questions_read_state_without_a_lease() -> None:

@@ -19,7 +19,7 @@ from pydantic_ai.models.function import AgentInfo, FunctionModel
 from pydantic_ai.tools import ToolDefinition
 
 from rosaos.events.plan import Plan
-from rosaos.models.tool_schemas import ENGINE_ONLY, CompactToolsModel, compact_schema
+from rosaos.models.tool_schemas import ENGINE_ONLY, KERNEL_HIDDEN, CompactToolsModel, compact_schema
 
 
 async def schema_of(server: FastMCP, name: str) -> dict[str, Any]:
@@ -95,6 +95,23 @@ async def test_the_wrapped_model_is_sent_compact_tools() -> None:
     assert [tool.name for tool in seen] == ["launch"]
     assert "plan" not in seen[0].parameters_json_schema["properties"]
     assert "plan" in full.parameters_json_schema["properties"]
+
+
+async def test_a_hidden_tool_is_not_offered_and_the_others_are() -> None:
+    # Issue 22: list_devices and list_places say what the prompt and recall already give an LLM.
+    seen: list[str] = []
+
+    def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        seen.extend(tool.name for tool in info.function_tools)
+        return ModelResponse(parts=[TextPart("ok")])
+
+    tools = [
+        ToolDefinition(name=name, parameters_json_schema={"type": "object", "properties": {}})
+        for name in ("recall", "list_places", "list_devices", "device_state")
+    ]
+    model = CompactToolsModel(FunctionModel(respond), KERNEL_HIDDEN)
+    await model.request([], None, ModelRequestParameters(function_tools=tools))
+    assert seen == ["recall", "device_state"]
 
 
 async def test_the_engines_plan_is_taken_out_of_the_history_the_model_reads() -> None:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import dataclasses
+
 import pytest
 from hypothesis import settings
 from hypothesis import strategies as st
@@ -82,6 +84,21 @@ def test_always_attached_device_is_added_without_being_asked() -> None:
     table = LeaseTable()
     assert table.acquire(1, "light", ["kitchen_light"], devices) == ["kitchen_light", "reachy"]
     assert table.acquire(2, "just talk", [], devices) == ["reachy"]
+
+
+def test_always_attached_device_with_a_pattern_goes_only_to_a_task_that_asks_for_it() -> None:
+    # Issue 22: the Reachy's speaking tools, prompt and the prefix they force on every tool name
+    # were a fifth of a light switch's process request, and its report reaches the user anyway.
+    reachy = dataclasses.replace(
+        endpoint("reachy", "shared", always_attached=True), attached_pattern=r"\b(say|tell)\b"
+    )
+    devices = world(reachy, *DEVICES.values())
+    table = LeaseTable()
+    assert table.acquire(1, "Turn on the kitchen light.", ["kitchen_light"], devices) == ["kitchen_light"]
+    assert table.acquire(2, "Say good night", [], devices) == ["reachy"]
+    assert table.acquire(3, "Tell them the weather", ["weather"], devices) == ["weather", "reachy"]
+    # Named by the kernel, it is granted whatever the task says.
+    assert table.acquire(4, "Look left", ["reachy"], devices) == ["reachy"]
 
 
 def test_always_attached_device_that_is_down_is_left_out() -> None:

@@ -53,6 +53,14 @@ async def stop_moving_and_talking(backend: ReachyBackend) -> None:
     await backend.safe_stop()
 
 
+SPEECH_WORDS = (
+    r"\b(say|said|speak|spoken|tell|told|announce|ask|greet|talk|aloud|voice|read (it |them )?out|"
+    r"sing|answer|reply|remind|warn|welcome|thank|introduce|explain|chat|pronounce|call out|"
+    r"stop (speaking|talking)|be quiet|silence|shut up)\w*"
+)
+"""Words of a task that asks the attached Reachy to speak (``DriverSpec.attached_pattern``): a
+process the kernel did not give the Reachy by name gets its ``speak`` only with one of them."""
+
 SPEC: DriverSpec[ReachyBackend, ReachySettings] = DriverSpec(
     name="reachy",
     title="Pollen Robotics Reachy Mini",
@@ -68,6 +76,8 @@ SPEC: DriverSpec[ReachyBackend, ReachySettings] = DriverSpec(
     # head, camera and emotions, whose schemas were 71 % of a light switch's tools.
     attached_tools=("speak", "stop_speaking"),
     attached_prompt=read_packaged_text(__file__, "attached_prompt.md"),
+    # And only to a task that speaks: a process's report reaches the user without it.
+    attached_pattern=SPEECH_WORDS,
     settings=ReachySettings,
     server=build_server,
     backends={"sim": sim_backend, "real": real_backend},

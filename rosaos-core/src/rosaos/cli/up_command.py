@@ -20,6 +20,7 @@ from rosaos.drivers import DeviceError
 from rosaos.kernel.runtime import Kernel, KernelError
 from rosaos.models.select import ModelError
 from rosaos.plugins import load_drivers
+from rosaos.processes.zygote import prefork
 
 EXIT_CONFIG = 2
 
@@ -72,6 +73,10 @@ def up_command(
         config = load_for_cli(config_path, **overrides)
         registry = load_drivers()
         world = build_world(config, registry)
+        if config.kernel.fork_server:
+            # Now, with the kernel's modules imported and before any thread or file: the fork
+            # server then shares their memory with the kernel (see rosaos.processes.zygote).
+            prefork()
         kernel = Kernel(config, world)
     except (ConfigError, ModelError) as error:
         err.print(f"rosaos up: {error}", markup=False)

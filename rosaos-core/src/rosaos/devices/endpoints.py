@@ -29,6 +29,8 @@ class DeviceEndpoint:
     """For an always-attached device: the tools a process gets when the kernel did not ask for it."""
     attached_prompt: str | None = None
     """The device prompt that goes with :attr:`attached_tools`."""
+    attached_pattern: str | None = None
+    """Words by which a task asks for it when not granted by name (``DriverSpec.attached_pattern``)."""
     on_request_tools: tuple[str, ...] = ()
     """Tools a process model gets only when its task asks for them (``DriverSpec.on_request_tools``)."""
     on_request_pattern: str | None = None

@@ -47,6 +47,7 @@ class DeviceDirectory:
                 confirm=self._confirm_rule(name),
                 attached_tools=tuple(spec.attached_tools),
                 attached_prompt=spec.attached_prompt,
+                attached_pattern=spec.attached_pattern,
                 on_request_tools=tuple(spec.on_request_tools),
                 on_request_pattern=spec.on_request_pattern,
                 host=self._hosting.host_of(name),

@@ -28,13 +28,15 @@ class CurrentEvent:
 
     def __init__(self) -> None:
         self.event_id: int | None = None
+        self.said: str | None = None
+        """The user's sentence when the turn holds exactly one (``launch_process``'s default task)."""
         self._steps = 0
 
-    def begin(self, event_id: int) -> None:
-        self.event_id, self._steps = event_id, 0
+    def begin(self, event_id: int, said: str | None = None) -> None:
+        self.event_id, self.said, self._steps = event_id, said, 0
 
     def end(self) -> None:
-        self.event_id = None
+        self.event_id, self.said = None, None
 
     def next_cause(self) -> LaunchCause | None:
         """The cause of the launch being made now; None outside the handling of an event."""

@@ -20,7 +20,7 @@ from pydantic_ai.models.wrapper import WrapperModel
 from pydantic_ai.toolsets import CombinedToolset
 from pydantic_ai.usage import UsageLimits
 
-from rosaos.events.types import Event
+from rosaos.events.types import Event, UserText
 from rosaos.kernel.agent import trim_history
 from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.event_text import render_event, render_events
@@ -29,7 +29,7 @@ from rosaos.kernel.offline_turn import offline_turn
 from rosaos.kernel.short_turns import LaunchAckModel, relayable, relayed_messages
 from rosaos.kernel.updates import UpdateKind, UpdateStream
 from rosaos.models.kernel_model import LocalIntentModel
-from rosaos.models.tool_schemas import CompactToolsModel
+from rosaos.models.tool_schemas import KERNEL_HIDDEN, CompactToolsModel
 
 log = logging.getLogger(__name__)
 
@@ -108,7 +108,7 @@ class KernelLoop:
                     batch.append(queue.pop(0))
                 # A batch's launches are caused by its first event: the offline engine's batches
                 # hold one event, and an LLM batch is handled again whole after a crash.
-                self.current.begin(batch[0].id)
+                self.current.begin(batch[0].id, said=user_sentence(batch))
                 try:
                     outputs = await self.handle_batch(batch)
                 finally:
@@ -174,11 +174,16 @@ class KernelLoop:
                     )
                     new_messages, output = turn.new_messages, turn.output
                 else:
+                    llm = (
+                        LaunchAckModel(CompactToolsModel(offline, KERNEL_HIDDEN))
+                        if offline is not None
+                        else None
+                    )
                     result = await self.agent.run(
                         prompt,
                         message_history=self.history,
                         instructions=self.instructions(),
-                        model=LaunchAckModel(CompactToolsModel(offline)) if offline is not None else offline,
+                        model=llm,
                         usage_limits=UsageLimits(request_limit=self.request_limit),
                     )
                     new_messages, output = result.new_messages(), result.output
@@ -200,6 +205,15 @@ class KernelLoop:
 
     def _remember(self, new_messages: list[ModelMessage]) -> None:
         self.history = trim_history([*self.history, *new_messages], self.history_budget, self.history_chars)
+
+
+def user_sentence(events: list[Event]) -> str | None:
+    """The user's words when ``events`` hold exactly one sentence of theirs; None otherwise.
+
+    ``launch_process`` takes them as its task when the model gives none: when the sentence is the
+    whole task, copying it costs a model its decoding (issue 22: 9 of a light switch's 28 tokens)."""
+    said = [event.payload.text for event in events if isinstance(event.payload, UserText)]
+    return said[0] if len(said) == 1 else None
 
 
 def _is_offline_engine(model: object) -> bool:

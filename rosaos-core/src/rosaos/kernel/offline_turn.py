@@ -28,7 +28,7 @@ from pydantic_ai.messages import (
     ModelRequest,
     ModelRequestPart,
     ModelResponse,
-    RetryPromptPart,
+    RetryInfo,
     ToolCallPart,
     ToolReturnPart,
 )
@@ -92,13 +92,19 @@ async def _call(
     call: ToolCallPart,
     ctx: RunContext[Any],
 ) -> ModelRequestPart:
-    """Run one tool call; its result, a failed result, or a retry prompt, as an agent run records them."""
+    """Run one tool call; its result, a failed result, or a retried one, as an agent run records them.
+
+    A call to be made again is the call's own return marked ``outcome="retried"`` (pydantic-ai's
+    replacement for the deprecated ``RetryPromptPart``), with the cause in ``retry`` for our code.
+    """
     tool = tools.get(call.tool_name)
     if tool is None:
-        return RetryPromptPart(
-            content=f"Unknown tool name: {call.tool_name!r}. Available tools: {', '.join(map(repr, tools))}",
+        return ToolReturnPart(
             tool_name=call.tool_name,
+            content=f"Unknown tool name: {call.tool_name!r}. Available tools: {', '.join(map(repr, tools))}",
             tool_call_id=call.tool_call_id,
+            outcome="retried",
+            retry=RetryInfo(cause="unknown_tool"),
         )
     ctx.tool_name, ctx.tool_call_id = call.tool_name, call.tool_call_id
     try:
@@ -108,7 +114,11 @@ async def _call(
             tool_name=call.tool_name, content=failed.message, tool_call_id=call.tool_call_id, outcome="failed"
         )
     except ModelRetry as retry:
-        return RetryPromptPart(
-            content=retry.message, tool_name=call.tool_name, tool_call_id=call.tool_call_id
+        return ToolReturnPart(
+            tool_name=call.tool_name,
+            content=retry.message,
+            tool_call_id=call.tool_call_id,
+            outcome="retried",
+            retry=RetryInfo(cause="model_retry"),
         )
     return ToolReturnPart(tool_name=call.tool_name, content=content, tool_call_id=call.tool_call_id)

@@ -54,9 +54,9 @@ def add_stop_tools(
             ),
         ] = None,
     ) -> dict[str, Any]:
-        """Stop at once, with no lease: ends the processes holding the devices and calls their safe_stop.
+        """Stop at once, with no lease: ends the processes holding the devices and halts them.
 
-        Returns 'summary', to tell the user.
+        Returns 'summary' for the user.
         """
         try:
             report = await stopper.stop(devices or [])
@@ -76,9 +76,9 @@ def add_stop_tools(
             ),
         ] = None,
     ) -> dict[str, Any]:
-        """Read a device's state with no lease and no process, also while another process holds it.
+        """Read a device's state, with no lease, also while a process holds it.
 
-        Returns state, 'said' (in words and degrees: prefer it) and 'held_by'.
+        Returns state, 'said' (words and degrees: prefer it) and 'held_by'.
         """
         known = endpoints()
         if device is not None and device not in known:

@@ -44,26 +44,25 @@ def build_kernel_tools(
 
     @server.tool(annotations=CHANGES)
     async def launch_process(
-        task: Annotated[
-            str,
-            Field(
-                min_length=1,
-                max_length=4000,
-                description="Complete and self-contained: the agent sees nothing else.",
-            ),
-        ],
         devices: Annotated[
             list[str],
-            Field(max_length=16, description="Instance names of the devices it needs."),
+            Field(max_length=16, description="Instance names."),
         ],
+        task: Annotated[
+            str | None,
+            Field(
+                max_length=4000,
+                description=(
+                    "Self-contained: the agent sees nothing else. Omit it when the user's one "
+                    "sentence, as said, is the whole task."
+                ),
+            ),
+        ] = None,
         then: Annotated[
             str | None,
             Field(
                 max_length=2000,
-                description=(
-                    "A next step to launch only if this one succeeds (after a search: 'turn the lamp "
-                    "green'). Not done by this process: it comes back with its callback."
-                ),
+                description=("A next step you launch only if this one succeeds; not done by this process."),
             ),
         ] = None,
         plan: Annotated[
@@ -74,11 +73,16 @@ def build_kernel_tools(
             ),
         ] = None,
     ) -> dict[str, Any]:
-        """Start a process agent on a task with its devices; its result comes later as a [Process callback].
-
-        A device another process holds is refused, naming the holder.
-        """
+        """Start a process agent; its result comes as a [Process callback]. A device another process holds is refused."""
         then = " ".join(then.split()) if then is not None and then.strip() else None
+        if task is None or not task.strip():
+            said = current.said if current is not None else None
+            if said is None or not said.strip():
+                raise ToolError(
+                    "give the task: it may be left out only when the event is one sentence of the "
+                    "user's that is the whole task, and this one is not"
+                )
+            task = said
         cause = current.next_cause() if current is not None else None
         if cause is not None and launched_before is not None:
             earlier = await launched_before(cause)

@@ -59,7 +59,7 @@ def add_memory_tools(
         ] = None,
         today: Annotated[bool, Field(description="Only since midnight.")] = False,
     ) -> dict[str, Any]:
-        """Who the robots saw, newest first: when, robot, where, nearest place, picture."""
+        """Who the robots saw, newest first."""
         known = store.place(place) if place else None
         named = known.name if known is not None else place
         midnight = datetime.now().astimezone().replace(hour=0, minute=0, second=0, microsecond=0)
@@ -140,10 +140,7 @@ def add_memory_tools(
 
     @server.tool(annotations=CHANGES)
     async def go_to_place(name: PlaceName, device: Device = None) -> dict[str, Any]:
-        """Send a robot to a named place (by default the one that saved it); result as a [Process callback].
-
-        Refused if the robot is in another frame.
-        """
+        """Send a robot to a named place (by default the one that saved it); result as a [Process callback]."""
         try:
             place = store.require_place(name)
             robot = device or place.device

@@ -18,6 +18,9 @@ their bounds. :class:`CompactToolsModel` changes only what a model is sent:
 
 Types, numeric bounds, short lengths, patterns, enums, informative defaults and descriptions stay:
 they are what the tool really accepts (issue 22: a schema's maximum is the real limit).
+
+A wrapper may also leave out whole tools a model has in another form (:data:`KERNEL_HIDDEN`); they
+stay callable, for the offline engine and for a model that calls one anyway.
 """
 
 from __future__ import annotations
@@ -29,13 +32,18 @@ from typing import Any
 
 from pydantic_ai import RunContext
 from pydantic_ai.messages import ModelMessage, ModelResponse, ToolCallPart
-from pydantic_ai.models import ModelRequestParameters, StreamedResponse
+from pydantic_ai.models import Model, ModelRequestParameters, StreamedResponse
 from pydantic_ai.models.wrapper import WrapperModel
 from pydantic_ai.settings import ModelSettings
 from pydantic_ai.tools import ToolDefinition
 
 ENGINE_ONLY = "x-rosaos-engine-only"
 """Schema key of a parameter only the offline engine fills in: ``Field(json_schema_extra={ENGINE_ONLY: True})``."""
+KERNEL_HIDDEN = frozenset({"list_devices", "list_places"})
+"""Kernel tools an LLM is not offered, since it has what they return in another form: the prompt
+lists the devices with their availability (``device_state`` and ``list_processes`` say who holds
+one), and ``recall`` returns the places (as does the prompt's memory summary). The offline engine
+calls them; each schema was about 200 bytes of every kernel request."""
 FREE_TEXT = 200
 """A string ``maxLength`` from which on the bound is not shown to a model (free text, not a code)."""
 
@@ -118,10 +126,13 @@ def compact_tool(tool: ToolDefinition) -> ToolDefinition:
     )
 
 
-def compact_parameters(parameters: ModelRequestParameters) -> ModelRequestParameters:
-    """The request's parameters with every function tool compacted."""
+def compact_parameters(
+    parameters: ModelRequestParameters, hidden: frozenset[str] = frozenset()
+) -> ModelRequestParameters:
+    """The request's parameters with every function tool compacted, and those in ``hidden`` left out."""
     return dataclasses.replace(
-        parameters, function_tools=[compact_tool(t) for t in parameters.function_tools]
+        parameters,
+        function_tools=[compact_tool(t) for t in parameters.function_tools if t.name not in hidden],
     )
 
 
@@ -171,8 +182,12 @@ class CompactToolsModel(WrapperModel):
     """An LLM that is sent compact tool schemas (:func:`compact_tool`); everything else passes through.
 
     Wrap only a model that reads schemas as text (an LLM); the offline engines read the full
-    ones (their bounds clamp arguments).
+    ones (their bounds clamp arguments). ``hidden`` names tools it is not offered (:data:`KERNEL_HIDDEN`).
     """
+
+    def __init__(self, wrapped: Model | str, hidden: frozenset[str] = frozenset()) -> None:
+        super().__init__(wrapped)
+        self.hidden = hidden
 
     async def request(
         self,
@@ -182,7 +197,7 @@ class CompactToolsModel(WrapperModel):
     ) -> ModelResponse:
         messages = without_engine_only_arguments(messages, engine_only_arguments(model_request_parameters))
         return await self.wrapped.request(
-            messages, model_settings, compact_parameters(model_request_parameters)
+            messages, model_settings, compact_parameters(model_request_parameters, self.hidden)
         )
 
     @asynccontextmanager
@@ -194,6 +209,6 @@ class CompactToolsModel(WrapperModel):
         run_context: RunContext[Any] | None = None,
     ) -> AsyncIterator[StreamedResponse]:
         messages = without_engine_only_arguments(messages, engine_only_arguments(model_request_parameters))
-        parameters = compact_parameters(model_request_parameters)
+        parameters = compact_parameters(model_request_parameters, self.hidden)
         async with self.wrapped.request_stream(messages, model_settings, parameters, run_context) as stream:
             yield stream

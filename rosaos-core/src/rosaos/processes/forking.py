@@ -25,12 +25,13 @@ import logging
 import os
 import signal
 import socket
-from collections.abc import Mapping, Sequence
+from collections.abc import Awaitable, Callable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from rosaos.models.select import OPENAI_COMPATIBLE, PYTHON_PREFIX, ModelSpec
 from rosaos.processes.fork_parking import adopt_parked, park_key
+from rosaos.processes.zygote import take as zygote_take
 
 log = logging.getLogger(__name__)
 
@@ -196,11 +197,17 @@ class ForkServer:
         """Run one fork server until it exits; return whether it became ready, and its exit code.
 
         The first one is adopted, when a parked server of the same data directory fits."""
+        zygote = zygote_take()
         adopted = await self._adopt() if self.park is not None and not self.adopted else None
         self.adopted = adopted is not None
         if adopted is not None:
+            if zygote is not None:
+                zygote.discard()
             ours, pid = adopted
             return await self._watch(ours, pid, None)
+        parking = (self.park, self._key()) if self.park is not None else None
+        if zygote is not None and (forked := zygote.become(self.python, self.env, self.preload, parking)):
+            return await self._watch(forked, zygote.pid, None, zygote.reap)
         try:
             ours, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
         except OSError as failure:  # not on Linux
@@ -236,10 +243,15 @@ class ForkServer:
         return await self._watch(ours, process.pid, process)
 
     async def _watch(
-        self, ours: socket.socket, pid: int, process: asyncio.subprocess.Process | None
+        self,
+        ours: socket.socket,
+        pid: int,
+        process: asyncio.subprocess.Process | None,
+        reap: Callable[[], Awaitable[int | None]] | None = None,
     ) -> tuple[bool, int | None]:
         """Serve the pool with the server ``pid`` on ``ours`` until it exits (or its socket closes:
-        an adopted server is not this process's child, and its exit code is not known)."""
+        an adopted server is not this process's child, and its exit code is not known; one forked
+        from the kernel is reaped by ``reap``)."""
         self.pid = pid
         loop = asyncio.get_running_loop()
         closed = loop.create_future()
@@ -258,7 +270,7 @@ class ForkServer:
             self._sock = None
             self._ready = False
             _killpg(pid)
-            returncode = await process.wait() if process is not None else None
+            returncode = await process.wait() if process is not None else await reap() if reap else None
             self.pid = None
             await self._lost()
             self._settled.set()

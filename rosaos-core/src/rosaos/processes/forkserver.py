@@ -51,6 +51,7 @@ import struct
 import sys
 import threading
 import time
+from collections.abc import Sequence
 from typing import Any, NoReturn
 
 WORKER = "rosaos.processes.worker"
@@ -77,6 +78,11 @@ def main() -> None:
     park: tuple[str, str] | None = None
     if extra[:1] == ["--park"]:
         park, extra = (extra[1], extra[2]), extra[3:]
+    serve(sock, park, extra, since)
+
+
+def import_worker_modules(extra: Sequence[str] = ()) -> None:
+    """Import what every worker needs (and ``extra``, best effort), so that forks find it loaded."""
     for module in (*PRELOAD, *FIRST_JOB, *extra):
         # Extra modules are a best guess (a model's module): one that fails is imported, and its
         # error reported, by the worker that needs it.
@@ -85,6 +91,16 @@ def main() -> None:
     importlib.import_module(WORKER)  # not optional: raise here if the worker cannot be imported
     # Built once here, before any fork: every worker then shares the CA bundle's pages for free.
     importlib.import_module("rosaos.tls").shared_context()
+
+
+def serve(sock: socket.socket, park: tuple[str, str] | None, extra: Sequence[str], since: float) -> None:
+    """Import, then serve the pool on ``sock`` (and park, with ``park``) until there is none.
+
+    ``since`` is when this process started importing: a module file changed after it makes the
+    server unfit for adoption. Also what a fork server forked from the kernel runs
+    (:mod:`rosaos.processes.zygote`), where most imports are done already.
+    """
+    import_worker_modules(extra)
     # The worker's imports stay loaded; the module itself is dropped, so that each worker runs it
     # afresh as __main__, exactly as ``python -m`` does.
     sys.modules.pop(WORKER)

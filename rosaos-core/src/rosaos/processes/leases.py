@@ -2,8 +2,8 @@
 
 A device declares its concurrency (:data:`rosaos.drivers.Concurrency`): an ``exclusive`` device is
 held by at most one live process, a ``shared`` one by any number. A grant is all-or-nothing: a
-process gets every device it asked for (plus the always-attached ones) or none, so it never starts
-with half of what its task needs. Refusals say who holds what, so the kernel agent can wait, ask
+process gets every device it asked for (plus the always-attached ones its task asks for, see
+:func:`attaches`) or none, so it never starts with half of what its task needs. Refusals say who holds what, so the kernel agent can wait, ask
 the user, or terminate the holder.
 
 The table is plain synchronous data: the process manager calls it from the event loop, and a
@@ -12,6 +12,7 @@ grant or release never awaits, so no lock is needed.
 
 from __future__ import annotations
 
+import re
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 
@@ -57,7 +58,7 @@ class LeaseTable:
         """Grant ``requested`` plus every always-attached device to ``process_id``, all or nothing.
 
         Returns the granted device names: the requested ones in the order asked, then the
-        always-attached ones that were not asked for. Raises :class:`LeaseRefused` naming every
+        always-attached ones that were not asked for and that ``task`` asks for (:func:`attaches`). Raises :class:`LeaseRefused` naming every
         problem (unknown device, device not served, exclusive device held by another process).
         An always-attached device that is not served right now is left out rather than refused:
         the process can still do its task, it just cannot talk to the user.
@@ -87,7 +88,9 @@ class LeaseTable:
                     "choose another device, or try again once it is healthy"
                 )
         implicit = [
-            name for name in self._always_attached(devices) if devices[name].grantable and name not in wanted
+            name
+            for name in self._always_attached(devices)
+            if devices[name].grantable and name not in wanted and attaches(devices[name], task)
         ]
         granted = wanted + implicit
 
@@ -141,6 +144,13 @@ class LeaseTable:
             return None
         leases = self._by_device.get(name)
         return leases[0] if leases else None
+
+
+def attaches(device: DeviceEndpoint, task: str) -> bool:
+    """Whether always-attached ``device`` goes to a process whose task is ``task`` unasked: always,
+    unless its driver names the words a task asks for it by (``DriverSpec.attached_pattern``)."""
+    pattern = device.attached_pattern
+    return pattern is None or re.search(pattern, task, re.IGNORECASE) is not None
 
 
 def _headline(task: str, limit: int = 80) -> str:

@@ -54,10 +54,7 @@ def add_timer_tools(server: FastMCP, book: TimerBook) -> None:
             ),
         ] = None,
     ) -> dict[str, Any]:
-        """Do an action later: when due, it comes back as a [Timer fired] event (it survives restarts).
-
-        Give in_seconds or at.
-        """
+        """Do an action later, as a [Timer fired] event (it survives restarts). Give in_seconds or at."""
         now = datetime.now(UTC)
         try:
             due = resolve_due(in_seconds, at, now)
