@@ -3,11 +3,14 @@
 The kernel and the process agent are the scripted ``FunctionModel``s of ``kernel_scripts.py``:
 the process walks the dog (2 m at 0.12 m/s, about 17 s); the kernel is then kept busy by a turn
 that takes 8 s ("slow 8"). "stop the dog" arrives during that turn. Before the fast path the
-stop waited its turn and the dog walked on for those seconds; now the stop at intake (holder
-terminated, ``safe_stop`` answered) takes under the issue's 0.5 s, asserted with a 2x margin for a
-loaded CI machine on the kernel's own clock, and the test's polling over MCP sees the dog still
-long before the turn ends, while the stop's event is still queued, and the kernel answers it afterwards with what the intake stop did. Real kernel,
-worker subprocess, ROS simulator over MCP HTTP.
+stop waited its turn and the dog walked on for those seconds; now the dog is stopped (its
+``safe_stop`` answered) under the issue's 0.5 s after intake, asserted with a 2x margin for a
+loaded CI machine on the kernel's own clock. That is measured to the moment the robot stops, not
+to the end of the whole stop: the walk's worker process may take longer to exit on a busy
+machine, and the robot is already still by then. The test's polling over MCP sees the dog still
+long before the turn ends, while the stop's event is still queued, and the kernel answers it
+afterwards with what the intake stop did. Real kernel, worker subprocess, ROS simulator over MCP
+HTTP.
 """
 
 from __future__ import annotations
@@ -47,7 +50,8 @@ profile = "puppypi"
 SLOW_TURN = 8.0
 """Seconds the kernel's model spends on the turn the stop arrives during."""
 STOP_BOUND = 0.5
-"""The issue's bound: the robot stops within 0.5 s of the stop being received."""
+"""The issue's bound: the robot stops within 0.5 s of the stop being received (intake to the
+dog's ``safe_stop`` answered)."""
 MARGIN = 2.0
 """Two cores shared with other jobs: the bound is asserted doubled, still far below ``SLOW_TURN``."""
 STILL = 0.02
@@ -89,9 +93,13 @@ async def test_stop_the_dog_stops_it_at_intake_while_the_kernel_is_mid_turn(
     said = await updates_of(api, stop)
     intake = [u["data"] for u in said if u["kind"] == "tool_call" and u["data"].get("at_intake")]
     assert intake, f"no stop at intake among {said}"
-    took = intake[0]["seconds"]
-    print(f"stop at intake took {took:.3f} s; the test saw the dog still {stopped_after:.3f} s after sending")
-    assert took < STOP_BOUND * MARGIN, f"the stop at intake took {took:.2f} s"
+    halted, took = intake[0]["safe_stop_seconds"]["dog"], intake[0]["seconds"]
+    print(
+        f"the dog's safe_stop answered {halted:.3f} s after intake (the whole stop, its process ended: "
+        f"{took:.3f} s); the test saw the dog still {stopped_after:.3f} s after sending"
+    )
+    assert halted < STOP_BOUND * MARGIN, f"the dog was stopped only {halted:.2f} s after intake"
+    assert took < SLOW_TURN / 2, f"the stop at intake took {took:.2f} s: it waited for something"
     assert abs(later["x"] - first["x"]) < STILL, "the dog walked on after its stop"
     assert not await handled(api, stop), "the kernel was still busy: this stop came from intake"
     listed = (await api.get("/processes", params={"all": "true"})).json()

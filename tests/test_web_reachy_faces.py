@@ -11,14 +11,12 @@ shell, ``rosaos memory picture`` prints the file.
 
 from __future__ import annotations
 
-import shutil
 import time
 from collections.abc import AsyncIterator
 from pathlib import Path
 
 import pytest
 import pytest_asyncio
-from playwright.async_api import async_playwright
 from typer.testing import CliRunner
 
 from rosaos.cli.root import app
@@ -27,11 +25,14 @@ from rosaos.memory.store import MemoryStore, Place
 
 from .e2e_support import eventually, kernel_api, running_kernel
 from .test_memory_llm_kernel import chat
+from .web_support import WAIT, logged_in_page, needs_chromium
 
-pytestmark = [pytest.mark.e2e, pytest.mark.slow, pytest.mark.asyncio(loop_scope="module")]
-
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
-WAIT = 120_000  # ms: a busy machine runs the simulator slowly
+pytestmark = [
+    pytest.mark.e2e,
+    pytest.mark.browser,
+    pytest.mark.slow,
+    pytest.mark.asyncio(loop_scope="module"),
+]
 FACE_PHOTO = Path(__file__).parents[1] / "plugins/rosaos-reachy/tests/fixtures/astronaut.jpg"
 
 WORLD = f"""
@@ -57,8 +58,7 @@ async def kernel(tmp_path: Path) -> AsyncIterator[Kernel]:
 async def test_a_face_the_reachy_saw_is_named_and_show_me_shows_its_picture(
     kernel: Kernel, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    if CHROMIUM is None:
-        pytest.skip("Chromium is not installed: ./scripts/test installs Debian's chromium package")
+    needs_chromium()
     async with kernel_api(kernel) as api:
         await chat(api, "reachy, is there anyone in front of you?")
 
@@ -70,23 +70,11 @@ async def test_a_face_the_reachy_saw_is_named_and_show_me_shows_its_picture(
     assert (face["device"], face["frame"], face["x"], face["y"]) == ("reachy", "fixed", 0.0, 0.0)
     assert face["place"] == "the living room" and str(face["image"]).startswith("reachy-")
 
-    async with async_playwright() as playwright:
-        browser = await playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
-        page = await browser.new_page(viewport={"width": 1280, "height": 900})
-        errors: list[str] = []
-        page.on("pageerror", lambda error: errors.append(str(error)))
-        await page.goto(kernel.login_link())
-        await page.wait_for_selector("#app", state="visible")
-        await page.fill("#chat-input", "where did you last see someone?")
-        await page.press("#chat-input", "Enter")
-        reply = page.locator("#chat-log .msg-kernel", has_text="seen by the reachy").last
-        await reply.wait_for(timeout=WAIT)
+    async with logged_in_page(kernel) as opened:
+        reply = await opened.ask("where did you last see someone?", "seen by the reachy")
         assert "In the living room" in await reply.inner_text()
 
-        await page.fill("#chat-input", "show me")
-        await page.press("#chat-input", "Enter")
-        shown = page.locator("#chat-log .msg-kernel", has_text="Here is the picture").last
-        await shown.wait_for(timeout=WAIT)
+        shown = await opened.ask("show me", "Here is the picture")
         text = await shown.inner_text()
         assert f"/sightings/{face['id']}/picture" in text and "face in the living room" in text, text
         picture = shown.locator(f"figure.sighting-picture[data-sighting='{face['id']}'] img")
@@ -94,8 +82,7 @@ async def test_a_face_the_reachy_saw_is_named_and_show_me_shows_its_picture(
         assert await picture.evaluate("img => img.naturalWidth") > 0
         assert (await picture.get_attribute("src") or "").startswith("blob:")  # fetched with the token
         assert not any(char in text for char in "{}[]"), text  # words, never raw JSON
-        await browser.close()
-    assert errors == []
+    assert opened.errors == []
 
     monkeypatch.setenv("ROSAOS_DATA_DIR", str(tmp_path / "data"))
     printed = CliRunner().invoke(app, ["memory", "picture"])

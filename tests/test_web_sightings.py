@@ -10,24 +10,20 @@ and turns the lamp green. Chromium opens the page with a login link and asks the
 from __future__ import annotations
 
 import math
-import shutil
 from collections.abc import AsyncIterator
 from pathlib import Path
 
 import httpx
 import pytest
 import pytest_asyncio
-from playwright.async_api import async_playwright
 
 from rosaos.kernel.runtime import Kernel
 
 from .e2e_support import device_state, eventually, kernel_api, running_kernel
 from .test_memory_llm_kernel import chat
+from .web_support import WAIT, logged_in_page, needs_chromium
 
-pytestmark = [pytest.mark.e2e, pytest.mark.asyncio(loop_scope="module")]
-
-CHROMIUM = shutil.which("chromium") or shutil.which("chromium-browser")
-WAIT = 120_000  # ms: a busy machine runs the simulators slowly
+pytestmark = [pytest.mark.e2e, pytest.mark.browser, pytest.mark.asyncio(loop_scope="module")]
 PERSON = (0.3, -2.5)
 DEMO = "Undock the turtlebot, look around for a person, and when you find someone turn the lamp green"
 
@@ -58,24 +54,15 @@ async def _demo_done(kernel: Kernel, api: httpx.AsyncClient) -> bool:
 
 
 async def test_the_last_sighting_is_named_in_chat_and_drawn_on_the_map(kernel: Kernel) -> None:
-    if CHROMIUM is None:
-        pytest.skip("Chromium is not installed: ./scripts/test installs Debian's chromium package")
+    needs_chromium()
     async with kernel_api(kernel) as api:
         [saved] = await chat(api, "the living room is at x 0.5, y -2")
         assert "living room" in saved, saved
         await chat(api, DEMO)
         await eventually(lambda: _demo_done(kernel, api), timeout=WAIT / 1000)
-    async with async_playwright() as playwright:
-        browser = await playwright.chromium.launch(executable_path=CHROMIUM, args=["--no-sandbox"])
-        page = await browser.new_page(viewport={"width": 1280, "height": 900})
-        errors: list[str] = []
-        page.on("pageerror", lambda error: errors.append(str(error)))
-        await page.goto(kernel.login_link())
-        await page.wait_for_selector("#app", state="visible")
-        await page.fill("#chat-input", "where did you last see someone?")
-        await page.press("#chat-input", "Enter")
-        reply = page.locator("#chat-log .msg-kernel", has_text="seen by").last
-        await reply.wait_for(timeout=WAIT)
+    async with logged_in_page(kernel) as opened:
+        page = opened.page
+        reply = await opened.ask("where did you last see someone?", "seen by")
         answer = await reply.inner_text()
         assert "In the living room" in answer and "seen by the turtlebot" in answer, answer
         assert "just now" in answer or "minute" in answer, answer
@@ -96,5 +83,4 @@ async def test_the_last_sighting_is_named_in_chat_and_drawn_on_the_map(kernel: K
         summary = await page.inner_text("#map-summary")
         assert "Last seen: person in the living room" in summary, summary
         await page.locator("#map-panel").screenshot(path=str(Path(kernel.config.data_dir).parent / "map.png"))
-        assert errors == []
-        await browser.close()
+    assert opened.errors == []

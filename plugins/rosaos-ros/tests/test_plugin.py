@@ -8,18 +8,14 @@ from typing import Any
 import pytest
 from pydantic import ValidationError
 
-from rosaos.drivers import DeviceContext, DeviceError
+from rosaos.drivers import DeviceError
 from rosaos.plugins import load_drivers
 from rosaos.processes.jobs import GrantedDevice
 from rosaos.processes.tool_offer import offered_names
 from rosaos_ros.plugin import SPEC, real_backend, sim_backend
 from rosaos_ros.settings import RosSettings
 
-
-def ctx(tmp_path: Path, sim: dict[str, Any] | None = None, **settings: Any) -> DeviceContext:
-    return DeviceContext(
-        "turtlebot", "TurtleBot", RosSettings.model_validate(settings), "sim", sim or {}, tmp_path
-    )
+from .conftest import context  # the context the hosting layer builds, as every test here uses
 
 
 def test_entry_point_registers_the_ros_driver() -> None:
@@ -48,7 +44,7 @@ def test_settings_reject_unknown_keys_and_never_show_the_token() -> None:
 
 
 def test_the_sim_table_can_name_the_profile(tmp_path: Path) -> None:
-    backend = sim_backend(ctx(tmp_path, sim={"profile": "puppypi"}))
+    backend = sim_backend(context(tmp_path, sim={"profile": "puppypi"}))
     try:
         assert backend.profile.name == "puppypi" and backend.simulated
     finally:
@@ -57,12 +53,12 @@ def test_the_sim_table_can_name_the_profile(tmp_path: Path) -> None:
 
 def test_a_profile_in_settings_and_a_different_one_in_sim_is_an_error(tmp_path: Path) -> None:
     with pytest.raises(DeviceError, match="keep one"):
-        sim_backend(ctx(tmp_path, sim={"profile": "puppypi"}, profile="turtlebot4"))
+        sim_backend(context(tmp_path, sim={"profile": "puppypi"}, profile="turtlebot4"))
 
 
 def test_a_bad_sim_key_names_the_allowed_ones(tmp_path: Path) -> None:
     with pytest.raises(DeviceError, match=r"allowed keys: profile, x, y, yaw"):
-        sim_backend(ctx(tmp_path, sim={"heading": 1}))
+        sim_backend(context(tmp_path, sim={"heading": 1}))
 
 
 def test_a_user_profile_in_the_data_dir_is_found_by_name(tmp_path: Path) -> None:
@@ -73,7 +69,7 @@ def test_a_user_profile_in_the_data_dir_is_found_by_name(tmp_path: Path) -> None
         "limits: {linear: 1.0, angular: 2.0}\nspeeds: {linear: 0.5, angular: 1.0}\n",
         encoding="utf-8",
     )
-    backend = real_backend(ctx(tmp_path, profile="rover", namespace="r1"))
+    backend = real_backend(context(tmp_path, profile="rover", namespace="r1"))
     try:
         assert (backend.profile.name, backend.profile.cmd_vel.topic, backend.simulated) == (
             "rover",

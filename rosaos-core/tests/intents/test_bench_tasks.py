@@ -23,6 +23,7 @@ kitchen") needs the kernel between its sentences (memory, processes), so it runs
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -47,6 +48,7 @@ from rosaos.processes.jobs import GrantedDevice
 from rosaos.processes.prompts import DEFAULT_PROCESS_PROMPT, process_system_prompt
 
 from .intents_support import BENCH_TASKS, OWN_TASKS
+from .shared_reachy import lent_daemon, starts_awake
 
 READ_ONLY_TOOLS = {"get_state"}
 # Task files that no implementation can pass as written; reported to the bench's owner.
@@ -170,6 +172,13 @@ async def _converse(world: TaskFile, task: BenchTask, tmp_path: Path) -> None:
     assert trial.status == "pass", f"{task.said!r}: {trial.reason}; replies: {trial.replies}"
 
 
+@pytest.fixture(scope="module")
+def shared_reachy(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
+    """One simulated Reachy daemon for the module's Reachy tasks (:mod:`.shared_reachy` says why)."""
+    with lent_daemon(tmp_path_factory.mktemp("reachy-daemon")):
+        yield
+
+
 @pytest.mark.parametrize(("world", "task"), _tasks())
 def test_bench_sentence_plans_the_expected_devices(world: TaskFile, task: BenchTask) -> None:
     if len(task.utterances) > 1:
@@ -178,13 +187,18 @@ def test_bench_sentence_plans_the_expected_devices(world: TaskFile, task: BenchT
 
 
 @pytest.mark.parametrize(("world", "task"), _tasks(slow=(pytest.mark.slow,)))
-async def test_bench_task_runs_on_simulators(world: TaskFile, task: BenchTask, tmp_path: Path) -> None:
+async def test_bench_task_runs_on_simulators(
+    world: TaskFile, task: BenchTask, tmp_path: Path, request: pytest.FixtureRequest
+) -> None:
     if task.id in TASK_FILE_ISSUES:
         pytest.xfail(TASK_FILE_ISSUES[task.id])
     if len(task.utterances) > 1:
         await _converse(world, task, tmp_path)
         return
     result, devices, initial = _match(world, task)
+    reachies = [devices[d] for p in result.processes for d in p.devices if devices[d].driver == "reachy"]
+    if reachies and all(starts_awake(config.sim) for config in reachies):
+        request.getfixturevalue("shared_reachy")
     replies = [result.reply]
     for process in result.processes:
         [device] = process.devices

@@ -8,18 +8,22 @@ from pathlib import Path
 
 import pytest
 
+from rosaos.clock import LOOP_CLOCK, Clock
 from rosaos.events.types import NewEvent, TimerFired
 from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.intake import Intake, Queued
 from rosaos.kernel.loop import render_event
 from rosaos.kernel.updates import UpdateStream
-from rosaos.timers.timer_book import TimerBook, TimerError
+from rosaos.testing.manual_clock import WALL_START, ManualClock
+from rosaos.timers.timer_book import MAX_WAIT_SECONDS, TimerBook, TimerError
 from rosaos.timers.timer_text import DueTimeError, resolve_due
 
+from .kernel_support import eventually
 
-async def kernel_book(store: EventStore) -> TimerBook:
+
+async def kernel_book(store: EventStore, clock: Clock = LOOP_CLOCK) -> TimerBook:
     """The book as the kernel opens it: firings go through the intake, published on the updates stream."""
-    return await TimerBook.open(store, Intake(store, await UpdateStream.open(store.database)).submit)
+    return await TimerBook.open(store, Intake(store, await UpdateStream.open(store.database)).submit, clock)
 
 
 async def test_a_book_opened_without_the_intake_does_not_fire(store: EventStore) -> None:
@@ -79,7 +83,15 @@ async def test_timers_survive_reopening_the_store(tmp_path: Path) -> None:
         await reopened.close()
 
 
+async def armed_for(clock: ManualClock, when: float) -> None:
+    """Wait until the book's loop sleeps until ``when`` on ``clock`` (it has seen what changed)."""
+    await eventually(lambda: clock.next_wake == when, message=f"a sleep until {when}")
+
+
 async def test_the_clock_fires_a_timer_set_while_it_waits(store: EventStore) -> None:
+    """On a clock the test moves: the loop wakes for a timer set while it sleeps, and fires it at its
+    second, not before (no real second passes)."""
+    clock = ManualClock()
     fired: list[int] = []
     rang = asyncio.Event()
 
@@ -89,19 +101,50 @@ async def test_the_clock_fires_a_timer_set_while_it_waits(store: EventStore) -> 
         rang.set()
         return Queued(appended.id, event)
 
-    book = await TimerBook.open(store, enqueue)
-    clock = asyncio.create_task(book.run())
+    book = await TimerBook.open(store, enqueue, clock)
+    loop = asyncio.create_task(book.run())
     try:
-        await asyncio.sleep(0.05)  # the clock is asleep with nothing to do
-        await book.set("turn on the lamp", datetime.now(UTC) + timedelta(seconds=0.2))
+        await armed_for(clock, MAX_WAIT_SECONDS)  # asleep with nothing to do: it looks again in a minute
+        await book.set("turn on the lamp", book.now() + timedelta(seconds=30))
+        await armed_for(clock, 30.0)  # woken by the new timer, now asleep until it is due
+        await clock.advance(29.5)
+        await armed_for(clock, 30.0)
+        assert not rang.is_set() and fired == []
+        await clock.advance(0.5)
         async with asyncio.timeout(5):
             await rang.wait()
     finally:
-        clock.cancel()
+        loop.cancel()
     event = await store.get(fired[0])
-    assert event is not None
+    assert event is not None and isinstance(event.payload, TimerFired)
+    assert event.payload.due == datetime.fromtimestamp(WALL_START + 30, UTC)
     assert render_event(event).startswith("[Timer fired] timer=1 due=")
     assert "late" not in render_event(event)
+
+
+async def test_a_timer_ten_minutes_off_fires_at_the_tenth_minute_not_before(store: EventStore) -> None:
+    """The loop looks again every minute (a timer another process added is seen) and fires nothing
+    early; ten minutes pass on the test's clock in no time."""
+    clock = ManualClock()
+    book = await kernel_book(store, clock)
+    await book.set("turn off the kitchen light", book.now() + timedelta(minutes=10))
+    loop = asyncio.create_task(book.run())
+    try:
+        for minute in range(1, 10):
+            await armed_for(clock, minute * MAX_WAIT_SECONDS)
+            await clock.advance(MAX_WAIT_SECONDS)
+        await armed_for(clock, 600.0)  # it looked at 9 minutes: nothing due, so it waits for the timer
+        assert await store.pending_count() == 0
+        await clock.advance(MAX_WAIT_SECONDS)
+        await eventually(lambda: _one_pending(store), message="the timer's event")
+    finally:
+        loop.cancel()
+    [timer] = await book.list_timers(include_settled=True)
+    assert timer.state == "fired" and timer.settled_at == datetime.fromtimestamp(WALL_START + 600, UTC)
+
+
+async def _one_pending(store: EventStore) -> bool:
+    return await store.pending_count() == 1
 
 
 async def test_a_late_timer_says_how_late(store: EventStore) -> None:

@@ -97,8 +97,13 @@ class StopAtIntake:
             del self._stops[oldest]
 
     async def _stop(self, event_id: int, devices: tuple[str, ...], heard: float) -> StopReport | None:
+        halted: dict[str, float] = {}
+
+        def answered(device: str) -> None:
+            halted[device] = round(time.monotonic() - heard, 3)
+
         try:
-            report = await self._stopper.stop(devices)
+            report = await self._stopper.stop(devices, answered)
         except StopError as error:  # a name the world lost since: the kernel's turn says so
             log.warning("stop at intake for event %s: %s", event_id, error)
             return None
@@ -112,6 +117,8 @@ class StopAtIntake:
             "result": report.model_dump(mode="json"),
             "seconds": round(time.monotonic() - heard, 3),
             # from intake to every holder ended and every safe_stop answered
+            "safe_stop_seconds": halted,
+            # from intake to each device's safe_stop answered: the moment that robot is stopped
         }
         try:
             await self._publish("tool_call", f"stopped at once: {report.summary}", data, event_id)

@@ -89,8 +89,14 @@ class Stopper:
         self._halts = halts
         self._display = display
 
-    async def stop(self, devices: Sequence[str] = ()) -> StopReport:
-        """Stop ``devices``, or everything busy when none is named (see the module docstring)."""
+    async def stop(
+        self, devices: Sequence[str] = (), answered: Callable[[str], None] | None = None
+    ) -> StopReport:
+        """Stop ``devices``, or everything busy when none is named (see the module docstring).
+
+        ``answered(name)`` is called the moment a device's ``safe_stop`` answers: the robot is
+        stopped then, while its process may still be ending (the stop at intake times both).
+        """
         endpoints = self._endpoints()
         unknown = [name for name in devices if name not in endpoints]
         if unknown:
@@ -106,7 +112,7 @@ class Stopper:
             if not explicit and rank == len(HALT_ORDER):
                 break  # a bare stop halts devices that halt something; the rest are processes only
             results = await asyncio.gather(
-                *(self._stop_one(endpoints[name], explicit, terminated) for name in group)
+                *(self._stop_one(endpoints[name], explicit, terminated, answered) for name in group)
             )
             stopped += [result for result in results if result is not None]
         if not explicit:
@@ -120,7 +126,11 @@ class Stopper:
         return min((HALT_ORDER.index(halt) for halt in halts), default=len(HALT_ORDER))
 
     async def _stop_one(
-        self, endpoint: DeviceEndpoint, explicit: bool, terminated: dict[int, StoppedProcess]
+        self,
+        endpoint: DeviceEndpoint,
+        explicit: bool,
+        terminated: dict[int, StoppedProcess],
+        answered: Callable[[str], None] | None,
     ) -> StoppedDevice | None:
         holders = [] if endpoint.always_attached else self._holders(endpoint.name)
         was: str | None = None
@@ -130,7 +140,7 @@ class Stopper:
             if was is None and not explicit:
                 return None
         ended = asyncio.gather(*(self._terminate(info, terminated) for info in holders))
-        (ok, detail), processes = await asyncio.gather(self._safe_stop(endpoint), ended)
+        (ok, detail), processes = await asyncio.gather(self._safe_stop(endpoint, answered), ended)
         if processes:
             was = processes[0].task
         return StoppedDevice(
@@ -156,7 +166,9 @@ class Stopper:
         except (DeviceError, TimeoutError):
             return None
 
-    async def _safe_stop(self, endpoint: DeviceEndpoint) -> tuple[bool, str]:
+    async def _safe_stop(
+        self, endpoint: DeviceEndpoint, answered: Callable[[str], None] | None = None
+    ) -> tuple[bool, str]:
         if endpoint.url is None:
             return True, f"not served ({endpoint.status}): nothing runs on it"
         client = DeviceClient(endpoint.url, endpoint.token, SAFE_STOP_TIMEOUT, endpoint.name)
@@ -164,6 +176,8 @@ class Stopper:
             detail = await asyncio.wait_for(client.call("safe_stop"), SAFE_STOP_TIMEOUT)
         except (DeviceError, TimeoutError) as error:
             return False, str(error) or f"safe_stop did not answer within {SAFE_STOP_TIMEOUT:g} s"
+        if answered is not None:
+            answered(endpoint.name)
         return True, str(detail)
 
     def summary(

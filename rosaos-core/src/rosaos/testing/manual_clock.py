@@ -9,21 +9,35 @@ from __future__ import annotations
 
 import asyncio
 
+WALL_START = 1_795_000_000.0
+"""The wall time a manual clock starts at unless told (2026-11-18 08:26:40 UTC): fixed, so a
+test's timers fall at the same instants every run."""
+
 
 class ManualClock:
-    """A :class:`rosaos.clock.Clock` whose time the test advances."""
+    """A :class:`rosaos.clock.Clock` whose time the test advances (its wall time moves with it)."""
 
-    def __init__(self, start: float = 0.0) -> None:
+    def __init__(self, start: float = 0.0, wall: float = WALL_START) -> None:
         self._now = start
+        self._wall_offset = wall - start
         self._sleepers: list[tuple[float, asyncio.Future[None]]] = []
 
     def now(self) -> float:
         return self._now
 
+    def wall(self) -> float:
+        return self._now + self._wall_offset
+
     @property
     def sleeping(self) -> int:
         """How many sleeps are waiting for time to move (a test waits for the code to get there)."""
         return sum(1 for _, future in self._sleepers if not future.done())
+
+    @property
+    def next_wake(self) -> float | None:
+        """When the earliest waiting sleep wakes, on this clock (None: nothing sleeps). A test waits
+        for this to know the code has armed its wait, e.g. for a timer it was just told of."""
+        return min((due for due, future in self._sleepers if not future.done()), default=None)
 
     async def sleep(self, seconds: float) -> None:
         if seconds <= 0:

@@ -12,16 +12,15 @@ while the kernel was down fires once at start-up, and its event says how late it
 from __future__ import annotations
 
 import asyncio
-import contextlib
 import logging
 import sqlite3
-import time
 from collections.abc import Awaitable, Callable
 from datetime import UTC, datetime, timedelta
 from typing import Any, Literal
 
 from pydantic import BaseModel, Field
 
+from rosaos.clock import LOOP_CLOCK, Clock, sleep_unless
 from rosaos.events.types import NewEvent, TimerFired, TimerFiredEvent
 from rosaos.kernel.event_store import EventStore
 from rosaos.kernel.intake import Queued
@@ -83,20 +82,28 @@ class TimerBook:
     ``enqueue`` queues a firing: the running kernel passes its intake, the one way into the
     queue. A book opened without it (``rosaos timers`` on the store of a stopped kernel) sets,
     lists and cancels, but does not fire. All access goes through one lock, so a cancel and a
-    firing never cross.
+    firing never cross. Time is ``clock``'s wall time (tests pass a
+    :class:`~rosaos.testing.manual_clock.ManualClock` and move it: ten minutes in no time).
     """
 
-    def __init__(self, store: EventStore, enqueue: Enqueue | None = None) -> None:
+    def __init__(self, store: EventStore, enqueue: Enqueue | None = None, clock: Clock = LOOP_CLOCK) -> None:
         self._database = store.database
         self._enqueue = enqueue
+        self._clock = clock
         self._lock = asyncio.Lock()
         self._changed = asyncio.Event()
 
     @classmethod
-    async def open(cls, store: EventStore, enqueue: Enqueue | None = None) -> TimerBook:
+    async def open(
+        cls, store: EventStore, enqueue: Enqueue | None = None, clock: Clock = LOOP_CLOCK
+    ) -> TimerBook:
         """Create the table if needed; the book shares the event store's connection and thread."""
         await store.database.executescript(_SCHEMA)
-        return cls(store, enqueue)
+        return cls(store, enqueue, clock)
+
+    def now(self) -> datetime:
+        """The book's time, as an aware UTC datetime (what due times are counted from)."""
+        return datetime.fromtimestamp(self._clock.wall(), UTC)
 
     async def set(self, action: str, due: datetime) -> Timer:
         """Add a timer that runs ``action`` at ``due`` (aware datetime). Raises :class:`TimerError`."""
@@ -105,7 +112,7 @@ class TimerBook:
             raise TimerError("a timer needs an action, e.g. 'turn off the kitchen light'")
         if due.tzinfo is None:
             raise TimerError("the due time needs a time zone")
-        now = time.time()
+        now = self._clock.wall()
         if due.timestamp() - now > MAX_DELAY.total_seconds():
             raise TimerError(f"{due.isoformat()} is more than a year away; set a nearer time")
         async with self._lock:
@@ -149,7 +156,7 @@ class TimerBook:
                 return connection.execute(
                     "UPDATE timers SET state = 'cancelled', settled_at = ? "
                     f"WHERE id = ? AND state = 'pending' RETURNING {_COLUMNS}",
-                    (time.time(), timer_id),
+                    (self._clock.wall(), timer_id),
                 ).fetchall()
 
             rows = await self._database.run(settle)
@@ -169,7 +176,7 @@ class TimerBook:
                 "this timer book was opened without the kernel's intake: only the kernel fires timers"
             )
         enqueue = self._enqueue
-        moment = (now or datetime.now(UTC)).timestamp()
+        moment = (now or self.now()).timestamp()
         fired: list[int] = []
         async with self._lock:
             rows = await self._database.fetch(
@@ -193,7 +200,7 @@ class TimerBook:
         """Seconds until the soonest pending timer (0 if overdue), or None when there is none."""
         rows = await self._database.fetch("SELECT min(due) FROM timers WHERE state = 'pending'")
         due = rows[0][0]
-        return None if due is None else max(0.0, float(due) - time.time())
+        return None if due is None else max(0.0, float(due) - self._clock.wall())
 
     async def run(self) -> None:
         """Fire timers as they fall due, for as long as the kernel runs (cancel the task to stop)."""
@@ -203,13 +210,12 @@ class TimerBook:
                 await self.fire_due()
             except Exception:  # a disk error must not stop every later timer: log, retry soon
                 log.exception("firing due timers failed; retrying in 1 s")
-                await asyncio.sleep(1.0)
+                await self._clock.sleep(1.0)
                 continue
             wait = await self.seconds_to_next()
             wait = MAX_WAIT_SECONDS if wait is None else min(wait, MAX_WAIT_SECONDS)
-            with contextlib.suppress(TimeoutError):
-                # Woken early when a timer is set or cancelled; the soonest may have changed.
-                await asyncio.wait_for(self._changed.wait(), timeout=max(wait, 0.01))
+            # Woken early when a timer is set or cancelled; the soonest may have changed.
+            await sleep_unless(self._clock, max(wait, 0.01), self._changed)
 
 
 def fired_event(timer: Timer, now: datetime) -> TimerFiredEvent:

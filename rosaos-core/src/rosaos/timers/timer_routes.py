@@ -7,7 +7,6 @@ so there is no route to set one: say it to the kernel with ``POST /chat``.
 
 from __future__ import annotations
 
-from datetime import UTC, datetime
 from typing import Annotated
 
 from fastapi import HTTPException, Query
@@ -25,7 +24,7 @@ async def list_timers(
     ] = False,
 ) -> TimerList:
     """The pending timers, soonest first; with ``all=true``, recent fired and cancelled ones after them."""
-    return TimerList(timers=await runtime.timers.list_timers(include_settled), now=datetime.now(UTC))
+    return TimerList(timers=await runtime.timers.list_timers(include_settled), now=runtime.timers.now())
 
 
 @protected.delete("/timers/{timer_id}")

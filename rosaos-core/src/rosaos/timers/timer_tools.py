@@ -7,7 +7,7 @@ as a ``[Timer fired]`` event, and its action is then launched like any command.
 
 from __future__ import annotations
 
-from datetime import UTC, datetime
+from datetime import datetime
 from typing import Annotated, Any
 
 from fastmcp import FastMCP
@@ -55,7 +55,7 @@ def add_timer_tools(server: FastMCP, book: TimerBook) -> None:
         ] = None,
     ) -> dict[str, Any]:
         """Do an action later, as a [Timer fired] event (it survives restarts). Give in_seconds or at."""
-        now = datetime.now(UTC)
+        now = book.now()
         try:
             due = resolve_due(in_seconds, at, now)
             timer = await book.set(action, due)
@@ -66,7 +66,7 @@ def add_timer_tools(server: FastMCP, book: TimerBook) -> None:
     @server.tool(annotations={"readOnlyHint": True, "destructiveHint": False, "idempotentHint": True})
     async def list_timers() -> list[dict[str, Any]]:
         """The timers still to fire, soonest first."""
-        now = datetime.now(UTC)
+        now = book.now()
         return [timer_data(timer, now) for timer in await book.pending()]
 
     @server.tool(annotations={"readOnlyHint": False, "destructiveHint": True, "idempotentHint": True})
@@ -82,7 +82,7 @@ def add_timer_tools(server: FastMCP, book: TimerBook) -> None:
         cancel_all: bool = False,
     ) -> list[dict[str, Any]]:
         """Cancel timers; with no argument the newest ('that timer')."""
-        now = datetime.now(UTC)
+        now = book.now()
         targets = await _targets(book, timer_id, matching, cancel_all)
         cancelled = []
         for target in targets:
