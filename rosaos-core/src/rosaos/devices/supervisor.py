@@ -42,6 +42,7 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from rosaos.auth import token_path
+from rosaos.clock import LOOP_CLOCK, Clock
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.directory import DirectoryEntry, SafeStopOutcome, safe_stop_entry
 from rosaos.devices.host import START_TIMEOUT, HostJob
@@ -129,8 +130,12 @@ class DeviceSupervisor:
         start_timeout: float = START_TIMEOUT,
         stop_grace: float = 5.0,
         defer_background: bool = False,
+        clock: Clock = LOOP_CLOCK,
     ) -> None:
         self.world = world
+        self.clock = clock
+        """What a remote instance's checks wait on, ``health_interval`` apart (tests move a
+        :class:`~rosaos.testing.manual_clock.ManualClock`)."""
         self._background_go = asyncio.Event()
         """Background-start instances wait for this: at once, or :meth:`release_background` when
         ``defer_background`` (``rosaos up`` lets the other devices and the workers boot first)."""
@@ -534,7 +539,7 @@ class DeviceSupervisor:
         while True:
             await self._probe_remote(hosted)
             hosted.settled.set()
-            await asyncio.sleep(self.health_interval)
+            await self.clock.sleep(self.health_interval)
 
     async def _terminate_group(self, group: list[_Hosted]) -> None:
         hosts = {id(hosted.host): hosted.host for hosted in group if hosted.host is not None}
