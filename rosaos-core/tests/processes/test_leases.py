@@ -96,6 +96,8 @@ def test_always_attached_device_with_a_pattern_goes_only_to_a_task_that_asks_for
     table = LeaseTable()
     assert table.acquire(1, "Turn on the kitchen light.", ["kitchen_light"], devices) == ["kitchen_light"]
     assert table.acquire(2, "Say good night", [], devices) == ["reachy"]
+    # A task given no device can only speak, whatever its words: "The battery is low."
+    assert table.acquire(5, "The battery is low.", [], devices) == ["reachy"]
     assert table.acquire(3, "Tell them the weather", ["weather"], devices) == ["weather", "reachy"]
     # Named by the kernel, it is granted whatever the task says.
     assert table.acquire(4, "Look left", ["reachy"], devices) == ["reachy"]

@@ -58,7 +58,8 @@ class LeaseTable:
         """Grant ``requested`` plus every always-attached device to ``process_id``, all or nothing.
 
         Returns the granted device names: the requested ones in the order asked, then the
-        always-attached ones that were not asked for and that ``task`` asks for (:func:`attaches`). Raises :class:`LeaseRefused` naming every
+        always-attached ones that were not asked for and that ``task`` asks for (:func:`attaches`),
+        or all of them when no device was asked for (speaking is all such a process can do). Raises :class:`LeaseRefused` naming every
         problem (unknown device, device not served, exclusive device held by another process).
         An always-attached device that is not served right now is left out rather than refused:
         the process can still do its task, it just cannot talk to the user.
@@ -90,7 +91,9 @@ class LeaseTable:
         implicit = [
             name
             for name in self._always_attached(devices)
-            if devices[name].grantable and name not in wanted and attaches(devices[name], task)
+            if devices[name].grantable
+            and name not in wanted
+            and (not wanted or attaches(devices[name], task))
         ]
         granted = wanted + implicit
 
