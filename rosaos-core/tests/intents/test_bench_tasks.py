@@ -14,7 +14,9 @@ of home.yaml), or when it expects no change at all (ambiguous, unknown, question
   names, and leave them as ``expect`` says (and every other initial key as it was);
 - a task that expects no change must not actuate: either it is not an exact match (the engine
   asks or refuses), or its plans only read state;
-- a ``reply`` regex must match some reply (the kernel's, or a process output), by ``rosaos.bench``'s rule.
+- a ``reply`` regex must match some reply (the kernel's, or a process output), by ``rosaos.bench``'s rule;
+  a state question the kernel answers itself (no lease, no process) is answered here the same
+  way, from the task's initial states.
 
 A task that is a conversation (several sentences: "the kitchen is at x 3.5, y 0", then "go to the
 kitchen") needs the kernel between its sentences (memory, processes), so it runs the way
@@ -41,7 +43,11 @@ from rosaos.devices.serve import open_device
 from rosaos.devices.world import build_world
 from rosaos.events.plan import Plan
 from rosaos.intents.grammar.vocabulary import sources_from_config
+from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.intents.understanding.matching import IntentMatcher
+from rosaos.intents.understanding.questions import read_question
+from rosaos.intents.understanding.stop_words import DeviceRefs
+from rosaos.models.kernel_actions import state_answer
 from rosaos.models.process_model import LocalPlanModel
 from rosaos.plugins import DriverRegistry, load_drivers
 from rosaos.processes.jobs import GrantedDevice
@@ -144,6 +150,9 @@ def _match(world: TaskFile, task: BenchTask) -> Any:
     if (reason := _covered(world, task, REGISTRY)) is not None:
         pytest.skip(reason)
     devices, initial = _devices(world, task)
+    if not task.expect and _kernel_answers(devices, initial, task):
+        # The kernel answers a state question itself and never hands it to the matcher.
+        return MatchResult("no_match", task.said), devices, initial
     result = _matcher(devices).match(task.said)
     planned = {step.tool for process in result.processes for step in process.plan.steps}
     if not task.expect and result.is_exact:
@@ -152,6 +161,20 @@ def _match(world: TaskFile, task: BenchTask) -> Any:
         assert result.is_exact, f"{task.said!r} did not match: {result.reply}"
         assert {device for process in result.processes for device in process.devices} == set(task.expect)
     return result, devices, initial
+
+
+def _kernel_answers(devices: dict[str, DeviceConfig], initial: dict[str, Any], task: BenchTask) -> list[str]:
+    """What the kernel answers a state question itself, before any match (no lease, no process):
+    from the task's initial states, by the kernel's own words (``state_answer``). Empty when the
+    states a task file sets do not say (a battery the simulator reports): the question's
+    ``get_state`` plan is then run on the simulator instead."""
+    question = read_question(task.said, DeviceRefs(sources_from_config(devices, REGISTRY)))
+    if question is None or question.topic == "help" or task.expect:
+        return []
+    asked = question.devices or tuple(initial)
+    return [
+        answer for device in asked if (answer := state_answer(question, device, initial[device])) is not None
+    ]
 
 
 class _Quiet:
@@ -199,7 +222,7 @@ async def test_bench_task_runs_on_simulators(
     reachies = [devices[d] for p in result.processes for d in p.devices if devices[d].driver == "reachy"]
     if reachies and all(starts_awake(config.sim) for config in reachies):
         request.getfixturevalue("shared_reachy")
-    replies = [result.reply]
+    replies = [result.reply, *_kernel_answers(devices, initial, task)]
     for process in result.processes:
         [device] = process.devices
         output, state = await _run(process.summary, process.plan, device, devices[device], tmp_path)

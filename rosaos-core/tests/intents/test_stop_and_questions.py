@@ -70,7 +70,7 @@ def test_sentences_that_are_not_a_stop_are_left_to_the_engine(said: str, refs: D
         ("how much battery?", Question("battery", ())),
         ("how charged is the turtlebot", Question("battery", ("turtlebot",))),
         ("is the turtlebot docked?", Question("docked", ("turtlebot",))),
-        ("hey, can you tell me if the turtlebot is docked", None),  # not a form it knows: left alone
+        ("hey, can you tell me if the turtlebot is docked", Question("docked", ("turtlebot",))),
         ("does the turtlebot see anyone?", Question("people", ("turtlebot",))),
         ("what can you do?", Question("help", ())),
     ],

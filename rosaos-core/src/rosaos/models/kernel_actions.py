@@ -26,7 +26,7 @@ from typing import Any
 from pydantic_ai.messages import ModelMessage, ModelResponsePart, TextPart, ToolCallPart
 
 from rosaos.events.plan import result_data
-from rosaos.intents.grammar.state_words import battery, doing, people_seen, position
+from rosaos.intents.grammar.state_words import battery, colour, doing, people_seen, position
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.intents.understanding.questions import Question, read_question
@@ -185,6 +185,12 @@ def _answer(
     return [TextPart(f"{names[0].upper()}{names[1:]} does not report that.")]
 
 
+def state_answer(question: Question, device: str, state: dict[str, Any]) -> str | None:
+    """What the offline kernel answers ``question`` about ``device`` in ``state``, nobody holding
+    it (for checks that run no kernel: the bench tasks' plan test)."""
+    return _about(question, {"device": device, "state": state, "held_by": []})
+
+
 def _about(question: Question, reading: dict[str, Any]) -> str | None:
     """One device's answer to ``question``, or None when its state does not say."""
     name, state = _spoken(reading["device"]), reading.get("state")
@@ -202,6 +208,14 @@ def _about(question: Question, reading: dict[str, Any]) -> str | None:
             by = f" by {state['artist']}" if state.get("artist") else ""
             return f"{'Yes: ' if topic == 'is_playing' else ''}{state['track']}{by} is playing on the {name}."
         return f"{'No, n' if topic == 'is_playing' else 'N'}othing is playing on the {name}."
+    if topic == "brightness" and isinstance(state.get("brightness"), int | float):
+        off = " (it is off)" if state.get("on") is False else ""
+        return f"The {name} is at {state['brightness']}% brightness{off}."
+    if topic == "colour" and (shade := colour(state)) is not None:
+        off = " (it is off)" if state.get("on") is False else ""
+        return f"The {name} is {shade}{off}."
+    if topic == "volume" and isinstance(state.get("volume"), int | float):
+        return f"The {name}'s volume is at {state['volume']}%."
     if topic == "position" and (where := position(state)) is not None:
         return f"The {name} is {where}."
     if topic == "battery" and (charge := battery(state)) is not None:

@@ -10,7 +10,8 @@ know (the raw state is still there for an LLM):
 - a robot: ``x``, ``y`` (metres, odometry frame), ``yaw`` (radians), ``linear``, ``angular``,
   and when it has a dock ``docked``; ``battery`` (a fraction, or a percentage above 1);
   ``people_seen`` (``[{x, y, at}]``);
-- a light: ``on``, ``brightness`` (percent);
+- a light: ``on``, ``brightness`` (percent), ``hue`` (degrees) and ``saturation`` (percent) in
+  colour mode, ``color_temp`` (kelvin; 0 in colour mode);
 - music: ``is_playing``, ``track``, ``artist``, ``volume``;
 - speech: ``speaking``.
 
@@ -159,3 +160,26 @@ def _ago(seconds: float) -> str:
 
 def _number(value: Any) -> float:
     return float(value) if isinstance(value, int | float) and not isinstance(value, bool) else 0.0
+
+
+_HUES = (
+    (15, "red"), (40, "orange"), (52, "amber"), (75, "yellow"), (105, "lime"), (150, "green"),
+    (175, "teal"), (195, "cyan"), (225, "sky blue"), (250, "blue"), (270, "indigo"), (285, "purple"),
+    (295, "violet"), (315, "magenta"), (345, "pink"), (361, "red"),
+)  # fmt: skip
+"""The colour a hue is called, by the upper end of its range in degrees."""
+
+
+def colour(state: dict[str, Any]) -> str | None:
+    """A light's colour in words ("blue", "warm white (2700 K)"); None when its state has none."""
+    kelvin = state.get("color_temp")
+    hue, saturation = state.get("hue"), state.get("saturation")
+    if isinstance(kelvin, int | float) and kelvin > 0:
+        shade = "warm white" if kelvin < 3300 else "neutral white" if kelvin < 4800 else "cool white"
+        return f"{shade} ({round(kelvin)} K)"
+    if isinstance(hue, int | float) and isinstance(saturation, int | float):
+        if saturation < 15:
+            return "white"
+        name = next(name for upper, name in _HUES if hue % 360 < upper)
+        return f"{'pale ' if saturation < 50 else ''}{name}"
+    return None

@@ -20,7 +20,8 @@ tries, in order, and stops at the first that is an exact command:
    …"); its "which one?" too when the literal reading found nothing;
 7. **the fuzzy model** (:mod:`rosaos.intents.understanding.fuzzy`), only when the literal reading
    found nothing at all (a question or a refusal stands): a close guess acts; a weaker one asks
-   "Did you mean …?" and does nothing; questions are never guessed into actions.
+   "Did you mean …?" and does nothing; questions are never guessed into actions, but a question
+   guessed as another question is answered (reading state changes nothing).
 
 Everything else keeps the literal result: "which one?", "I don't know …", "not understood".
 The reader never reads negations, questions or "stop", and refuses a number out of a device's
@@ -116,7 +117,9 @@ def _guess(
     question = QUESTION_START.get(language.split("-")[0])
     asks = question is not None and question.match(plain) is not None
     acts = any(step.tool != "get_state" for process in meant.processes for step in process.plan.steps)
-    if guess.score >= ACT_SCORE and not (asks and acts):
+    if (guess.score >= ACT_SCORE and not (asks and acts)) or (asks and not acts):
+        # A question answered from state changes nothing: answering beats "Did you mean …?",
+        # which would only ask the user to say their question again.
         return meant
     reply = phrase(language, "did_you_mean", suggestion=guess.sentence)
     return MatchResult("clarify", text, reply=reply, suggestion=guess.sentence)

@@ -6,6 +6,12 @@ asking about one :data:`Topic`. The forms are those of the language, not of a dr
 porch light still on?" and "is the turtlebot docked?" need no template of the driver's. A
 reference several devices share ("where is the robot?") asks about each of them; a missing one
 ("how much battery?", "what's playing?") about every device whose state has the answer.
+
+What is around a question never changes what it asks, so it is taken off by its role, as the
+command reader does for commands: openers ("oh", "hey, quick question:"), indirect frames ("do
+you know if …", "can you tell me whether …": the question inside is read as asked), adverbs of
+time ("still", "right now", "at the moment", "currently") wherever they stand, and tags ("…, do
+you know?", "… then?").
 """
 
 from __future__ import annotations
@@ -18,12 +24,33 @@ from rosaos.intents.understanding.compose.speech import command_words
 from rosaos.intents.understanding.stop_words import DeviceRefs
 
 Topic = Literal[
-    "on", "off", "playing", "is_playing", "position", "battery", "docked", "people", "busy", "help"
-]
+    "on", "off", "playing", "is_playing", "position", "battery", "docked", "people", "busy", "help",
+    "brightness", "colour", "volume",
+]  # fmt: skip
 
 _OPENERS = re.compile(
-    r"^(?:(?:hey|okay|ok|so|um|uh|rosa|please|quick question)[, ]+)*"
-    r"(?:(?:can|could) you tell me |do you know |tell me |i wonder |i'd like to know )?"
+    r"^(?:(?:hey|okay|ok|so|um|uh|oh|ah|hmm|well|rosa|please|quick question|just wondering|just curious)[, ]+)*"
+)
+_FRAMES = re.compile(
+    r"^(?:(?:can|could|would) you (?:please )?tell me|do you (?:happen to )?know|tell me|i wonder|"
+    r"i'm wondering|i was wondering|i'd like to know|any idea|have you (?:any|an) idea|let me know|check) "
+)
+"""What makes a question indirect: "do you know …", "can you tell me …" (its inner question is read)."""
+_NOT_A_NOUN = r"(?!(?:the|a|an|my|our|your|this|that|these|those|its|it)\b)"
+_INDIRECT = re.compile(
+    r"^(?:if|whether) (?P<ref>.+?) (?P<verb>is|are|has|was|were|does|did) (?P<rest>.+)$"
+    rf"|^(?P<wh>what(?: {_NOT_A_NOUN}\w+)?|which \w+|how \w+|where|who) (?P<ref2>.+) (?P<verb2>is|are)"
+    r"(?: (?P<tail>set to|at|on|playing|doing|set at))?$"
+)
+"""An indirect question ("… if the lamp is on", "… what colour the lamp is") → asked directly."""
+_TIME_WORDS = re.compile(
+    r"\b(?:still|currently|presently|right now|at the moment|at present|just now|by any chance|already|now)\b"
+    r"|\b(?:sitting|standing|resting|parked|back)\b(?= (?:on|at|in|by)\b)"
+)
+"""Words that say when or how, not what is asked: "is the robot still sitting on its dock?"."""
+_TAGS = re.compile(
+    r"(?:[, ]+(?:do you know|you know|any idea|then|please|for me|by any chance|can you check|"
+    r"could you check|or not|right|currently|now))+$"
 )
 _REF = r"(?P<ref>[a-z0-9' ]+?)"
 _NOW = r"(?: (?:right now|now|at the moment|currently|yet|so far|still))?"
@@ -55,6 +82,25 @@ _FORMS: tuple[tuple[Topic, str], ...] = (
     ("people", rf"(?:is|are) (?:there )?{_SEEN} in front of {_REF}"),
     ("people", rf"who (?:does|can|did) {_REF} see{_NOW}"),
     ("busy", rf"is {_REF} (?:moving|walking|driving|busy|doing anything|working){_NOW}"),
+    ("on", rf"did (?:i|we|you|someone|somebody|anyone|anybody) (?:leave|forget|keep) {_REF} (?:on|lit|running)"),
+    ("off", rf"did (?:i|we|you|someone|somebody|anyone|anybody) (?:turn|switch|shut) off {_REF}"),
+    ("off", rf"did (?:i|we|you|someone|somebody|anyone|anybody) (?:turn|switch|shut) {_REF} off"),
+    ("on", rf"(?:is|are) {_REF} (?:switched |turned )?(?:on|lit)(?: or (?:off|not))?"),
+    ("brightness", rf"how (?:bright|dim|brightly lit) (?:is|are) {_REF}(?: set| turned up)?(?: to| at)?"),
+    ("brightness", rf"(?:what|which) (?:brightness|level|percentage|percent|dimmer level) (?:is|are) {_REF}(?: set| turned| dimmed)?(?: to| at| on)?"),
+    ("brightness", rf"(?:what's|whats|what is|how's|hows|how is) the (?:brightness|dimmer|light level)(?: level)?(?: (?:of|on|for) {_REF})?(?: set)?(?: to| at)?"),
+    ("brightness", rf"(?:what's|whats|what is|how's|hows|how is) {_REF}(?:'s)? (?:brightness|dimmer|light level)(?: level)?(?: set)?(?: to| at)?"),
+    ("brightness", rf"(?:what|how much) (?:is|are) {_REF} (?:dimmed|brightened) to"),
+    ("colour", rf"(?:what|which) (?:colou?r|shade|hue)(?: temperature)? (?:is|are) {_REF}(?: set| showing| glowing| shining| lit| turned)?(?: to| at| in| on)?(?: (?:right )?now)?"),
+    ("colour", rf"(?:what's|whats|what is) the (?:colou?r|shade|hue)(?: temperature)?(?: (?:of|on|for) {_REF})?(?: set)?(?: to| at)?"),
+    ("colour", rf"(?:what's|whats|what is) {_REF}(?:'s)? (?:colou?r|shade|hue)(?: temperature)?(?: set)?(?: to| at)?"),
+    ("volume", rf"(?:what's|whats|what is|how's|hows|how is) the (?:volume|sound level)(?: level)?(?: (?:of|on|for) {_REF})?(?: set)?(?: to| at)?"),
+    ("volume", rf"(?:what's|whats|what is|how's|hows|how is) {_REF}(?:'s)? (?:volume|sound level)(?: level)?(?: set)?(?: to| at)?"),
+    ("volume", rf"(?:what|which) volume (?:is|are) {_REF}(?: set| playing| turned)?(?: to| at| on)?"),
+    ("volume", r"(?:what|which) volume (?:is|are) (?:it|this|that|the music)(?: set| playing| turned)?(?: to| at| on)?"),
+    ("volume", rf"how loud (?:is|are) {_REF}(?: set| playing| turned up)?(?: to| at)?"),
+    ("volume", r"how loud (?:is|are) (?:it|this|that)(?: set| playing| turned up)?(?: to| at)?"),
+    ("playing", r"(?:what|which|who)(?:'s| is| are)? .*\b(?:song|track|tune|music|playing|singing|artist|band|album|listening to|on the (?:radio|speaker|stereo))\b.*"),
     ("help", r"what (?:can|could) (?:you|i) (?:do|say|ask|tell you to do)(?: here| for me| with you)?"),
     ("help", r"(?:help|what do you do|what are you able to do|what commands do you know)"),
 )  # fmt: skip
@@ -74,8 +120,14 @@ class Question:
 
 def read_question(text: str, refs: DeviceRefs) -> Question | None:
     """The question ``text`` asks, or None when it is not one of the state questions."""
-    said = " ".join(text.lower().replace("’", "'").replace("?", " ").replace(",", " ").split()).strip(" .!")
-    said = _OPENERS.sub("", said).strip()
+    said = " ".join(text.lower().replace("’", "'").replace("?", " ").replace(",", " , ").split()).strip(
+        " .!,"
+    )
+    said = _OPENERS.sub("", _TAGS.sub("", said)).strip(" ,")
+    indirect = _FRAMES.match(said)
+    if indirect is not None:
+        said = _direct(said[indirect.end() :].strip(" ,"))
+    said = " ".join(_TIME_WORDS.sub(" ", said).replace(",", " ").split())
     # The discourse around a question ("hmm, …", "ok so …", "… then?") is the command reader's to strip.
     bare = command_words(said)
     for topic, form in FORMS:
@@ -90,6 +142,18 @@ def read_question(text: str, refs: DeviceRefs) -> Question | None:
             continue  # "is the kettle on?": not a device of this world; the engine says what exists
         return Question(topic, devices)
     return None
+
+
+def _direct(said: str) -> str:
+    """An indirect question as a direct one: "if the lamp is on" → "is the lamp on", "what colour
+    the lamp is" → "what colour is the lamp"; anything else as it is."""
+    found = _INDIRECT.match(said)
+    if found is None:
+        return said
+    if found.group("ref"):
+        return f"{found.group('verb')} {found.group('ref')} {found.group('rest')}"
+    tail = f" {found.group('tail')}" if found.group("tail") else ""
+    return f"{found.group('wh')} {found.group('verb2')} {found.group('ref2')}{tail}"
 
 
 def _devices(ref: str, refs: DeviceRefs) -> tuple[str, ...] | None:

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.understanding.compose.references import References
+from rosaos.intents.understanding.compose.speech import asks, remark
 
 STOP_PHRASES = (
     "emergency stop", "stop moving", "stop it", "hold it", "hold on", "hold up", "stand still",
@@ -33,6 +34,10 @@ STOP_PHRASES = (
     "stop", "halt", "freeze", "enough", "cease", "abort", "whoa", "woah", "stopp",
 )  # fmt: skip
 """Words and phrases that mean stop, longest first where one contains another."""
+
+INTERJECTIONS = frozenset({"whoa", "woah", "hold on", "hold up"})
+"""Stop words that are also what people say before a request ("whoa, that's loud, turn it down"):
+a stop alone, or beside a remark ("whoa, the dog is too close"), but not before a command."""
 
 DOING = frozenset(
     [
@@ -134,9 +139,17 @@ FILLERS = frozenset(
         "both",
         "every",
         "each",
+        "make",
+        "get",
+        "have",
+        "tell",
+        "ask",
+        "let",
+        "to",
     ]
 )
-"""Words that carry no command: ignored around a stop."""
+"""Words that carry no command: ignored around a stop (also the causative frame: "make the dog
+stop", "tell the robot to halt")."""
 
 _NEGATED_MOVES = ("don't move", "do not move", "dont move")
 NEGATIONS = ("don't", "dont", "do not", "never", "not", "no need to", "doesn't")
@@ -199,6 +212,8 @@ def read_stop(text: str, refs: DeviceRefs) -> StopRequest | None:
             clauses.append(("stop" if _count_stops(clause) else "name", clause, found))
     if not any(kind == "stop" for kind, _, _ in clauses):
         return None
+    if _only_exclaimed(clauses):
+        return None  # "whoa, the music is way too loud, turn it down": surprise, then a request
     first = next((index for index, (kind, _, _) in enumerate(clauses) if kind == "other"), len(clauses))
     if any(kind == "stop" and not found for kind, _, found in clauses[first:]):
         return None  # "walk forward, then stop": the end of that command, not a stop of its own
@@ -214,6 +229,28 @@ def read_stop(text: str, refs: DeviceRefs) -> StopRequest | None:
         if kind == "other" or (kind == "name" and index > first)
     ]
     return StopRequest(tuple(dict.fromkeys(devices)), " and ".join(rest))
+
+
+def _only_exclaimed(clauses: list[tuple[str, str, list[str]]]) -> bool:
+    """Whether every stop in ``clauses`` is an interjection naming nothing, and another clause asks
+    for something (a command, not a remark about what happens)."""
+    stops = [(clause, found) for kind, clause, found in clauses if kind == "stop"]
+    exclaimed = all(
+        not found and not _count_stops(" ".join(_strip_interjections(clause.split())))
+        for clause, found in stops
+    )
+    asked = any(
+        kind == "other" and not remark(clause) and not asks(clause) and not _count_stops(clause)
+        for kind, clause, _ in clauses
+    )
+    return exclaimed and asked
+
+
+def _strip_interjections(words: list[str]) -> list[str]:
+    text = f" {' '.join(words)} "
+    for phrase in sorted(INTERJECTIONS, key=len, reverse=True):
+        text = text.replace(f" {phrase} ", " ")
+    return text.split()
 
 
 def _words(text: str) -> list[str]:

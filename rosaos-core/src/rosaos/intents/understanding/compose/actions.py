@@ -32,7 +32,11 @@ _UNDOCK = re.compile(
 _DOCK = re.compile(
     rf"\b(?:re)?dock\b|\b(?:go|goes|head|come|return|get|send|drive|take|back|park|walk|roll|move)\b(?:\s+\w+){{0,3}}?"
     rf"\s+(?:back\s+)?(?:to|on|onto|into|at|toward|towards)?\s*{DET}{_DOCK_PLACE}\b|\bgo\s+(?:and\s+)?charge\b|\brecharge\b"
+    r"|\b(?:back\s+)?to\s+(?:go\s+)?(?:re)?charge\b|\b(?:back\s+)?for\s+(?:a\s+)?(?:re)?charg(?:e|ing)\b"
+    r"|\bcharg(?:e|ing)\s+(?:up|itself|yourself|its battery|your battery)\b|\b(?:go|head|get)\s+charging\b"
 )
+"""Back to the dock: "dock", "return to base", "head home", "go back to the charger", "send it back to
+charge", "go recharge", "charge up"."""
 _SHUFFLE_OFF = re.compile(r"\b(?:un-?shuffle|stop shuffling|no shuffle|shuffle off|in order)\b")
 _SHUFFLE = re.compile(r"\b(?:shuffle|mix(?:\s+\w+){0,3}\s+up|mix it up|randomi[sz]e|random order)\b")
 _NEXT = re.compile(r"\b(?:skip\w*|next (?:song|track|tune|one|1)|another (?:song|track|tune))\b|^next$")
@@ -41,6 +45,15 @@ _PREVIOUS = re.compile(
     r"|go back(?:\s+to the (?:last|previous))?\s+(?:song|track|tune)|replay (?:the )?(?:last|previous)\w*)\b"
 )
 _PAUSE = re.compile(r"\bpause\w*\b")
+_AUDIENCE = r"(?:everyone|everybody|every1|the room|them|us|people|all|the \w+|y'?all)"
+_SAY = re.compile(
+    r"^(?:(?:have|get|make|let|ask)\s+(?P<who>.+?)\s+(?:to\s+)?)?"
+    rf"(?:say(?:\s+to\s+{_AUDIENCE})?|tell\s+{_AUDIENCE}|announce|let\s+{_AUDIENCE}\s+know|inform\s+{_AUDIENCE}"
+    r"|shout|call out|give\s+(?:a|an)\s+(?=shout|announcement))(?:\s+that)?\s+(?!to\s)(?P<text>.+)$"
+)
+"""Words to say out loud, and who says them: "have Reachy say good night", "let everyone know the
+pizza's here", "announce that dinner is ready". "Tell the drone to take off" is an order to
+someone, not words to say."""
 _PRESS = re.compile(r"\b(?:hit|press|push|tap|click|do|go)\b|\b(?:ahead|forward|on)$")
 """Words around a transport word that add nothing: "hit pause", "skip ahead", "go back a song"."""
 _RESUME = re.compile(
@@ -59,8 +72,35 @@ _REPEAT_OFF = re.compile(
     r"|\bno (?:more )?(?:repeat|loop)\w*|\bun-?loop\w*|\bdisable (?:the )?(?:repeat|loop)\w*"
 )
 _REPEAT = re.compile(r"\b(?:repeat|loop)\w*\b|\bon (?:a )?loop\b|\bover and over\b")
-_PLAY = re.compile(r"^(?:play|put on|queue up|throw on)\s+(?P<query>.+)$")
-_LOOK = re.compile(r"\blook\w*\b(?:\s+\w+){0,3}?\s+(?P<direction>left|right|up|down)\b")
+_PLAY = re.compile(
+    r"^(?:play|put on|queue up|throw on|blast|hear|listen to|have|get|give me|start|start playing|go with)"
+    r"\s+(?P<query>.+)$"
+)
+_PLAY_VERBS = ("play", "put on", "queue", "throw on", "listen", "hear")
+"""Verbs that play whatever follows; the others of :data:`_PLAY` ("have", "get") only a genre."""
+_PLAYED_WORDS = re.compile(
+    r"\b(?:music|songs?|tracks?|tunes?|stuff|playlist|radio|some|something|a bit of|a little)\b"
+)
+"""Words around a genre that name no device: "some jazz music", "a bit of classical stuff"."""
+_LOOK_VERB = r"(?:look\w*|glanc\w*|peek\w*|peer\w*|gaz\w*|tilt\w*|turn\w*\s+(?:\w+\s+)?(?:head|eyes|face)|point\w*\s+(?:\w+\s+)?(?:head|eyes|face)|lift\w*\s+(?:\w+\s+)?(?:head|eyes|chin)|lower\w*\s+(?:\w+\s+)?(?:head|eyes|chin)|raise\w*\s+(?:\w+\s+)?(?:head|eyes|chin))"
+_LOOK = re.compile(
+    rf"\b{_LOOK_VERB}\b(?:\s+\w+){{0,4}}?\s+(?P<direction>left|right|up|down|upwards?|downwards?)\b"
+)
+"""The head turned or tilted one way: "look up", "glance over to your right", "tilt your head down",
+"turn your head to the left", "eyes up"."""
+_THING = (
+    r"(?:at|toward|towards|to)\s+(?:the\s+|your\s+|my\s+)?"
+    r"(?P<thing>ceiling|sky|roof|stars|lights?|floor|ground|feet|desk|table|lap|keyboard)\b"
+)
+_LOOK_AT = re.compile(rf"\b{_LOOK_VERB}\b(?:\s+\w+){{0,2}}?\s+{_THING}")
+_AT_THING = re.compile(rf"\b{_THING}")
+"""Looking at a thing that is up or down: "look up at the ceiling", "glance at the floor"."""
+_ASIDE = re.compile(
+    r"\b(?:over|to|at|towards?|your|the|its|his|her|side|a|little|bit|quick|quickly|briefly)\b"
+)
+"""Words around a look that name no device: "glance over to your right side"."""
+_UPWARD = frozenset({"ceiling", "sky", "roof", "stars", "light", "lights"})
+_HEAD_CHANGE = re.compile(r"\b(?:lift|raise)\w*\b|\b(?:lower|drop)\w*\b")
 _LOOK_FRONT = re.compile(
     r"\blook\w*(?:\s+\w+){0,2}?\s+(?:straight(?:\s+ahead)?|ahead|forwards?|(?:to |at )?the front|front|"
     r"cent(?:er|re)|normal(?:ly)?)\b"
@@ -104,8 +144,15 @@ _DOWN = re.compile(
     r"dimmed|not so loud|not so bright)\b"
 )
 _MAX = re.compile(
-    r"\b(?:max(?:imum)?|full(?:\s+(?:brightness|volume|blast|power))?|all the way up|100 percent)\b"
+    r"\b(?:max(?:imum|ed|ed out)?|full(?:\s+(?:brightness|volume|blast|power))?|all the way up|100 percent"
+    r"|as (?:bright|loud|high|much) as (?:it|they|you) (?:goes|go|can go|gets|get|can)|highest(?: setting)?"
+    r"|top volume|top brightness)\b"
 )
+_MIN = re.compile(
+    r"\b(?:all the way down|min(?:imum)?|lowest(?: setting)?|as (?:dim|low|quiet|soft) as (?:it|they|you)"
+    r" (?:goes|go|can go|gets|get|can))\b"
+)
+"""The bottom of a level: the relative tool's floor (a bulb stays lit at 1 %, a speaker goes to 0)."""
 _SET_WORD = re.compile(r"\b(?:to|at)\s+[\d.]+|\b(?:brightness|volume|level|percent)\b|%")
 _OFF = re.compile(r"\b(?:off|kill|shut|out|extinguish|cut|deactivate|disable|power down)\b")
 _ON = re.compile(
@@ -130,7 +177,8 @@ class Said:
     values: dict[str, Any] = field(default_factory=dict)
     rest: str = ""
     family: str | None = None
-    """For ``level``: ``brightness`` or ``volume`` when the words say which."""
+    """For ``level``: ``brightness`` or ``volume`` when the words say which; for ``face_front``,
+    ``body`` when only the body was meant."""
     quantity: Quantity | None = None
     """The number the values came from, to restate in the reply (:func:`restate`)."""
 
@@ -141,8 +189,11 @@ def _cut(text: str, *patterns: re.Pattern[str]) -> str:
     return " ".join(text.split())
 
 
-def read_action(clause: str, colours: frozenset[str]) -> Said | None:
-    """The action ``clause`` asks for, or None when it names no action this lexicon knows."""
+def read_action(clause: str, colours: frozenset[str], genres: frozenset[str] = frozenset()) -> Said | None:
+    """The action ``clause`` asks for, or None when it names no action this lexicon knows.
+
+    ``colours`` are the colour names the world's lights know; ``genres`` the kinds of music its
+    players declare (a clause that names one wants it played: "I'd love some jazz")."""
     quantity = find_quantity(clause)
     text = clause.replace(quantity.text, " ", 1) if quantity else clause
     size = vague_size(text)
@@ -167,12 +218,20 @@ def read_action(clause: str, colours: frozenset[str]) -> Said | None:
         return Said("pause", rest=_cut(plain, _PAUSE, _PRESS))
     if _RESUME.search(plain) or _REPLAY.match(clause):
         return Said("resume", rest=_cut(plain, _RESUME, _PRESS))
+    spoken = _SAY.match(clause)
+    if spoken:
+        return Said("say", {"text": spoken.group("text")}, rest=spoken.group("who") or "")
     played = _PLAY.match(clause)
-    if played:
+    if played and (clause.startswith(_PLAY_VERBS) or _genre(played.group("query"), genres)):
         query = re.sub(
             r"^(?:some|something|anything|a bit of|a little)\s+(?:by\s+|from\s+)?", "", played.group("query")
         )
         return Said("play", {"query": query}, rest="")
+    genre = _genre(plain, genres)
+    if genre is not None and not _OFF.search(plain) and not _PAUSE.search(plain):
+        # "some jazz in the living room", "how about some classical": a kind of music, wanted.
+        rest = _cut(plain, re.compile(rf"\b{re.escape(genre)}\b"), _PLAYED_WORDS)
+        return Said("play", {"query": genre}, rest=rest)
     if _LOOK_FRONT.search(plain):
         return Said("look", {"direction": "front"}, _cut(plain, _LOOK_FRONT))
     if _FACE_FRONT.search(plain) and not _LEFT.search(plain) and not _RIGHT.search(plain):
@@ -182,11 +241,30 @@ def read_action(clause: str, colours: frozenset[str]) -> Said | None:
         )
         if re.search(r"\bhead\b", plain):
             return Said("look", {"direction": "front"}, _cut(plain, front, re.compile(r"\bhead\b")))
-        return Said("face_front", rest=_cut(plain, front))
+        body = "body" if re.search(r"\b(?:body|base)\b", plain) else None  # the body only, not the head
+        return Said("face_front", rest=_cut(plain, front), family=body)
     looked = _LOOK.search(plain)
     if looked:
-        return Said("look", {"direction": looked.group("direction")}, _cut(plain, _LOOK))
-    said = _motion(plain, quantity, size) or _light_or_sound(plain, quantity, size, colours)
+        direction = looked.group("direction").removesuffix("s").removesuffix("wards").removesuffix("ward")
+        return Said("look", {"direction": direction}, _cut(plain, _LOOK, _AT_THING, _ASIDE))
+    looked_at = _LOOK_AT.search(plain)
+    if looked_at:
+        direction = "up" if looked_at.group("thing") in _UPWARD else "down"
+        return Said("look", {"direction": direction}, _cut(plain, _LOOK_AT, _ASIDE))
+    tilted = _HEAD_CHANGE.search(plain) if re.search(r"\b(?:head|chin|eyes)\b", plain) else None
+    if tilted:
+        direction = "up" if re.match(r"(?:lift|raise)", tilted.group(0)) else "down"
+        return Said(
+            "look",
+            {"direction": direction},
+            _cut(plain, _HEAD_CHANGE, _ASIDE, re.compile(r"\b(?:head|chin|eyes)\b")),
+        )
+    # A colour is never a motion: "switch the lamp back to warm white" goes back to a colour.
+    said = (
+        _colour(plain, colours)
+        or _motion(plain, quantity, size)
+        or _light_or_sound(plain, quantity, size, colours)
+    )
     if said is not None and quantity is not None and not said.values:
         return None  # a number the action does not take: not this reader's to guess
     return replace(said, quantity=quantity) if said is not None and quantity is not None else said
@@ -263,10 +341,9 @@ def _light_or_sound(text: str, quantity: Quantity | None, size: Size, colours: f
             {"kelvin": quantity.value},
             _cut(text, re.compile(r"\b(?:colou?r temperature|temperature)\b")),
         )
-    for colour in sorted(colours, key=len, reverse=True):
-        pattern = re.compile(rf"\b{re.escape(colour)}\b")
-        if pattern.search(text):
-            return Said("colour", {"colour": colour}, _cut(text, pattern))
+    coloured = _colour(text, colours)
+    if coloured is not None:
+        return coloured
     if _WARMER.search(text):
         return Said(
             "colour_temperature", {"kelvin_change": -SIZES["kelvin_change"][size]}, _cut(text, _WARMER)
@@ -286,15 +363,18 @@ def _light_or_sound(text: str, quantity: Quantity | None, size: Size, colours: f
         else family
     )
     level_words = (
+        _MAX,
+        _MIN,
         _UP,
         _DOWN,
-        _MAX,
         _LEVEL_NOUN,
         _BRIGHT_WORD,
         re.compile(r"\b(?:to|at|by|level|percent)\b|%"),
     )
     if _MAX.search(text):
         return Said("level", {"level": 100}, _cut(text, *level_words), family)
+    if _MIN.search(text):
+        return Said("level", {"change": -100}, _cut(text, *level_words), family)
     if (
         quantity is not None
         and quantity.unit in (None, "percent")
@@ -318,4 +398,23 @@ def _light_or_sound(text: str, quantity: Quantity | None, size: Size, colours: f
         return Said("switch_on", rest=_cut(text, _ON, _TURN_VERB, re.compile(r"\b(?:switch|put|power|on)\b")))
     if _TOGGLE.search(text):
         return Said("toggle", rest=_cut(text, _TOGGLE))
+    return None
+
+
+def _genre(text: str, genres: frozenset[str]) -> str | None:
+    """The one kind of music ``text`` names, if any ("jazz" in "some jazz please")."""
+    found = [genre for genre in genres if re.search(rf"\b{re.escape(genre)}\b", text)]
+    return max(found, key=len) if found else None
+
+
+_SHADE = re.compile(r"\b(?:plain|pure|normal|regular|simple|nice|bright|back|colou?r|white)\b")
+"""Words around a colour name that say no more than it: "back to plain daylight white"."""
+
+
+def _colour(text: str, colours: frozenset[str]) -> Said | None:
+    """The colour ``text`` names (the longest name the world's lights know), if any."""
+    for colour in sorted(colours, key=len, reverse=True):
+        pattern = re.compile(rf"\b{re.escape(colour)}\b")
+        if pattern.search(text):
+            return Said("colour", {"colour": colour}, _cut(text, pattern, _SHADE))
     return None

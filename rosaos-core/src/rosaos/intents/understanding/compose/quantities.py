@@ -64,7 +64,8 @@ SMALL = ("a little bit", "a tiny bit", "a little", "a bit", "a tad", "a touch", 
 LARGE = ("a whole lot", "a lot", "lots", "way", "much", "far", "loads", "heaps", "a great deal",
          "way more", "a ton", "significantly")  # fmt: skip
 _SMALL = re.compile(r"\b(?:" + "|".join(re.escape(word) for word in SMALL) + r")\b", re.IGNORECASE)
-_LARGE = re.compile(r"\b(?:" + "|".join(re.escape(word) for word in LARGE) + r")\b", re.IGNORECASE)
+# "all the way up" and "the way I like it" are no amount: "way" after "the" is not "way more".
+_LARGE = re.compile(r"(?<!the )\b(?:" + "|".join(re.escape(word) for word in LARGE) + r")\b", re.IGNORECASE)
 
 
 @dataclass(frozen=True)
@@ -119,6 +120,10 @@ def spell_numbers(text: str) -> str:
     """``text`` with number words, fractions and mixed numbers written as digits."""
     text = re.sub(r"(\d),(\d{3})\b", r"\1\2", text)
     text = _RUN.sub(_spell_run, text)
+    # "the one in the kitchen", "that one": a device, not a number.
+    text = re.sub(
+        r"\b(the|this|that|other|which|each|every|any|no) 1\b(?![.\d]|\s*(?:%|percent))", r"\1 one", text
+    )
     text = re.sub(r"\b(\d+)\s+point\s+(\d+)\b", r"\1.\2", text, flags=re.I)
     # "2 and a half", "1 and 3 quarters"
     text = re.sub(

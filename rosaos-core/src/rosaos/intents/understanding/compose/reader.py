@@ -23,13 +23,14 @@ from __future__ import annotations
 
 import re
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from rosaos.events.plan import PlanStep
 from rosaos.intents.grammar.capabilities import Capabilities, Capability
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.understanding.compose.actions import Said, read_action, restate
 from rosaos.intents.understanding.compose.references import Reference, References
+from rosaos.intents.understanding.compose.scenes import Scene, read_scene
 from rosaos.intents.understanding.compose.speech import asks, clauses, negated, normalise, remark, says_stop
 from rosaos.intents.understanding.match_result import MatchResult, build_result
 from rosaos.intents.understanding.readings import RANK_DRIVER, Focus, Reading, ReadingContext
@@ -52,6 +53,10 @@ _SWAP = re.compile(
 )
 """Two devices trading states: "swap the lights", "switch them around", "turn the on one off and
 the off one on". Each of two on/off devices is toggled, which trades their states."""
+_DETERMINERS = frozenset({"the", "my", "our", "your", "this", "that", "these", "those", "a", "an"})
+_ONE = re.compile(r"\b(?:the|that|this)\s+(?:other\s+)?(?:one|1)\b")
+_LOUDNESS = re.compile(r"\b(?:loud|noisy|quiet|blaring|deafening|can'?t hear)\b")
+_LIGHTNESS = re.compile(r"\b(?:bright|dark|dim|gloomy|harsh|glaring|blinding|too light)\b")
 _COMMENT = re.compile(r"^(?:it'?s|it is|that'?s|that is|this is|i'?m|i am|we'?re|so|wow|man|god|gosh)\b")
 
 
@@ -73,7 +78,7 @@ class Composer:
         self.language = language
         self.capabilities: dict[str, Capabilities] = {}
         self.descriptions = {device.name: device.description for device in devices}
-        colours: set[str] = set()
+        values: dict[str, set[str]] = {"colour": set(), "play": set()}
         for device in devices:
             file = device.mapping_file()
             if file is None or file.capabilities is None:
@@ -81,8 +86,9 @@ class Composer:
             self.capabilities[device.name] = file.capabilities
             for capability in file.capabilities.can:
                 if capability.values:
-                    colours |= set(file.list_values(capability.values))
-        self.colours = frozenset(colours)
+                    values.setdefault(capability.does, set()).update(file.list_values(capability.values))
+        self.colours = frozenset(values["colour"])
+        self.genres = frozenset(values["play"])
         self.references = References(devices, self.capabilities, language)
 
     def read(
@@ -107,19 +113,25 @@ class Composer:
             return None
         parsed = [self._clause(piece) for piece in pieces]
         parsed = self._addressed(parsed)
+        parsed = [_as_said(clause, text) for clause in parsed]
         commands = [clause for clause in parsed if clause.said is not None]
-        if complete and any(clause.said.action == "play" for clause in commands if clause.said):
-            # A free-text query is the user's own words ("Here Comes the Sun", "Take Five"): the
-            # templates keep them as said, where this reader has lowercased them and made digits.
-            return None
+        if not commands or all(
+            clause.said and clause.said.action == "colour_temperature" for clause in commands
+        ):
+            scene = read_scene(plain)
+            set_scene = self._scene(scene, plain, focus) if scene is not None else None
+            if set_scene is not None:
+                return build_result(self.context, text, [set_scene], focus is not None)
         if not commands:
             need = self._need(plain, focus)
             return build_result(self.context, text, [need], focus is not None) if need else None
         readings: list[Reading] = []
         before: tuple[str, ...] = ()
         last: _Clause | None = None
-        for clause in parsed:
+        for index, clause in enumerate(parsed):
             reading: Reading | None
+            if index == 0 and self._exclaimed(clause) and len(commands) > 0:
+                continue  # "Movie night! Dim the lamp …": an exclamation before the commands
             if clause.said is None and clause.reference.named and last is not None and last.said:
                 again = _again(last, clause.text)
                 reading = self._reading(again, last.said, clause.reference, before, focus)
@@ -148,14 +160,37 @@ class Composer:
             # "the baby is napping", "I'm heading out": why, not what. Its words are neither an
             # action ("out") nor a device this world lacks ("baby").
             about = self.references.resolve(text)
-            return _Clause(text, None, Reference(), () if about.unknown else about.devices)
-        said = read_action(text, self.colours)
+            devices = () if about.unknown else about.devices
+            return _Clause(text, None, Reference(), devices or self._felt(text))
+        said = read_action(text, self.colours, self.genres)
         reference = self.references.resolve(said.rest if said else text)
         return _Clause(text, said, reference)
 
+    def _exclaimed(self, clause: _Clause) -> bool:
+        """A short opening that names nothing here and asks nothing ("movie night", "party
+        time", "finally"): not a device this world lacks ("the tv, turn it on" names one)."""
+        words = clause.text.split()
+        return (
+            clause.said is None
+            and clause.reference.unknown
+            and len(words) <= 3
+            and words[0] not in _DETERMINERS
+            and not self.references.names_a_kind(clause.text)
+        )
+
+    def _felt(self, remark: str) -> tuple[str, ...]:
+        """The one device a remark about a level is about: "it's a bit loud" is the one player."""
+        family = "volume" if _LOUDNESS.search(remark) else "brightness" if _LIGHTNESS.search(remark) else None
+        if family is None:
+            return ()
+        said = Said("level", {"change": 10}, family=family)
+        able = tuple(device for device in self.capabilities if self._capability(device, said))
+        return able if len(able) == 1 else ()
+
     @staticmethod
     def _addressed(parsed: list[_Clause]) -> list[_Clause]:
-        """A clause that is only a device, before a command that names none, addresses it."""
+        """A clause that is only a device, before a command that names none, addresses it; so
+        does one said last, after such a command ("turn your head to the right, Reachy")."""
         merged: list[_Clause] = []
         index = 0
         while index < len(parsed):
@@ -171,6 +206,19 @@ class Composer:
                 merged.append(_Clause(f"{clause.text}, {following.text}", following.said, clause.reference))
                 index += 2
                 continue
+            if (
+                clause.said is not None
+                and not clause.reference.named
+                and not clause.reference.pronoun
+                and following is not None
+                and index + 2 == len(parsed)
+                and following.said is None
+                and following.reference.named
+                and not following.reference.unknown
+            ):
+                merged.append(_Clause(f"{clause.text}, {following.text}", clause.said, following.reference))
+                index += 2
+                continue
             merged.append(clause)
             index += 1
         return merged
@@ -182,6 +230,12 @@ class Composer:
             return None
         if reference.named:
             named = list(reference.devices)
+            if before and _ONE.search(text):
+                # "turn on the kitchen light and switch off the one in the living room": "one" is
+                # a device of the kind just named.
+                kinds = {kind for device in before for kind in self.references.kinds(device)}
+                named = [device for device in named if self.references.kinds(device) & kinds]
+                reference = replace(reference, plural=False)
         elif before:
             named = list(before)
         else:
@@ -195,15 +249,36 @@ class Composer:
         if not able:
             return None
         plural = reference.plural or (not reference.named and bool(before) and len(before) > 1)
+        if (
+            len(able) > 1
+            and not plural
+            and len(meant := [device for device in able if device in before]) == 1
+        ):
+            # "the kitchen feels cold, make that light warmer": of the lights, the one just named.
+            able = {device: able[device] for device in meant}
         if len(able) > 1 and not plural:
             return self.context.clarify(text, 0, RANK_DRIVER, list(able))
         if reference.both and len(able) != 2:
             return self.context.clarify(text, 0, RANK_DRIVER, list(able))
         steps = {device: self._step(device, capability, said) for device, capability in able.items()}
-        calls = {device: [step] for device, step in steps.items() if step is not None}
+        calls = {
+            device: [step, *self._also(device, able[device], said)] for device, step in steps.items() if step
+        }
         if len(calls) != len(steps):
             return None
         return Reading(restate(text, said), RANK_DRIVER, len(text), calls=calls)
+
+    def _also(self, device: str, first: Capability, said: Said) -> list[PlanStep]:
+        """The other steps of an action a driver declares more than once with nothing to fill:
+        "face forward" turns the Reachy's body to the front, then its head."""
+        if first.args or said.values or said.family:
+            return []
+        declared = self.capabilities[device].doing(said.action, self.descriptions.get(device, ""))
+        return [
+            PlanStep(device=device, tool=other.tool, args=dict(other.fixed))
+            for other in declared[1:]
+            if not other.args
+        ]
 
     def _capability(self, device: str, said: Said) -> Capability | None:
         declared = self.capabilities.get(device)
@@ -260,6 +335,25 @@ class Composer:
         }
         reading = Reading(text, RANK_DRIVER, len(text), calls=calls)
         return build_result(self.context, text, [reading], focus is not None)
+
+    def _scene(self, scene: Scene, text: str, focus: Focus) -> Reading | None:
+        """Every device that can take part in ``scene``, in the place ``text`` names if any."""
+        place = self.references.resolve(text)
+        calls: dict[str, list[PlanStep]] = {}
+        for said in scene.actions:
+            for device in self.capabilities:
+                capability = self._capability(device, said)
+                if capability is None or (focus is not None and device not in focus):
+                    continue
+                if place.named and not place.unknown and device not in place.devices:
+                    continue
+                step = self._step(device, capability, said)
+                if step is not None:
+                    calls.setdefault(device, []).append(step)
+        if len(calls) > 1 and not (place.named and not place.unknown):
+            # "movie night" with lights in three rooms: which room is a real question.
+            return self.context.clarify(text, 0, RANK_DRIVER, list(calls))
+        return Reading(text, RANK_DRIVER, len(text), calls=calls) if calls else None
 
     def _need(self, text: str, focus: Focus) -> Reading | None:
         """A need or a complaint → the action that meets it, on the one device that fits."""
@@ -321,3 +415,23 @@ def _driver_amount(reading: Reading, template: Reading | None) -> Reading:
     if same != {device: [step.tool for step in steps] for device, steps in template.calls.items()}:
         return reading
     return template
+
+
+def _as_said(clause: _Clause, text: str) -> _Clause:
+    """``clause`` with a free-text query or text to say in the user's own words ("Take Five",
+    "Here Comes the Sun"): the reader works on lowercase and digits, a search or a voice on
+    what was said."""
+    said = clause.said
+    meaning = "query" if "query" in (said.values if said else {}) else "text"
+    if said is None or not isinstance(query := said.values.get(meaning), str):
+        return clause
+    words, size = text.split(), len(query.split())
+    for start in range(len(words)):
+        for end in range(start + max(1, size - 3), min(len(words), start + size + 3) + 1):
+            window = " ".join(words[start:end]).strip(" ,.!?;:\"'")
+            if normalise(window) == query:
+                values = {**said.values, meaning: window}
+                return replace(
+                    clause, text=clause.text.replace(query, window), said=replace(said, values=values)
+                )
+    return clause

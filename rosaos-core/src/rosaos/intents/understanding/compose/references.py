@@ -133,6 +133,17 @@ _GLUE = frozenset(
 )  # fmt: skip
 """Words inside a device phrase that name nothing themselves ("the light over the stairs")."""
 _WORD = re.compile(r"[a-z][a-z0-9'-]*")
+_SYNONYMS: tuple[frozenset[str], ...] = tuple(
+    frozenset(group.split())
+    for group in (
+        "sofa couch settee", "tv television telly", "lounge living",
+        "hall hallway corridor foyer entryway", "stairs stair stairwell staircase stairway",
+        "office study", "bathroom washroom restroom loo", "ceiling overhead", "porch veranda",
+        "garden yard backyard", "nursery kid", "workbench bench", "dining diner", "den lounge",
+        "entrance entry doorway", "speaker stereo", "dog puppy doggy doggo pup",
+    )
+)  # fmt: skip
+"""Words people use for the same thing ("the lamp by the couch" for a lamp next to the sofa)."""
 MIN_PREFIX = 4
 _REMEMBERED_WORDS = 4096
 
@@ -193,6 +204,7 @@ class References:
             nouns |= set(declared.kind) if declared else set()
             text = " ".join([*names, *device.aliases, device.description, *device.areas(language)])
             words = {singular(word) for word in _WORD.findall(text.lower())} - _FUNCTION_WORDS
+            words |= {other for group in _SYNONYMS if words & group for other in group}
             self._known.append(_Known(device.name, frozenset(nouns), frozenset(words | nouns)))
         self._nouns = frozenset(noun for known in self._known for noun in known.nouns)
         # Word → devices, so a lookup costs the word's length, not the number of devices (issue 27:
@@ -220,6 +232,14 @@ class References:
             rest = tuple(device for device in kept.devices if device not in removed.devices)
             return Reference(rest, plural=True, named=True)
         return self._resolve(tokens, group)
+
+    def names_a_kind(self, phrase: str) -> bool:
+        """Whether ``phrase`` says a noun some device is called by ("light", "robot")."""
+        return any(singular(token) in self._nouns for token in _WORD.findall(phrase.lower()))
+
+    def kinds(self, device: str) -> frozenset[str]:
+        """The nouns ``device`` is called by ("light", "lamp"), for "the one in the kitchen"."""
+        return next((known.nouns for known in self._known if known.name == device), frozenset())
 
     def take(self, tokens: list[str]) -> tuple[tuple[str, ...], list[str]]:
         """The devices ``tokens`` name, and the tokens that are not part of naming them.

@@ -22,16 +22,22 @@ _INTERJECTIONS = (
     "buddy", "gosh", "geez", "jeez", "damn", "wow", "sorry", "excuse me", "yes", "yeah", "yep", "also",
     "and", "then", "actually", "honestly", "quick", "quickly", "real quick", "just", "kindly",
     "please", "pretty please", "hey assistant", "computer", "oops", "whoops", "anyway", "anyways",
+    "maybe", "perhaps", "possibly", "kinda", "i guess", "i think", "i suppose", "by any chance",
+    "whoa", "woah", "wait", "hmm okay", "so yeah", "you know what", "right so",
 )  # fmt: skip
 _REQUEST_FRAMES = (
     r"(?:can|could|would|will|wouldja|couldja|can't|won't)\s+(?:you|ya|u|yah)(?:\s+please)?",
     r"(?:do|would)\s+you\s+mind(?:\s+if\s+you)?",
     r"(?:be\s+a\s+(?:dear|darling|love|pal|sweetheart)|do\s+me\s+a\s+(?:favou?r|solid))(?:\s+and)?",
     r"go\s+ahead\s+and",
-    r"i(?:'d|\s+would)\s+(?:like|love)\s+(?:you\s+|it\s+if\s+you\s+)?(?:to\s+)?",
+    r"(?:i|we)\s+(?:could|can)\s+(?:really\s+)?(?:do\s+with|use)",
+    r"(?:i'm|im|i\s+am|we're|we\s+are)\s+in\s+the\s+mood\s+for",
+    r"(?:i|we)\s+(?:fancy|feel\s+like)(?:\s+hearing)?",
+    r"you\s+(?:can|could|may|might\s+as\s+well|should)(?:\s+(?:now|just|please))?(?:\s+go\s+ahead\s+and)?",
+    r"i(?:'d|\s+would)\s+(?:like|love)(?:\s+you|\s+it\s+if\s+you)?(?:\s+to)?",
     r"i\s+(?:want|need)\s+you\s+to",
-    r"i\s+want\s+to\s+(?=turn|switch|set|make)",
-    r"(?:how\s+about|what\s+about)\s+(?:you\s+)?",
+    r"i\s+(?:want|wanna)(?:\s+to)?(?=\s+(?:turn|switch|set|make|hear|listen))",
+    r"(?:how|what)\s+about(?:\s+you)?",
     r"let's",
     r"time\s+to",
     r"try\s+(?:to|and)",
@@ -47,6 +53,10 @@ _TAGS = (
     "mate", "buddy", "dude", "man", "then", "already", "again", "as well", "too",
     "thanks a lot", "thanks so much", "thank you so much", "thank you very much", "thanks very much",
     "much appreciated", "would you kindly", "k", "pls", "plz",
+    "for a sec", "for a second", "for a moment", "for a bit", "a sec", "by any chance", "if possible",
+    "if that's ok", "if that's okay", "if that's alright", "when you have a moment", "do you know",
+    "you know", "i think", "i guess", "maybe", "perhaps", "at the moment", "currently", "still",
+    "right away", "straight away", "for now",
 )  # fmt: skip
 
 
@@ -72,7 +82,10 @@ _NEGATION = re.compile(
 )
 _QUESTION = re.compile(
     r"^(?:is|are|was|were|what|what's|whats|how|where|who|why|when|which|does|has|am|should|shall|"
-    r"isn't|aren't|(?:do|did|have)\s+(?:you|i|we|they|it|any))\b",
+    r"isn't|aren't|(?:do|did|have)\s+(?:you|i|we|they|it|any))\b"
+    # an indirect question: "tell me whether the light is off", "I wonder if the robot docked"
+    r"|^(?:tell\s+me|let\s+me\s+know|i\s+wonder|i'm\s+wondering|any\s+idea|check|know)\s+"
+    r"(?:if|whether|what|which|where|how|who|when)\b|\bwhether\b",
     re.IGNORECASE,
 )
 _SUBJECT = (
