@@ -22,8 +22,10 @@ command), so both see the same machine load. For each run the light is switched 
   reads the state over one kept-open MCP session from the moment the transcript is ready.
 
 Then every public task sentence is transcribed in three conditions (benchmarks/voice_accuracy.py):
-word and command error rates. Peak RSS is read before the engine for the command error rate is
-loaded into this process (the voice process itself never loads it).
+word and command error rates; and each is cut after every word and judged as a draft
+(benchmarks/voice_turns.py): false early ends, the turns end of turn by meaning would cut. Peak
+RSS is read before the engine for those is loaded into this process (the voice process itself
+never loads it); the goal's figure is ``rosaos voice --wav``'s own peak.
 
 Prints a table and writes JSON (``benchmarks/results/voice.json`` unless ``--json PATH``)::
 
@@ -53,6 +55,7 @@ import numpy as np
 from rich.console import Console
 from rich.table import Table
 from voice_accuracy import CONDITIONS, scores, transcripts
+from voice_turns import describe, false_early_ends
 
 from rosaos.config import load_config
 from rosaos.devices.client import DeviceClient
@@ -195,7 +198,7 @@ async def one_run(
             KernelHandoff(client),
             report,
             early_transcription=early,
-            judge=KernelJudge(client),
+            judge=KernelJudge(client, world_phrases({"kitchen_light": {}})),  # as rosaos voice does
         )
         await pipeline.run()
         if "failure" in marks or "accepted" not in marks:
@@ -210,7 +213,8 @@ async def one_run(
         {
             "draft_transcribed": last["transcribed_at"] - last["end"],
             "draft_judged": last["judged_at"] - last["end"],
-            "draft_whole": bool(last["whole"]),
+            "draft_whole": last["whole"] is True,
+            "draft_too_late": last["whole"] is None,
             "draft_transcript": last["draft_text"],
         }
         if last is not None
@@ -276,17 +280,22 @@ def report(results: dict[str, Any]) -> None:
         console.print(table)
         if mode == "early":
             whole = sum(bool(run.get("draft_whole")) for run in runs)
+            late = sum(bool(run.get("draft_too_late")) for run in runs)
             console.print(
-                f"drafts judged a whole command (the turn may end by meaning): {whole} of {len(runs)}"
+                f"drafts judged a whole command (the turn ends by meaning): {whole} of {len(runs)}; "
+                f"transcribed too late to judge (after the 0.55 s pause): {late}"
             )
     for condition, figures in results["accuracy"].items():
         console.print(
             f"{condition}: word error rate {figures['word_error_rate']:.3f}, command error rate "
             f"{figures['command_error_rate']:.3f} ({figures['sentences']} public task sentences)"
         )
+    for line in describe(results["end_of_turn"]):
+        console.print(line, markup=False, highlight=False)
     console.print(
-        f"peak RSS: rosaos voice --wav {results['rosaos_voice_peak_rss_mib']:.0f} MiB; "
-        f"this benchmark's process (pipeline in-process) {results['peak_rss_mib']:.0f} MiB"
+        f"peak RSS of the voice process, rosaos voice --wav (its own VmHWM): "
+        f"{results['rosaos_voice_peak_rss_mib']:.0f} MiB; this benchmark's process (pipeline "
+        f"in-process, plus an MCP client and the accuracy runs) {results['peak_rss_mib']:.0f} MiB"
     )
 
 
@@ -318,6 +327,7 @@ async def main_async(options: argparse.Namespace) -> dict[str, Any]:
             await asyncio.wait_for(kernel.wait(), timeout=30)
     heard = transcripts(stt, Path(tmp_accuracy.name), not options.no_bias, options.condition)
     peak_rss = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # before the engine is loaded
+    turns = await asyncio.to_thread(false_early_ends, stt, Path(tmp_accuracy.name))  # it runs its own loops
     speech = float(runs[0]["speech_seconds"])
     return {
         "machine": machine(),
@@ -328,6 +338,7 @@ async def main_async(options: argparse.Namespace) -> dict[str, Any]:
         "stt_real_time_factor": round(statistics.median(float(r["stt_compute"]) for r in runs) / speech, 3),
         "transcript": runs[-1]["transcript"],
         "accuracy": scores(heard),
+        "end_of_turn": turns,
         "peak_rss_mib": round(peak_rss, 1),
         "rosaos_voice_peak_rss_mib": cli_rss,
         "load_average_after": [round(x, 2) for x in os.getloadavg()],
@@ -336,21 +347,39 @@ async def main_async(options: argparse.Namespace) -> dict[str, Any]:
     }
 
 
+PEAK_AT_EXIT = """
+import atexit, sys
+from pathlib import Path
+out = Path(sys.argv.pop(1))
+atexit.register(lambda: out.write_text(next(
+    line.split()[1] for line in Path("/proc/self/status").read_text().splitlines()
+    if line.startswith("VmHWM:"))))
+from rosaos.cli import main
+sys.argv[0] = "rosaos"
+main()
+"""
+"""``rosaos voice`` as the CLI runs it, writing its own peak RSS (``VmHWM``, kB) to a file at exit."""
+
+
 def voice_cli_peak_rss(work: Path, wav: Path) -> float:
-    """Peak RSS (MiB) of ``rosaos voice --wav`` itself, the process a user runs: this benchmark's
-    own process also holds an MCP client and the timing machinery."""
-    command = [sys.executable, "-m", "rosaos.cli", "voice", "--config", str(work / "rosaos.toml")]
-    process = subprocess.Popen(
+    """Peak RSS (MiB) of ``rosaos voice --wav`` itself, the process a user runs.
+
+    Read from the process's own ``VmHWM`` at exit, not from ``wait4``: a child's ``ru_maxrss``
+    starts at its parent's RSS at the fork (Linux carries it across ``exec``), so that reported
+    this benchmark's own ~300 MiB, not the voice process's.
+    """
+    peak = work / "voice-peak-kb"
+    command = [sys.executable, "-c", PEAK_AT_EXIT, str(peak), "voice", "--config", str(work / "rosaos.toml")]
+    done = subprocess.run(
         [*command, "--wav", str(wav), "--json"],
         cwd=work,
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
+        check=False,
     )
-    _, status, usage = os.wait4(process.pid, 0)
-    process.returncode = os.waitstatus_to_exitcode(status)
-    if process.returncode != 0:
-        raise SystemExit(f"rosaos voice --wav exited with {process.returncode}")
-    return round(usage.ru_maxrss / 1024, 1)
+    if done.returncode != 0 or not peak.is_file():
+        raise SystemExit(f"rosaos voice --wav exited with {done.returncode}")
+    return round(int(peak.read_text()) / 1024, 1)
 
 
 async def _devices(config: Any) -> list[dict[str, Any]]:

@@ -149,7 +149,7 @@ async def test_understand_says_whether_a_draft_is_a_whole_command(api: httpx.Asy
     whole = (await api.post("/understand", json={"text": "turn on the kitchen light"})).json()
     # (Not "turn on the": in a world of one light the engine reads it as that light, and acts.)
     begun = (await api.post("/understand", json={"text": "set the kitchen light to"})).json()
-    assert whole == {"text": "turn on the kitchen light", "complete": True, "kind": "plans"}
+    assert whole == {"text": "turn on the kitchen light", "complete": True, "kind": "plans", "moves": False}
     assert begun["complete"] is False
     assert (await api.post("/understand", json={"text": "  "})).status_code == 422
     after = (await api.get("/updates", params={"after": 0, "limit": 1000})).json()["updates"]

@@ -17,9 +17,11 @@ from pathlib import Path
 import pytest
 import pytest_asyncio
 
+from rosaos.frontends.voice.end_of_turn import KernelJudge
+from rosaos.kernel.api.kernel_client import KernelClient
 from rosaos.kernel.runtime import Kernel
 
-from .e2e_support import device_state, eventually, running_kernel
+from .e2e_support import device_state, eventually, kernel_api, running_kernel
 from .voice_e2e_support import rosaos_voice
 
 pytestmark = [
@@ -70,3 +72,25 @@ async def test_spoken_turtlebot_command_reaches_the_turtlebot(kernel: Kernel, wa
         return bool((await device_state(kernel, "turtlebot"))["x"] > start + 0.5)
 
     await eventually(moved, timeout=120)
+
+
+async def test_the_turn_judge_hears_that_a_command_would_move_a_robot(kernel: Kernel) -> None:
+    """``POST /understand`` says ``moves`` for a whole command that sets a robot moving, so the voice
+    front end never ends such a turn early; a light switch and a stop do not move anything."""
+    async with kernel_api(kernel) as api:
+
+        async def judge(text: str) -> dict[str, object]:
+            answer: dict[str, object] = (await api.post("/understand", json={"text": text})).json()
+            return answer
+
+        drive = await judge("drive the turtlebot forward")
+        light = await judge("turn on the kitchen light")
+        stop = await judge("stop the turtlebot")
+    assert drive["complete"] is True and drive["moves"] is True
+    assert light["complete"] is True and light["moves"] is False
+    assert stop["moves"] is False
+    # The voice front end's judge: a whole command ends the turn early, a motion never does.
+    async with KernelClient.from_config(kernel.config, url=kernel.url) as client:
+        judge = KernelJudge(client)
+        assert await judge.complete("turn on the kitchen light") is True
+        assert await judge.complete("drive the turtlebot forward") is False

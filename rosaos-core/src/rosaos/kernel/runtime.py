@@ -168,7 +168,11 @@ class Kernel:
             return Understanding(text=text, complete=False, kind="no_engine")
         # Matching a sentence that does not fit takes up to a few hundred ms: not on the loop.
         result = await asyncio.to_thread(local.match, text)
-        return Understanding(text=text, complete=result.is_exact, kind=result.kind)
+        instances = self.world.instances
+        moves = result.is_exact and result.starts_motion(
+            lambda name: instances[name].spec.halts if name in instances else ()
+        )
+        return Understanding(text=text, complete=result.is_exact, kind=result.kind, moves=moves)
 
     def readiness(self) -> Readiness:
         """Devices still starting and the pool's warm-up: what "ready" after the banner waits for."""

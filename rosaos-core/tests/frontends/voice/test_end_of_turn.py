@@ -127,3 +127,31 @@ async def test_the_engine_judges_the_command_after_the_wake_phrase(
     judge: EngineJudge, command: str, whole: bool
 ) -> None:
     assert await is_whole_command(judge, f"Hello. {command}", WAKE) is whole
+
+
+@pytest.mark.parametrize(
+    ("command", "whole"),
+    [
+        # One light in the world: the engine acts on "turn on the" (it can only mean that light),
+        # but a sentence does not end on "the": the speaker is still talking.
+        ("turn on the", False),
+        ("turn on the kitchen light and", False),
+        ("turn on the kitchen light", True),
+        # Partway into a name of the world: "living room lamp" is still being said.
+        ("switch off the living", False),
+        ("switch off the living room lamp", True),
+        ("turn the kitchen light on", True),  # a particle ends a command
+    ],
+)
+async def test_a_draft_that_stops_where_no_sentence_ends_is_not_whole(command: str, whole: bool) -> None:
+    world = {
+        "kitchen_light": DeviceConfig(driver="tapo", description="Ceiling light in the kitchen"),
+        "living_room_lamp": DeviceConfig(driver="tapo", description="Lamp in the living room"),
+    }
+    matcher = IntentMatcher(sources_from_config(world, load_drivers()), "en")
+    lone_light = IntentMatcher(sources_from_config({"light": world["kitchen_light"]}, load_drivers()), "en")
+    judge = EngineJudge(lambda text: matcher.match(text).is_exact, ["kitchen light", "living room lamp"])
+    if command == "turn on the":  # the rule, not the engine, keeps it open
+        assert lone_light.match(command).is_exact
+        judge = EngineJudge(lambda text: lone_light.match(text).is_exact, ["light"])
+    assert await is_whole_command(judge, f"Hello. {command}", WAKE) is whole

@@ -86,10 +86,9 @@ async def _run(
             stt = build_stt(voice)
             if isinstance(stt, OpenAITranscriptionSTT):
                 closers.append(stt.aclose)
+            names = await _world_phrases(config, client)
             if isinstance(stt, MoonshineSTT) and voice.vocabulary_bias:
-                stt.bias_toward(
-                    [*await _world_phrases(config, client), voice.wake_phrase, *voice.wake_aliases]
-                )
+                stt.bias_toward([*names, voice.wake_phrase, *voice.wake_aliases])
             robot = await find_reachy(client, token)
             report = _printer(json_output)
             replies = ReplyFollower(client, robot, _reply_reporter(report)) if voice.speak_replies else None
@@ -114,7 +113,7 @@ async def _run(
                 replies=replies,
                 barge_in=_barge_in(voice, segmenter),
                 early_transcription=voice.early_transcription and voice.stt == "local",
-                judge=KernelJudge(client),
+                judge=KernelJudge(client, names),
             )
             pipeline.report(
                 Heard("ready", _describe(voice, source, pipeline, client), {"kernel": client.base_url})

@@ -64,7 +64,8 @@ class EarlyTranscriber:
 
     async def of_draft(self, segment: SpeechSegment) -> Transcript | None:
         """The transcript of draft ``segment`` once it is made; None if it failed or a newer draft
-        replaced it. Waiting here never cancels the transcription."""
+        replaced it (not when the final utterance took it: the pipeline reports it came too late).
+        Waiting here never cancels the transcription."""
         task = self._task
         if task is None or self._key != draft_key(segment):
             return None
@@ -72,7 +73,7 @@ class EarlyTranscriber:
             result = await asyncio.shield(task)
         except Exception:  # the final utterance retries it (transcribe)
             return None
-        return result if self._task is task else None
+        return result if self._task is task or self._task is None else None
 
     async def transcribe(self, segment: SpeechSegment) -> Transcript:
         """The transcript of a final utterance: the draft's if it had the same samples, else made now."""

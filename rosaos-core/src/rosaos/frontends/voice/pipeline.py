@@ -271,15 +271,17 @@ class VoicePipeline:
     async def _judge_draft(self, draft: SpeechSegment, judge: TurnJudge) -> None:
         """A draft that is a whole command ends its turn after the short pause, not the long one.
 
-        Each judged draft is reported (``--json`` only) with when each step finished, in stream
-        seconds, so a turn that still waited the long pause says why: the transcript came late,
-        the judge was slow, or the draft was not a whole command.
+        Each draft's transcript is reported (``--json`` only) with when each step finished, in
+        stream seconds, so a turn that still waited the long pause says why: the transcript came
+        too late to judge (``whole`` null), the judge was slow, or it was not a whole command.
         """
         result = await self.transcriber.of_draft(draft)
         transcribed = self.segmenter.now
-        if result is None or not self.segmenter.holds(draft):
-            return  # replaced, or the speaker went on, or the turn already ended
-        whole = await is_whole_command(judge, result.text, self.gate.phrases)
+        if result is None:
+            return  # replaced by a newer draft, or it failed (the final utterance retries it)
+        # Not held: the speaker went on, or the long pause ended the turn before the transcript came.
+        held = self.segmenter.holds(draft)
+        whole = await is_whole_command(judge, result.text, self.gate.phrases) if held else None
         judged = self.segmenter.now
         final = self.segmenter.complete(draft) if whole else None  # None: feed() ends it later
         self.report(

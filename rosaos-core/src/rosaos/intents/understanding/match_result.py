@@ -7,6 +7,7 @@ calls from every clause in order, with the replies the process and the kernel wi
 
 from __future__ import annotations
 
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, Literal
 
@@ -49,6 +50,15 @@ class MatchResult:
     def is_exact(self) -> bool:
         """True when the sentence matched completely and can run without asking anything."""
         return self.kind == "plans"
+
+    def starts_motion(self, halts: Callable[[str], Sequence[str]]) -> bool:
+        """Whether running it would set a robot moving: a step on a device that halts ``motion``
+        (``halts(device)`` is its driver's ``DriverSpec.halts``) other than stopping it."""
+        return any(
+            "motion" in halts(step.device) and not step.tool.endswith("stop")
+            for process in self.processes
+            for step in process.plan.steps
+        )
 
 
 def build_result(context: ReadingContext, text: str, readings: list[Reading], picked: bool) -> MatchResult:

@@ -143,6 +143,11 @@ class Understanding(BaseModel):
     text: str
     complete: bool
     kind: str = Field(description="The engine's verdict: plans, clarify, no_match, or no_engine.")
+    moves: bool = Field(
+        default=False,
+        description="A whole command that would set a robot moving: the voice front end waits the "
+        "full pause before ending such a turn ('drive forward ... one meter').",
+    )
 
 
 class Accepted(BaseModel):
