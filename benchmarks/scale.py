@@ -84,7 +84,7 @@ def cpu_by_role(pid: int, data_dir: Path) -> dict[str, float]:
     found: dict[str, float] = {}
     for member in tree(pid):
         try:
-            name = role(member, hosts)
+            name = role(member, hosts, pid)
         except OSError:
             continue
         name = "workers" if name.startswith("worker") else name
