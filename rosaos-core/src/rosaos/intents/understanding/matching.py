@@ -38,6 +38,7 @@ from rosaos.intents.grammar.intents_file import IntentsFile
 from rosaos.intents.grammar.phrases import confirms, conjunctions, pronouns
 from rosaos.intents.grammar.vocabulary import ARTICLES, DeviceVocabulary
 from rosaos.intents.understanding.compose.reader import Composer
+from rosaos.intents.understanding.compose.speech import normalise, remark
 from rosaos.intents.understanding.fuzzy import FuzzyMatcher
 from rosaos.intents.understanding.generalize import understand
 from rosaos.intents.understanding.match_result import MatchResult, ProcessPlan, build_result, no_match
@@ -335,7 +336,10 @@ class IntentMatcher:
     def _hides_command(self, reading: Reading) -> bool:
         """A wildcard that swallowed a conjunction ("play jazz and turn on the lamp"), or one that
         says no words of its own ("play it again": what plays, not a search for "it again")."""
-        return any(len(self._splitter.split(text)) > 1 or _says_nothing(text) for text in reading.wildcards)
+        return any(
+            len(self._splitter.split(text)) > 1 or _says_nothing(text) or _gives_reason(reading.clause, text)
+            for text in reading.wildcards
+        )
 
     def _partition(self, pieces: tuple[str, ...], allow_unknown: bool, focus: Focus) -> list[Reading] | None:
         """Cut ``pieces`` (texts and separators, alternating) into the fewest clauses that all match.
@@ -480,6 +484,17 @@ def _says_nothing(wildcard: str) -> bool:
     """Whether a wildcard's text only points back at what is there ("it again", "that song")."""
     words = re.findall(r"[\w']+", wildcard.lower())
     return bool(words) and all(word in _BACK_REFERENCE for word in words)
+
+
+def _gives_reason(clause: str, wildcard: str) -> bool:
+    """Whether a wildcard ran on past a comma into a reason ("put on something ambient, I need
+    to focus"): the search is the words before it. A title with a comma ("Hello, Goodbye")
+    names no subject and verb after it."""
+    said = " ".join(re.findall(r"[\w']+", normalise(wildcard)))
+    return any(
+        remark(part.strip()) and said.endswith(" ".join(re.findall(r"[\w']+", part)))
+        for part in normalise(clause).split(",")[1:]
+    )
 
 
 def _leaned_on(reading: Reading | None) -> tuple[str, str] | None:

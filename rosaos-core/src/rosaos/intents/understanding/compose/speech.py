@@ -29,6 +29,9 @@ _REQUEST_FRAMES = (
     r"(?:can|could|would|will|wouldja|couldja|can't|won't)\s+(?:you|ya|u|yah)(?:\s+please)?",
     r"(?:do|would)\s+you\s+mind(?:\s+if\s+you)?",
     r"(?:be\s+a\s+(?:dear|darling|love|pal|sweetheart)|do\s+me\s+a\s+(?:favou?r|solid))(?:\s+and)?",
+    # "would you be so kind as to", "be kind enough to": politeness with its own verb
+    r"(?:(?:can|could|would|will)\s+(?:you|ya)\s+)?(?:please\s+)?be\s+(?:so\s+kind\s+as|kind\s+enough|good\s+enough)\s+to",
+    r"i(?:'d|\s+would)\s+(?:really\s+)?appreciate\s+it\s+if\s+you(?:'d|\s+would|\s+could)?",
     r"go\s+ahead\s+and",
     r"(?:i|we)\s+(?:could|can)\s+(?:really\s+)?(?:do\s+with|use)",
     r"(?:i'm|im|i\s+am|we're|we\s+are)\s+in\s+the\s+mood\s+for",
@@ -68,7 +71,16 @@ _LEAD = re.compile(
     rf"^(?:(?:{_alternatives(_INTERJECTIONS)})\b|(?:{'|'.join(_REQUEST_FRAMES)})(?=\s|$))[\s,!.?;:-]*",
     re.IGNORECASE,
 )
-_TAIL = re.compile(rf"[\s,!.?;:-]*\b(?:{_alternatives(_TAGS)})[\s,!.?;:-]*$", re.IGNORECASE)
+# A term of address, set off by a comma ("…, dear", "love, …"): who is spoken to, not what is
+# asked. The comma is what tells "for me, love" from "play something I love".
+_ADDRESS = (
+    r"(?:my\s+)?(?:dear|dearest|love|darling|honey|hon|sweetie|sweetheart|babe|pet|pal|friend|buddy|"
+    r"mate|sir|madam|ma'am|chief|boss)"
+)
+_TAIL = re.compile(
+    rf"[\s,!.?;:-]*\b(?:{_alternatives(_TAGS)})[\s,!.?;:-]*$|\s*,\s*{_ADDRESS}[\s,!.?;:-]*$", re.IGNORECASE
+)
+_LEAD_ADDRESS = re.compile(rf"^{_ADDRESS}\s*,\s*", re.IGNORECASE)
 _SPLIT = re.compile(
     r"\s*(?:[,;]\s*(?:and\s+then|and|then|after\s+that|plus|also)?|\band\s+then\b|\bthen\b|\band\b"
     r"|\bafter\s+that\b|\bafterwards\b|\bplus\b)\s*",
@@ -76,7 +88,9 @@ _SPLIT = re.compile(
 )
 _NEGATION = re.compile(
     # "I don't like this one, skip it": a feeling about what plays, the reason for a command.
-    r"\b(?:(?:don't|dont|do not)(?!\s+(?:really\s+)?(?:like|love|enjoy|care for|dig)\b)|never|no need to|not|won't|shouldn't|mustn't|didn't|doesn't|nothing|"
+    # "not this one, skip it": a rejection of what plays, the reason for the command after it.
+    r"\b(?:(?:don't|dont|do not)(?!\s+(?:really\s+)?(?:like|love|enjoy|care for|dig)\b)|never|no need to|"
+    r"not(?!\s+(?:this|that)(?:\s+(?:one|song|track|tune))?\s*(?:,|$))|won't|shouldn't|mustn't|didn't|doesn't|nothing|"
     r"no more|forget it|never mind|nevermind|cancel)\b",
     re.IGNORECASE,
 )
@@ -107,10 +121,17 @@ _REMARK = re.compile(
     r"seems|sounds|smells|came|went|left|arrived|woke|fell|says|said|called|rang|knocked|is|are|was|were)\b"
     r"|(?:this|that|these|those)\s+(?:is|are|was|were)\b"
     r"|(?:thank you|thanks|much appreciated|appreciate it|cheers|love you|you're the best|good job|well done)\b"
+    # a need before or after the command: "I need proper light for chopping", "I need to focus"
+    r"|(?:i|we)\s+(?:really\s+|just\s+)?(?:need|want)\s+(?:to\s+(?!turn|switch|set|make|put|play|have|hear)\w+"
+    r"|(?!(?:\w+\s+){0,3}(?:on|off)\b)(?:\w+\s+){1,3}(?:for|to)\b)"
+    # a rejection of what plays, the reason for the command beside it: "not this one, skip it"
+    r"|(?:nah\s+|no\s+)?not\s+(?:this|that)(?:\s+(?:one|song|track|tune))?(?:\s+again)?$"
     r"|(?:i|we|they|he|she)\s+(?!want\b|need\b|would\b|wanna\b|gotta\b)\w+)",
     re.IGNORECASE,
 )
-_STOP = re.compile(r"\b(?:stop|halt|freeze|hold it|enough|abort|emergency)\b", re.IGNORECASE)
+_STOP = re.compile(
+    r"\b(?:stop|halt|freeze|hold it|enough(?!\s+(?:to|for|as)\b)|abort|emergency)\b", re.IGNORECASE
+)
 
 
 def normalise(text: str) -> str:
@@ -127,7 +148,7 @@ def command_words(text: str) -> str:
     previous = None
     while previous != text:
         previous = text
-        text = _LEAD.sub("", text).strip()
+        text = _LEAD_ADDRESS.sub("", _LEAD.sub("", text)).strip()
         text = _TAIL.sub("", text).strip()
     return text
 
