@@ -1,8 +1,10 @@
-"""A driver's own question template is answered from ``device_state``, not by a process.
+"""A question about state is answered from ``device_state``, not by a process.
 
-The built-in drivers' templates ("how bright is the kitchen light?", "what's the volume?") plan a
-process that only reads ``get_state``; the offline engine reads the state through the kernel's
-lease-free ``device_state`` instead, so the answer comes while another process holds the device.
+"how bright is the kitchen light?" and "what's the volume?" are read as questions (issue 20's
+third round: brightness, colour and volume are answered from state); the offline engine reads the
+state through the kernel's lease-free ``device_state``, so the answer comes while another process
+holds the device. A question that names no device ("what's the volume?") reads every device and
+answers from those whose state says.
 """
 
 from __future__ import annotations
@@ -36,20 +38,20 @@ def model() -> LocalIntentModel:
 
 
 @pytest.mark.parametrize(
-    ("said", "device", "state", "answer"),
+    ("said", "asked", "device", "state", "answer"),
     [
-        ("how bright is the kitchen light?", "kitchen_light", {"on": True, "brightness": 70},
-         "The kitchen light is on, at 70% brightness."),
-        ("what's the volume?", "spotify", {"is_playing": False, "volume": 40}, "The volume is at 40."),
+        ("how bright is the kitchen light?", {"device": "kitchen_light"}, "kitchen_light",
+         {"on": True, "brightness": 70}, "The kitchen light is at 70% brightness."),
+        ("what's the volume?", {}, "spotify", {"is_playing": False, "volume": 40}, "The spotify's volume is at 40%."),
     ],
 )  # fmt: skip
-def test_a_template_question_reads_device_state(
-    model: LocalIntentModel, said: str, device: str, state: dict[str, Any], answer: str
+def test_a_state_question_reads_device_state(
+    model: LocalIntentModel, said: str, asked: dict[str, str], device: str, state: dict[str, Any], answer: str
 ) -> None:
     messages: list[ModelMessage] = [ModelRequest(parts=[UserPromptPart(said)])]  # a bare prompt: typed text
     [call] = model.respond(messages, TOOLS)
     assert isinstance(call, ToolCallPart) and call.tool_name == "device_state"
-    assert call.args_as_dict() == {"device": device}
+    assert call.args_as_dict() == asked
     result = {"device": device, "state": state, "held_by": [{"id": 3, "task": "a long task"}], "said": []}
     messages += [
         ModelResponse(parts=[call]),

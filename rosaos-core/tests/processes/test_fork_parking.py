@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -49,7 +50,10 @@ asyncio.run(main())
 
 def parked_fork_server(name: str | None) -> int:
     """Run a kernel stand-in (parking under ``name``, or not) until its fork server is ready,
-    SIGKILL it; the server's pid."""
+    SIGKILL it; the server's pid, once it has parked.
+
+    The server parks only after it sees its socket close: a pool started before that finds no
+    one parked (CI, loaded, once started the next pool first and so never adopted)."""
     script = DYING_KERNEL if name is not None else DYING_KERNEL.replace("park=sys.argv[1]", "park=None")
     kernel = subprocess.Popen(
         [sys.executable, "-c", script, name or "", json.dumps(worker_env())],
@@ -63,6 +67,11 @@ def parked_fork_server(name: str | None) -> int:
         kernel.kill()
         kernel.wait()
     assert line.isdigit(), f"the first kernel's fork server did not start: {line!r}"
+    if name is not None:
+        deadline = time.monotonic() + 30
+        while f"@{name}" not in Path("/proc/net/unix").read_text():
+            assert time.monotonic() < deadline, "the fork server did not park within 30 s"
+            time.sleep(0.05)
     return int(line)
 
 
