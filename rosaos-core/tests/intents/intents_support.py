@@ -14,7 +14,10 @@ from fastmcp import FastMCP
 from fastmcp.exceptions import ToolError
 from pydantic import Field
 
-from rosaos.intents.grammar.vocabulary import DeviceVocabulary
+from rosaos.config import DeviceConfig
+from rosaos.intents.grammar.vocabulary import DeviceVocabulary, sources_from_config
+from rosaos.intents.understanding.matching import IntentMatcher
+from rosaos.plugins import load_drivers
 
 INTENTS = Path(__file__).parent / "drivers"
 BULB = INTENTS / "bulb.yaml"
@@ -88,3 +91,15 @@ def build_device_server(name: str, state: dict[str, Any], fail: set[str] | None 
         return act("play", playing=query)
 
     return server
+
+
+def plan_calls(result: Any) -> list[tuple[str, str, dict[str, Any]]]:
+    """Every step a match planned, as ``(device, tool, args)``, in order: what a spec test compares."""
+    return [
+        (step.device, step.tool, step.args) for process in result.processes for step in process.plan.steps
+    ]
+
+
+def matcher_for(devices: dict[str, DeviceConfig]) -> IntentMatcher:
+    """An English matcher of these devices, with the installed drivers' intents."""
+    return IntentMatcher(sources_from_config(devices, load_drivers()), "en")

@@ -22,12 +22,7 @@ from rosaos.intents.understanding.matching import IntentMatcher
 from rosaos.plugins import load_drivers
 
 from .intents_support import INTENTS
-
-
-def _calls(result: Any) -> list[tuple[str, str, dict[str, Any]]]:
-    return [
-        (step.device, step.tool, step.args) for process in result.processes for step in process.plan.steps
-    ]
+from .intents_support import plan_calls as _calls
 
 
 @pytest.fixture(scope="module")

@@ -17,13 +17,9 @@ from rosaos.intents.understanding.compose.speech import command_words, negated, 
 from rosaos.intents.understanding.matching import IntentMatcher
 from rosaos.plugins import load_drivers
 
+from .intents_support import plan_calls as _calls
+
 Call = tuple[str, str, dict[str, Any]]
-
-
-def _calls(result: Any) -> list[Call]:
-    return [
-        (step.device, step.tool, step.args) for process in result.processes for step in process.plan.steps
-    ]
 
 
 @pytest.fixture(scope="module")

@@ -13,24 +13,15 @@ from typing import Any
 import pytest
 
 from rosaos.config import DeviceConfig
-from rosaos.intents.grammar.vocabulary import DeviceVocabulary, sources_from_config
+from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.understanding.compose.speech import clauses, normalise, remark, without_reason
 from rosaos.intents.understanding.matching import IntentMatcher
 from rosaos.intents.understanding.questions import Question, read_question
 from rosaos.intents.understanding.stop_words import DeviceRefs, StopRequest, read_stop
-from rosaos.plugins import load_drivers
 
 from .intents_support import home_world
-
-
-def _calls(result: Any) -> list[tuple[str, str, dict[str, Any]]]:
-    return [
-        (step.device, step.tool, step.args) for process in result.processes for step in process.plan.steps
-    ]
-
-
-def _matcher(devices: dict[str, DeviceConfig]) -> IntentMatcher:
-    return IntentMatcher(sources_from_config(devices, load_drivers()), "en")
+from .intents_support import matcher_for as _matcher
+from .intents_support import plan_calls as _calls
 
 
 @pytest.fixture(scope="module")

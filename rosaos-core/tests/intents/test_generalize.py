@@ -6,8 +6,6 @@ templates matter (relative changes, "all the lights", areas), against the real d
 
 from __future__ import annotations
 
-from typing import Any
-
 import pytest
 
 from rosaos.config import DeviceConfig
@@ -17,11 +15,7 @@ from rosaos.intents.understanding.matching import IntentMatcher
 from rosaos.intents.understanding.rephrase import join_split_names, negated, strip_fillers
 from rosaos.plugins import load_drivers
 
-
-def _calls(result: Any) -> list[tuple[str, str, dict[str, Any]]]:
-    return [
-        (step.device, step.tool, step.args) for process in result.processes for step in process.plan.steps
-    ]
+from .intents_support import plan_calls as _calls
 
 
 @pytest.fixture(scope="module")
