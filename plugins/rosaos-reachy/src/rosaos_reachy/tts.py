@@ -170,12 +170,13 @@ class LocalTts:
             import pyttsx3  # imported here: it loads libespeak-ng at import
 
             if self._engine is None:
-                engine = pyttsx3.init("espeak")
-                engine.setProperty("rate", self.rate)
-                if self.voice:
-                    engine.setProperty("voice", self.voice)
-                self._engine = engine
+                self._engine = pyttsx3.init("espeak")
             engine = self._engine
+            # pyttsx3 hands every caller in a process the same espeak engine, so another speaker's
+            # rate or voice may be set on it since: set ours before each sentence.
+            engine.setProperty("rate", self.rate)
+            if self.voice:
+                engine.setProperty("voice", self.voice)
             engine.save_to_file(text, str(path))
             engine.runAndWait()
         except Exception as error:  # a missing libespeak-ng shows up as OSError/RuntimeError
