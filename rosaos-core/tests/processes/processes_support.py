@@ -216,3 +216,14 @@ def wait_until_dead(pid: int, within: float = 10.0) -> None:
         if time.monotonic() > deadline:
             raise AssertionError(f"process {pid} did not exit within {within:g} s")
         time.sleep(0.01)
+
+
+def wait_until_parked(name: str, within: float = 30.0) -> None:
+    """Wait until a fork server has bound the park ``name`` (an abstract UNIX socket).
+
+    A server parks only after it sees its kernel's socket close: a pool started before that finds
+    no one parked and starts a fresh server (CI once lost an adoption test to that race)."""
+    deadline = time.monotonic() + within
+    while f"@{name}" not in Path("/proc/net/unix").read_text():
+        assert time.monotonic() < deadline, f"no fork server parked as {name!r} within {within:g} s"
+        time.sleep(0.05)

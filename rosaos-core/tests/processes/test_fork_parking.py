@@ -12,7 +12,6 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
-import time
 from pathlib import Path
 
 import pytest
@@ -29,6 +28,7 @@ from .processes_support import (
     parent_pid,
     pid_alive,
     wait_until_dead,
+    wait_until_parked,
     worker_env,
 )
 
@@ -68,10 +68,7 @@ def parked_fork_server(name: str | None) -> int:
         kernel.wait()
     assert line.isdigit(), f"the first kernel's fork server did not start: {line!r}"
     if name is not None:
-        deadline = time.monotonic() + 30
-        while f"@{name}" not in Path("/proc/net/unix").read_text():
-            assert time.monotonic() < deadline, "the fork server did not park within 30 s"
-            time.sleep(0.05)
+        wait_until_parked(name)
     return int(line)
 
 

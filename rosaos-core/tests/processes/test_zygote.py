@@ -27,6 +27,7 @@ from .processes_support import (
     parent_pid,
     pid_alive,
     wait_until_dead,
+    wait_until_parked,
     worker_env,
 )
 
@@ -86,7 +87,8 @@ async def test_a_kernel_killed_ends_its_workers_and_the_next_adopts_its_forked_f
     for worker in pids["workers"]:  # type: ignore[attr-defined]
         wait_until_dead(worker, within=30)
     server = pids["server"]
-    assert isinstance(server, int) and pid_alive(server), "the forked fork server did not park"
+    assert isinstance(server, int) and pid_alive(server), "the forked fork server did not outlive its kernel"
+    wait_until_parked(name)
     endings = Endings()
     pool = WorkerPool(size=0, env=worker_env(), on_ended=endings.record, park=name)
     await pool.start()
