@@ -31,7 +31,7 @@ from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.understanding.compose.actions import Said, read_action, restate
 from rosaos.intents.understanding.compose.references import Reference, References
 from rosaos.intents.understanding.compose.scenes import Scene, read_scene
-from rosaos.intents.understanding.compose.speech import asks, clauses, negated, normalise, remark, says_stop
+from rosaos.intents.understanding.compose.speech import asks, clauses, negated_command, normalise, remark, says_stop
 from rosaos.intents.understanding.match_result import MatchResult, build_result
 from rosaos.intents.understanding.readings import RANK_DRIVER, Focus, Reading, ReadingContext
 
@@ -103,7 +103,7 @@ class Composer:
         if not self.capabilities or not self.language.startswith("en"):
             return None
         plain = normalise(text)
-        if negated(plain) or asks(plain) or says_stop(plain):
+        if negated_command(plain) or asks(plain) or says_stop(plain):
             return None
         swapped = _SWAP.search(" ".join(clauses(plain)))
         if swapped is not None:

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 
 from rosaos.intents.grammar.capabilities import Capabilities
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
+from rosaos.intents.understanding.compose.places import PLACE_NOUNS, name_places
 
 _FUNCTION_WORDS = frozenset(
     [
@@ -117,6 +118,7 @@ _FUNCTION_WORDS = frozenset(
         "less",
         "than",
         "as",
+        *PLACE_NOUNS,  # every room is a room: only the word before it says which
     ]
 )
 _DETERMINERS = frozenset(
@@ -129,7 +131,8 @@ _EXCEPT = re.compile(
 )
 _GLUE = frozenset(
     {"the", "a", "an", "my", "our", "your", "this", "that", "these", "those", "its", "their", "his", "her",
-     "of", "in", "on", "over", "above", "under", "below", "near", "next", "beside", "by", "with", "and"}
+     "of", "in", "on", "over", "above", "under", "below", "near", "next", "beside", "by", "with", "and",
+     *PLACE_NOUNS}
 )  # fmt: skip
 """Words inside a device phrase that name nothing themselves ("the light over the stairs")."""
 _WORD = re.compile(r"[a-z][a-z0-9'-]*")
@@ -139,7 +142,7 @@ _SYNONYMS: tuple[frozenset[str], ...] = tuple(
         "sofa couch settee", "tv television telly", "lounge living",
         "hall hallway corridor foyer entryway", "stairs stair stairwell staircase stairway",
         "office study", "bathroom washroom restroom loo", "ceiling overhead", "porch veranda",
-        "garden yard backyard", "nursery kid", "workbench bench", "dining diner", "den lounge",
+        "garden yard backyard", "nursery kid kids children child playroom", "workbench bench", "dining diner", "den lounge",
         "entrance entry doorway", "speaker stereo", "dog puppy doggy doggo pup",
     )
 )  # fmt: skip
@@ -203,6 +206,7 @@ class References:
             declared = capabilities.get(device.name)
             nouns |= set(declared.kind) if declared else set()
             text = " ".join([*names, *device.aliases, device.description, *device.areas(language)])
+            text = name_places(text)  # "the sitting room" in a description is the living room
             words = {singular(word) for word in _WORD.findall(text.lower())} - _FUNCTION_WORDS
             words |= {other for group in _SYNONYMS if words & group for other in group}
             self._known.append(_Known(device.name, frozenset(nouns), frozenset(words | nouns)))
@@ -221,7 +225,8 @@ class References:
 
     def resolve(self, phrase: str) -> Reference:
         """The devices ``phrase`` names (see :class:`Reference`)."""
-        tokens = _WORD.findall(phrase.lower())
+        phrase = name_places(phrase)
+        tokens = _WORD.findall(phrase)
         group = any(token in _GROUP for token in tokens)
         excepted = _EXCEPT.search(phrase.lower()) if group or self._has_plural(tokens) else None
         if excepted is not None:
@@ -248,6 +253,7 @@ class References:
         question: "is the light over the stairs on"). A phrase needs a noun or a device's own
         name ("the kitchen" alone is a place, not a device); one that names a device this world
         lacks names none, and all its words are left over."""
+        tokens = _WORD.findall(name_places(" ".join(tokens)))
         naming = [token for token in tokens if self._naming(token)]
         rest = [token for token in tokens if not self._naming(token) and token not in _GLUE]
         if not any(singular(token) in self._nouns for token in naming):
@@ -277,7 +283,7 @@ class References:
             and not token[0].isdigit()
         ]
         modifiers = [token for _, token in others if self._known_word(token)]
-        if heads and self._unknown_before(tokens, heads, others):
+        if heads and self._unknown_before(tokens, heads, others) or self._unknown_place(tokens):
             return Reference(unknown=True, named=True)
         if not heads and not modifiers:
             if self._unknown_object(tokens):
@@ -317,6 +323,18 @@ class References:
             if index >= 0 and index in unknown:
                 return True
         return False
+
+    def _unknown_place(self, tokens: list[str]) -> bool:
+        """A room this world lacks ("the games room"): its word before "room" names no device, so
+        no device is guessed from "room" alone (every room is one)."""
+        return any(
+            token in PLACE_NOUNS
+            and index > 0
+            and tokens[index - 1] not in _FUNCTION_WORDS
+            and not tokens[index - 1][0].isdigit()
+            and not self._known_word(tokens[index - 1])
+            for index, token in enumerate(tokens)
+        )
 
     def _unknown_object(self, tokens: list[str]) -> bool:
         """A thing the sentence names that no device is ("turn on the tv", "open the blinds")."""

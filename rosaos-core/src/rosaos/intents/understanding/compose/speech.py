@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import re
 
+from rosaos.intents.understanding.compose.places import name_places
 from rosaos.intents.understanding.compose.quantities import spell_numbers
 
 _INTERJECTIONS = (
@@ -107,6 +108,8 @@ _SUBJECT = (
     r"there|there's|that's|everyone|everyone's|everybody|everybody's|someone|somebody|nobody|no one|"
     r"people|guests|(?:the|my|our|his|her|their|a)\s+\w+(?:'s)?)"
 )
+_IS = re.compile(r"^((?:the|my|our|his|her|their|a)\s+(?:\w+\s+)?\w+)'s\b")
+"""A subject with "'s" for "is": "the baby's asleep" is "the baby is asleep"."""
 _REASON = re.compile(
     rf"\s+(?:because|cause|'cause|cuz|coz|cos|since|as|so that|so|now that|while|given that|seeing as|where|from where)"
     rf"\s+{_SUBJECT}(?=\s|$).*$",
@@ -135,12 +138,13 @@ _STOP = re.compile(
 
 
 def normalise(text: str) -> str:
-    """Lowercase, plain apostrophes, number words as digits, no end punctuation."""
+    """Lowercase, plain apostrophes, number words as digits, rooms by their own word ("where we
+    cook": the kitchen, before "where" can be read as the start of a reason), no end punctuation."""
     text = text.lower().replace("\u2019", "'").replace("\u2018", "'")
     text = re.sub(r"[!?.]+\s+(?=\S)", ", ", text)  # one sentence, then another: two clauses
     text = re.sub(r"[\"“”!?.]+(?=\s|$)", " ", text)
     text = re.sub(r"\s+", " ", text).strip()
-    return spell_numbers(text)
+    return name_places(spell_numbers(text))
 
 
 def command_words(text: str) -> str:
@@ -175,12 +179,22 @@ def remark(clause: str) -> bool:
     baby is napping", "I'm heading out", "we have guests", "it's too close to the stairs").
     Said beside a command, it is the reason for it and dropped; alone, it may be a need
     (the reader's :meth:`~rosaos.intents.understanding.compose.reader.Composer` reads those)."""
-    return _REMARK.match(clause) is not None
+    return _REMARK.match(clause) is not None or _REMARK.match(_IS.sub(r"\1 is", clause)) is not None
 
 
 def negated(text: str) -> bool:
     """Whether ``text`` says not to do something ("don't", "never", "no need to")."""
     return _NEGATION.search(text) is not None
+
+
+def negated_command(text: str) -> bool:
+    """Whether a command of ``text`` is negated: :func:`negated` on its clauses, without the
+    remarks said after the first clause ("skip this one, I'm not in the mood": the "not" is the
+    reason's, not the command's). A remark that opens the sentence still counts: "I'm not sure,
+    turn it off" is not read as a plain command."""
+    pieces = clauses(text)
+    kept = [piece for index, piece in enumerate(pieces) if index == 0 or not remark(piece)]
+    return negated(", ".join(kept))
 
 
 def asks(text: str) -> bool:
