@@ -129,6 +129,7 @@ _BACK_WORDS = re.compile(r"\b(?:backwards?|back|reverse|retreat|away from me)\b"
 """What :data:`_BACKWARD` matched, less the words between "back" and "up": "back the dog up"."""
 _FORWARD = re.compile(r"\b(?:forwards?|ahead|onwards?|closer|towards? me|straight)\b")
 _COOLER = re.compile(r"\b(?:cooler|colder|bluer|whiter|crisper|less warm|less yellow)\b")
+_WHITE = re.compile(r"\b(?:(?:shade|tone|kind)\s+of\s+)?(?:white|yellow|daylight)\b")
 _WARMER = re.compile(r"\b(?:warmer|cozier|cosier|yellower|softer white|less cool|less blue|more yellow)\b")
 _WARM = re.compile(r"\b(?:warm|cozy|cosy|candle-?like)\b")
 _COOL = re.compile(r"\b(?:cool|cold|crisp|icy)\b")
@@ -346,11 +347,11 @@ def _light_or_sound(text: str, quantity: Quantity | None, size: Size, colours: f
         return coloured
     if _WARMER.search(text):
         return Said(
-            "colour_temperature", {"kelvin_change": -SIZES["kelvin_change"][size]}, _cut(text, _WARMER)
+            "colour_temperature", {"kelvin_change": -SIZES["kelvin_change"][size]}, _cut(text, _WARMER, _WHITE)
         )
     if _COOLER.search(text):
         return Said(
-            "colour_temperature", {"kelvin_change": SIZES["kelvin_change"][size]}, _cut(text, _COOLER)
+            "colour_temperature", {"kelvin_change": SIZES["kelvin_change"][size]}, _cut(text, _COOLER, _WHITE)
         )
     if _WARM.search(text) and not _COOL.search(text):
         return Said("colour_temperature", {"kelvin": WARM_KELVIN}, _cut(text, _WARM))
@@ -412,7 +413,11 @@ _SHADE = re.compile(r"\b(?:plain|pure|normal|regular|simple|nice|bright|back|col
 
 
 def _colour(text: str, colours: frozenset[str]) -> Said | None:
-    """The colour ``text`` names (the longest name the world's lights know), if any."""
+    """The colour ``text`` names (the longest name the world's lights know), if any; none for a
+    white said with a comparative ("a cooler white", "a warmer shade of white"): that changes the
+    white the light has, relative to it."""
+    if (_WARMER.search(text) or _COOLER.search(text)) and _WHITE.search(text):
+        return None
     for colour in sorted(colours, key=len, reverse=True):
         pattern = re.compile(rf"\b{re.escape(colour)}\b")
         if pattern.search(text):

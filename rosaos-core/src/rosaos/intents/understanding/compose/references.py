@@ -147,6 +147,8 @@ _SYNONYMS: tuple[frozenset[str], ...] = tuple(
     )
 )  # fmt: skip
 """Words people use for the same thing ("the lamp by the couch" for a lamp next to the sofa)."""
+_KIN = {"lamp": "light", "bulb": "light", "lantern": "light"}
+"""Nouns for the same kind of device, used only when a place or description word says which one."""
 MIN_PREFIX = 4
 _REMEMBERED_WORDS = 4096
 
@@ -301,6 +303,14 @@ class References:
                 known.name: sum(self._has_word(known, word) for word in modifiers) for known in candidates
             }
             best = max(scores.values())
+            if best == 0 and heads:
+                # "the bedroom lamp" for the bedside light: a lamp is a light, and the place says which
+                kin = {_KIN.get(noun, noun) for noun in head_nouns}
+                candidates = [known for known in self._known if kin <= {_KIN.get(n, n) for n in known.nouns}]
+                scores = {
+                    known.name: sum(self._has_word(known, word) for word in modifiers) for known in candidates
+                }
+                best = max(scores.values(), default=0)
             if best == 0:
                 return Reference(unknown=True, named=True)
             candidates = [known for known in candidates if scores[known.name] == best]

@@ -120,7 +120,7 @@ _REMARK = re.compile(
     r"keeps?|just|got|gets?|hates?|(?:\w+ing))\b"
     r"|(?:i'm|im|i've|i'll(?!\s+(?:have|take)\b)|(?:i'd|we'd)(?!\s+(?:like|love|prefer|rather|want)\b)|we're|we've|we'll|you're|he's|she's|they're|it's|there's|that's|everyone's|"
     r"everybody's|someone's|somebody's|nobody's|no one's|everything's|nothing's|something's)\b"
-    r"|(?:the|my|our|his|her|their|a)\s+(?:\w+\s+)?\w+\s+(?:hurts?|aches?|sleeps|naps|works|starts|feels|looks|"
+    r"|(?:the|my|our|his|her|their|a)\s+(?:\w+\s+){0,2}\w+\s+(?:hurts?|aches?|sleeps|naps|works|starts|feels|looks|"
     r"seems|sounds|smells|came|went|left|arrived|woke|fell|says|said|called|rang|knocked|is|are|was|were)\b"
     r"|(?:this|that|these|those)\s+(?:is|are|was|were)\b"
     r"|(?:thank you|thanks|much appreciated|appreciate it|cheers|love you|you're the best|good job|well done)\b"
