@@ -55,6 +55,8 @@ Action = Literal[
     "look",
     "face_front",
     "say",
+    "sleep",
+    "wake",
 ]
 """What the core knows how to say, in every language it reads: the verbs that mean each."""
 ACTIONS: tuple[str, ...] = Action.__args__  # type: ignore[attr-defined]

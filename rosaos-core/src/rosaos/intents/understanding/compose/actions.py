@@ -54,6 +54,19 @@ _SAY = re.compile(
 """Words to say out loud, and who says them: "have Reachy say good night", "let everyone know the
 pizza's here", "announce that dinner is ready". "Tell the drone to take off" is an order to
 someone, not words to say."""
+_MODAL_WHO = re.compile(
+    r"^(?:can|could|would|will)\s+(?!you\b|u\b)(?P<who>(?:the\s+|our\s+|my\s+)?[\w'-]+)\s+(?:please\s+)?"
+    r"(?=say|tell|announce|shout|call out)"
+)
+"""A device asked to speak by name ("could the Reachy say hello"): the same as "have the Reachy say"."""
+_SLEEP = re.compile(
+    r"\b(?:go(?:es)?\s+(?:back\s+)?to\s+(?:sleep|bed)|(?:take|have)\s+a\s+(?:little\s+)?(?:nap|rest|snooze)"
+    r"|(?:doze|nod)\s+off|(?:time\s+(?:to|for)|you\s+can|you\s+may)\s+(?:go\s+)?(?:sleep|rest|nap|bed)"
+    r"|(?:put|send)\s+(?:[\w'-]+\s+){0,3}to\s+(?:sleep|bed)|(?:sleep|nap|snooze)\s+now)\b|^(?:sleep|nap|snooze)$"
+)
+"""Going to sleep, as a verb phrase: "go to sleep", "take a nap", "you can rest now" (a bare noun
+"sleep" is not an order: "I need sleep", "play sleep music")."""
+_WAKE = re.compile(r"\bwake\s+(?:[\w'-]+\s+){0,3}?up\b|\bwake\s+up\b|^wake\b|\brise\s+and\s+shine\b")
 _PRESS = re.compile(r"\b(?:hit|press|push|tap|click|do|go)\b|\b(?:ahead|forward|on)$")
 """Words around a transport word that add nothing: "hit pause", "skip ahead", "go back a song"."""
 _RESUME = re.compile(
@@ -219,9 +232,13 @@ def read_action(clause: str, colours: frozenset[str], genres: frozenset[str] = f
         return Said("pause", rest=_cut(plain, _PAUSE, _PRESS))
     if _RESUME.search(plain) or _REPLAY.match(clause):
         return Said("resume", rest=_cut(plain, _RESUME, _PRESS))
-    spoken = _SAY.match(clause)
+    spoken = _SAY.match(_MODAL_WHO.sub(r"have \g<who> ", clause))
     if spoken:
         return Said("say", {"text": spoken.group("text")}, rest=spoken.group("who") or "")
+    if _WAKE.search(plain):
+        return Said("wake", rest=_cut(plain, _WAKE))
+    if _SLEEP.search(plain):
+        return Said("sleep", rest=_cut(plain, _SLEEP))
     played = _PLAY.match(clause)
     if played and (clause.startswith(_PLAY_VERBS) or _genre(played.group("query"), genres)):
         query = re.sub(

@@ -36,6 +36,8 @@ from rosaos.intents.understanding.match_result import MatchResult, build_result
 from rosaos.intents.understanding.readings import RANK_DRIVER, Focus, Reading, ReadingContext
 
 LiteralReading = Callable[[str, Focus], Reading | None]
+_OCCASION = re.compile(r"^(?:it's\s+|its\s+|it\s+is\s+)?(?:(?:about\s+)?time\s+(?:to|for)\b|bedtime\b|good\s+(?:morning|night|evening)\b)")
+"""A clause that says what time it is for ("time to work", "good night"), once no action is read in it."""
 _NEED_LIGHT = re.compile(
     r"\b(?:need|want|could use|would like|give me|get me|some)\b.*\b(?:light|lighting)\b"
     r"|\bcan'?t see\b|\b(?:too|so|very|pretty|quite|really) dark\b|\bpitch black\b|\bdark in here\b"
@@ -163,6 +165,8 @@ class Composer:
             devices = () if about.unknown else about.devices
             return _Clause(text, None, Reference(), devices or self._felt(text))
         said = read_action(text, self.colours, self.genres)
+        if said is None and _OCCASION.match(text):
+            return _Clause(text, None, Reference())  # "…, time to work": when, not what
         reference = self.references.resolve(said.rest if said else text)
         return _Clause(text, said, reference)
 
@@ -211,7 +215,8 @@ class Composer:
                 and not clause.reference.named
                 and not clause.reference.pronoun
                 and following is not None
-                and index + 2 == len(parsed)
+                # said last, or before only remarks ("wake up, Reachy, time to work")
+                and all(rest.said is None and not rest.reference.named for rest in parsed[index + 2 :])
                 and following.said is None
                 and following.reference.named
                 and not following.reference.unknown

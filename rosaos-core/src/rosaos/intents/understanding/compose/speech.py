@@ -108,6 +108,9 @@ _SUBJECT = (
     r"there|there's|that's|everyone|everyone's|everybody|everybody's|someone|somebody|nobody|no one|"
     r"people|guests|(?:the|my|our|his|her|their|a)\s+\w+(?:'s)?)"
 )
+_OCCASION = re.compile(r"^(?:it's\s+|its\s+)?(?:about\s+)?time\s+(?:to|for)\s+[\w'-]+$")
+""""time to work", "time for bed": one word after "time to" is an occasion or a verb to read
+whole, not a request frame to strip ("time to turn on the lamp" is one)."""
 _IS = re.compile(r"^((?:the|my|our|his|her|their|a)\s+(?:\w+\s+)?\w+)'s\b")
 """A subject with "'s" for "is": "the baby's asleep" is "the baby is asleep"."""
 _REASON = re.compile(
@@ -160,7 +163,8 @@ def command_words(text: str) -> str:
 def clauses(text: str) -> list[str]:
     """``text`` cut into clauses at commas, "and", "then"; each without its own discourse, and
     without the reason given for it ("…, because it's too bright": :func:`without_reason`)."""
-    return [command_words(piece) for piece in _SPLIT.split(without_reason(command_words(text)))]
+    pieces = _SPLIT.split(without_reason(command_words(text)))
+    return [piece if _OCCASION.match(piece) else command_words(piece) for piece in pieces]
 
 
 def without_reason(text: str) -> str:
