@@ -62,6 +62,13 @@ class Reading:
         return (int(self.actionable), self.rank, self.literal)
 
 
+_DESCRIBED = re.compile(
+    r"^(?:the|that|this)\s+(?P<what>(?:[\w'-]+\s+){0,3}?[\w'-]+)\s+(?:song|track|tune|number|piece)\b(?P<rest>.*)$",
+    re.IGNORECASE,
+)
+"""A track said by what it is about ("the sun song", "that rain song by …"): no title says "the … song"."""
+
+
 def slot_values(result: RecognizeResult) -> dict[str, Any]:
     """Matched slots by name. Whole numbers become ``int``: hassil returns 20.0 for "20 percent"."""
     values: dict[str, Any] = {}
@@ -71,8 +78,18 @@ def slot_values(result: RecognizeResult) -> dict[str, Any]:
             value = int(value)
         elif isinstance(value, str):
             value = value.strip()
+            if entity.is_wildcard and name.endswith("query"):
+                value = search_words(value)
         values[name] = value
     return values
+
+
+def search_words(query: str) -> str:
+    """What to search for in a ``{query}`` a person said: a track said by what it is about ("the
+    sun song by the Beatles") is searched by its words ("sun by the Beatles"); a "please" at the
+    end is politeness, not part of a title."""
+    query = re.sub(r"[\s,]+please$", "", query, flags=re.IGNORECASE)
+    return _DESCRIBED.sub(r"\g<what>\g<rest>", query)
 
 
 def wildcard_texts(result: RecognizeResult) -> tuple[str, ...]:

@@ -21,6 +21,7 @@ from rosaos.intents.understanding.compose.quantities import (
     remove_vague,
     vague_size,
 )
+from rosaos.intents.understanding.readings import search_words
 
 DET = r"(?:(?:the|its|his|her|their|your|my|our|a)\s+)?"
 _DOCK_PLACE = (
@@ -244,7 +245,7 @@ def read_action(clause: str, colours: frozenset[str], genres: frozenset[str] = f
         query = re.sub(
             r"^(?:some|something|anything|a bit of|a little)\s+(?:by\s+|from\s+)?", "", played.group("query")
         )
-        return Said("play", {"query": query}, rest="")
+        return Said("play", {"query": search_words(query)}, rest="")
     genre = _genre(plain, genres)
     if genre is not None and not _OFF.search(plain) and not _PAUSE.search(plain):
         # "some jazz in the living room", "how about some classical": a kind of music, wanted.
@@ -364,7 +365,9 @@ def _light_or_sound(text: str, quantity: Quantity | None, size: Size, colours: f
         return coloured
     if _WARMER.search(text):
         return Said(
-            "colour_temperature", {"kelvin_change": -SIZES["kelvin_change"][size]}, _cut(text, _WARMER, _WHITE)
+            "colour_temperature",
+            {"kelvin_change": -SIZES["kelvin_change"][size]},
+            _cut(text, _WARMER, _WHITE),
         )
     if _COOLER.search(text):
         return Said(

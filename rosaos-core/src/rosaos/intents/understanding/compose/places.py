@@ -54,4 +54,8 @@ def _use_room(found: re.Match[str]) -> str:
     room = _ACTIVITY_ROOMS.get(found.group(1))
     if room is None:
         return found.group(0)
-    return room if room.endswith("room") or room in {"kitchen", "office", "garage", "nursery"} else f"{room} room"
+    return (
+        room
+        if room.endswith("room") or room in {"kitchen", "office", "garage", "nursery"}
+        else f"{room} room"
+    )

@@ -31,12 +31,21 @@ from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.understanding.compose.actions import Said, read_action, restate
 from rosaos.intents.understanding.compose.references import Reference, References
 from rosaos.intents.understanding.compose.scenes import Scene, read_scene
-from rosaos.intents.understanding.compose.speech import asks, clauses, negated_command, normalise, remark, says_stop
+from rosaos.intents.understanding.compose.speech import (
+    asks,
+    clauses,
+    negated_command,
+    normalise,
+    remark,
+    says_stop,
+)
 from rosaos.intents.understanding.match_result import MatchResult, build_result
 from rosaos.intents.understanding.readings import RANK_DRIVER, Focus, Reading, ReadingContext
 
 LiteralReading = Callable[[str, Focus], Reading | None]
-_OCCASION = re.compile(r"^(?:it's\s+|its\s+|it\s+is\s+)?(?:(?:about\s+)?time\s+(?:to|for)\b|bedtime\b|good\s+(?:morning|night|evening)\b)")
+_OCCASION = re.compile(
+    r"^(?:it's\s+|its\s+|it\s+is\s+)?(?:(?:about\s+)?time\s+(?:to|for)\b|bedtime\b|good\s+(?:morning|night|evening)\b)"
+)
 """A clause that says what time it is for ("time to work", "good night"), once no action is read in it."""
 _NEED_LIGHT = re.compile(
     r"\b(?:need|want|could use|would like|give me|get me|some)\b.*\b(?:light|lighting)\b"

@@ -285,7 +285,7 @@ class References:
             and not token[0].isdigit()
         ]
         modifiers = [token for _, token in others if self._known_word(token)]
-        if heads and self._unknown_before(tokens, heads, others) or self._unknown_place(tokens):
+        if (heads and self._unknown_before(tokens, heads, others)) or self._unknown_place(tokens):
             return Reference(unknown=True, named=True)
         if not heads and not modifiers:
             if self._unknown_object(tokens):
