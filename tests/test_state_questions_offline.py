@@ -24,6 +24,7 @@ from pydantic_ai.messages import (
 
 from rosaos.config import RosaosConfig
 from rosaos.devices.world import build_world
+from rosaos.intents.grammar.state_words import called
 from rosaos.intents.grammar.vocabulary import device_vocabularies
 from rosaos.models.kernel_model import LocalIntentModel
 from rosaos.plugins import load_drivers
@@ -42,7 +43,8 @@ def model() -> LocalIntentModel:
     [
         ("how bright is the kitchen light?", {"device": "kitchen_light"}, "kitchen_light",
          {"on": True, "brightness": 70}, "The kitchen light is at 70% brightness."),
-        ("what's the volume?", {}, "spotify", {"is_playing": False, "volume": 40}, "The spotify's volume is at 40%."),
+        # A device named after its product is called by that name: not "the spotify's volume".
+        ("what's the volume?", {}, "spotify", {"is_playing": False, "volume": 40}, "Spotify's volume is at 40%."),
     ],
 )  # fmt: skip
 def test_a_state_question_reads_device_state(
@@ -52,7 +54,14 @@ def test_a_state_question_reads_device_state(
     [call] = model.respond(messages, TOOLS)
     assert isinstance(call, ToolCallPart) and call.tool_name == "device_state"
     assert call.args_as_dict() == asked
-    result = {"device": device, "state": state, "held_by": [{"id": 3, "task": "a long task"}], "said": []}
+    driver = build_world(RosaosConfig(), load_drivers()).get(device).spec.name
+    result = {
+        "device": device,
+        "called": called(device, driver),  # as the kernel's device_state tool answers
+        "state": state,
+        "held_by": [{"id": 3, "task": "a long task"}],
+        "said": [],
+    }
     messages += [
         ModelResponse(parts=[call]),
         ModelRequest(parts=[ToolReturnPart("device_state", result, tool_call_id=call.tool_call_id)]),

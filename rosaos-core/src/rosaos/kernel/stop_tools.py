@@ -20,7 +20,7 @@ from pydantic import Field
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.drivers import READ_ONLY, DeviceError
-from rosaos.intents.grammar.state_words import describe
+from rosaos.intents.grammar.state_words import called, describe
 from rosaos.kernel.stopping import StopError, Stopper, StopReport, describe_task
 from rosaos.processes.manager import ProcessManager
 
@@ -97,7 +97,12 @@ async def _read(endpoint: DeviceEndpoint, running: list[Any]) -> dict[str, Any]:
         for info in running
         if endpoint.name in info.devices and not endpoint.always_attached
     ]
-    answer: dict[str, Any] = {"device": endpoint.name, "status": endpoint.status, "held_by": held_by}
+    answer: dict[str, Any] = {
+        "device": endpoint.name,
+        "called": called(endpoint.name, endpoint.driver),
+        "status": endpoint.status,
+        "held_by": held_by,
+    }
     if endpoint.url is None:
         return answer | {"state": None, "said": [f"The {_spoken(endpoint.name)} is {endpoint.status}."]}
     client = DeviceClient(endpoint.url, endpoint.token, STATE_TIMEOUT, endpoint.name)
@@ -106,7 +111,7 @@ async def _read(endpoint: DeviceEndpoint, running: list[Any]) -> dict[str, Any]:
     except (DeviceError, TimeoutError) as error:
         problem = str(error) or f"it did not answer within {STATE_TIMEOUT:g} s"
         return answer | {"state": None, "said": [f"I could not read the {_spoken(endpoint.name)}: {problem}"]}
-    return answer | {"state": state, "said": describe(_spoken(endpoint.name), state)}
+    return answer | {"state": state, "said": describe(endpoint.name, state, endpoint.driver)}
 
 
 def _spoken(name: str) -> str:

@@ -194,6 +194,8 @@ def state_answer(question: Question, device: str, state: dict[str, Any]) -> str 
 def _about(question: Question, reading: dict[str, Any]) -> str | None:
     """One device's answer to ``question``, or None when its state does not say."""
     name, state = _spoken(reading["device"]), reading.get("state")
+    the = str(reading.get("called") or f"the {name}")  # "Spotify", not "the spotify" (state_words.called)
+    subject = the[:1].upper() + the[1:]
     if not isinstance(state, dict):
         said = reading.get("said") or []
         return str(said[0]) if said and question.devices else None
@@ -202,38 +204,38 @@ def _about(question: Question, reading: dict[str, Any]) -> str | None:
         lit = state["on"]
         yes = lit if topic == "on" else not lit
         level = f", at {state['brightness']}% brightness" if lit and "brightness" in state else ""
-        return f"{'Yes' if yes else 'No'}, the {name} is {'on' if lit else 'off'}{level}."
+        return f"{'Yes' if yes else 'No'}, {the} is {'on' if lit else 'off'}{level}."
     if topic in ("playing", "is_playing") and isinstance(state.get("is_playing"), bool):
         if state["is_playing"] and state.get("track"):
             by = f" by {state['artist']}" if state.get("artist") else ""
-            return f"{'Yes: ' if topic == 'is_playing' else ''}{state['track']}{by} is playing on the {name}."
-        return f"{'No, n' if topic == 'is_playing' else 'N'}othing is playing on the {name}."
+            return f"{'Yes: ' if topic == 'is_playing' else ''}{state['track']}{by} is playing on {the}."
+        return f"{'No, n' if topic == 'is_playing' else 'N'}othing is playing on {the}."
     if topic == "brightness" and isinstance(state.get("brightness"), int | float):
         off = " (it is off)" if state.get("on") is False else ""
-        return f"The {name} is at {state['brightness']}% brightness{off}."
+        return f"{subject} is at {state['brightness']}% brightness{off}."
     if topic == "colour" and (shade := colour(state)) is not None:
         off = " (it is off)" if state.get("on") is False else ""
-        return f"The {name} is {shade}{off}."
+        return f"{subject} is {shade}{off}."
     if topic == "volume" and isinstance(state.get("volume"), int | float):
-        return f"The {name}'s volume is at {state['volume']}%."
+        return f"{subject}'s volume is at {state['volume']}%."
     if topic == "position" and (where := position(state)) is not None:
-        return f"The {name} is {where}."
+        return f"{subject} is {where}."
     if topic == "battery" and (charge := battery(state)) is not None:
-        return f"The {name}'s battery is at {charge}."
+        return f"{subject}'s battery is at {charge}."
     if topic == "docked" and isinstance(state.get("docked"), bool):
         if state["docked"]:
-            return f"Yes, the {name} is docked."
+            return f"Yes, {the} is docked."
         where = position(state)
-        return f"No, the {name} is not docked{': it is ' + where if where else ''}."
+        return f"No, {the} is not docked{': it is ' + where if where else ''}."
     if topic == "people" and ("x" in state or "people_seen" in state):
         seen = people_seen(state)
         busy = f" (it is busy: {reading['held_by'][0]['task']})" if reading["held_by"] else ""
         return f"{'Yes' if state.get('people_seen') else 'No'}, {seen}{busy}."
     if topic == "busy":
         if reading["held_by"]:
-            return f"Yes, the {name} is busy: {reading['held_by'][0]['task']}."
+            return f"Yes, {the} is busy: {reading['held_by'][0]['task']}."
         now = doing(state)
-        return f"Yes, the {name} is {now}." if now else f"No, the {name} is not doing anything."
+        return f"Yes, {the} is {now}." if now else f"No, {the} is not doing anything."
     return None
 
 

@@ -102,31 +102,43 @@ def people_seen(state: dict[str, Any], now: datetime | None = None) -> str:
     return f"it has seen someone ({sightings}{ago})"
 
 
-def describe(name: str, state: dict[str, Any]) -> list[str]:
-    """Short sentences about ``state``, one per thing a person might ask; [] when none apply."""
+def called(name: str, driver: str = "") -> str:
+    """How a reply names a device: "the kitchen light", but "Spotify" for an instance named after
+    its driver (a product's name is a proper name: "playing on Spotify", not "on the spotify")."""
+    spoken = name.replace("_", " ")
+    if driver and spoken.lower() == driver.replace("_", " ").lower():
+        return spoken[:1].upper() + spoken[1:]
+    return f"the {spoken}"
+
+
+def describe(name: str, state: dict[str, Any], driver: str = "") -> list[str]:
+    """Short sentences about ``state``, one per thing a person might ask; [] when none apply.
+    ``driver`` tells a product's name from a common noun (:func:`called`)."""
+    the = called(name, driver)
+    subject = the[:1].upper() + the[1:]
     said = []
     if isinstance(state.get("on"), bool):
         level = f", at {state['brightness']}% brightness" if state["on"] and "brightness" in state else ""
-        said.append(f"The {name} is {'on' if state['on'] else 'off'}{level}.")
+        said.append(f"{subject} is {'on' if state['on'] else 'off'}{level}.")
     if isinstance(state.get("is_playing"), bool):
         if state["is_playing"] and state.get("track"):
             by = f" by {state['artist']}" if state.get("artist") else ""
-            said.append(f"Playing {state['track']}{by} on the {name}.")
+            said.append(f"Playing {state['track']}{by} on {the}.")
         else:
-            said.append(f"Nothing is playing on the {name}.")
+            said.append(f"Nothing is playing on {the}.")
         if "volume" in state:
-            said.append(f"The {name}'s volume is at {state['volume']}%.")
+            said.append(f"{subject}'s volume is at {state['volume']}%.")
     where = position(state)
     if where is not None:
         moving = " and moving" if doing(state) == "moving" else ""
-        said.append(f"The {name} is {where}{moving}.")
+        said.append(f"{subject} is {where}{moving}.")
     charge = battery(state)
     if charge is not None:
-        said.append(f"The {name}'s battery is at {charge}.")
+        said.append(f"{subject}'s battery is at {charge}.")
     if "people_seen" in state:
-        said.append(f"The {name}: {people_seen(state)}.")
+        said.append(f"{subject}: {people_seen(state)}.")
     if state.get("speaking") is True:
-        said.append(f"The {name} is speaking.")
+        said.append(f"{subject} is speaking.")
     return said
 
 
