@@ -147,6 +147,7 @@ def normalise(text: str) -> str:
     text = re.sub(r"[!?.]+\s+(?=\S)", ", ", text)  # one sentence, then another: two clauses
     text = re.sub(r"[\"“”!?.]+(?=\s|$)", " ", text)
     text = re.sub(r"\s+", " ", text).strip()
+    text = re.sub(r"\brise and shine\b", "wake up", text)  # an idiom: its "and" joins no two commands
     return name_places(spell_numbers(text))
 
 
