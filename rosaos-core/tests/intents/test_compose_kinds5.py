@@ -104,7 +104,10 @@ def test_a_light_named_by_kind_alone_is_asked_about_listing_the_lights(home: Int
 @pytest.mark.parametrize(
     ("said", "expected"),
     [
-        ("a little quieter please, the baby's finally asleep", [("spotify", "change_volume", {"delta": -10})]),
+        (
+            "a little quieter please, the baby's finally asleep",
+            [("spotify", "change_volume", {"delta": -10})],
+        ),
         ("a bit louder, my dad's hard of hearing", [("spotify", "change_volume", {"delta": 10})]),
         ("skip this one, I'm not in the mood", [("spotify", "next_track", {})]),
         ("next song, I'm not really feeling it", [("spotify", "next_track", {})]),
