@@ -119,3 +119,38 @@ def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
             return self._parts[nodeid]
 
     return SplitScopeScheduling(config, log)
+
+
+_WORKERS: dict[str, list[float]] = {}
+"""Per xdist worker, as the controller sees its reports: first start, last stop, seconds in tests."""
+_LAST_MODULE: dict[str, str] = {}
+
+
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    """Note when each xdist worker ran tests (controller only), for :func:`pytest_terminal_summary`."""
+    node = getattr(report, "node", None)
+    if node is None or not report.stop:
+        return
+    name = str(node.gateway.id)
+    first, last, busy = _WORKERS.setdefault(name, [report.start, report.stop, 0.0])
+    _WORKERS[name] = [min(first, report.start), max(last, report.stop), busy + report.stop - report.start]
+    if report.stop >= last:
+        _LAST_MODULE[name] = report.nodeid.split("::", 1)[0]
+
+
+def pytest_terminal_summary(terminalreporter: Any) -> None:
+    """How busy each xdist worker was and when it ran out of work: the run is as long as the later
+    one, so a worker that ends minutes before the other says the order needs a look (SPLIT,
+    :func:`_slow_modules_first`)."""
+    if not _WORKERS:
+        return
+    began = min(first for first, _, _ in _WORKERS.values())
+    ends = sorted(last for _, last, _ in _WORKERS.values())
+    terminalreporter.section("xdist workers")
+    for name, (_, last, busy) in sorted(_WORKERS.items()):
+        terminalreporter.write_line(
+            f"{name}: {busy:.0f} s in tests, its last test ended at {last - began:.0f} s ({_LAST_MODULE[name]})"
+        )
+    terminalreporter.write_line(
+        f"the first worker out of work waited {ends[-1] - ends[0]:.0f} s for the last"
+    )
