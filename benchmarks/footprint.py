@@ -60,11 +60,18 @@ def children(pid: int) -> list[int]:
 
 
 def memory_kib(pid: int) -> dict[str, int]:
-    """PSS and RSS in KiB from /proc/PID/smaps_rollup."""
-    values: dict[str, int] = {}
+    """PSS, RSS and USS in KiB from /proc/PID/smaps_rollup.
+
+    USS (the private pages, clean and dirty) is what the process alone costs: unlike PSS it does
+    not shrink when other processes on the machine (another venv's, hard-linked by uv) map the
+    same library files, so it is the figure to compare on a shared machine.
+    """
+    values: dict[str, int] = {"uss": 0}
     for line in Path(f"/proc/{pid}/smaps_rollup").read_text().splitlines():
-        match = re.match(r"(Pss|Rss):\s+(\d+) kB", line)
-        if match:
+        match = re.match(r"(Pss|Rss|Private_Clean|Private_Dirty):\s+(\d+) kB", line)
+        if match and match.group(1).startswith("Private"):
+            values["uss"] += int(match.group(2))
+        elif match:
             values[match.group(1).lower()] = int(match.group(2))
     return values
 
@@ -131,10 +138,10 @@ def parent(pid: int) -> int:
     return int(Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1])
 
 
-def is_fork_server(pid: int, kernel: int) -> bool:
+def is_fork_server(pid: int, kernel: int, hosts: dict[int, str]) -> bool:
     """Started as ``python -m rosaos.processes.forkserver``, or forked from the kernel (the zygote
     of ``rosaos.processes.zygote``: the kernel's child with the kernel's command line)."""
-    if pid == kernel:
+    if pid == kernel or pid in hosts:  # a forked device host has the kernel's command line too
         return False
     line = command_line(pid)
     return "rosaos.processes.forkserver" in line or (parent(pid) == kernel and line == command_line(kernel))
@@ -147,10 +154,12 @@ def role(pid: int, hosts: dict[int, str], kernel: int) -> str:
         return "kernel (rosaos up)"
     if "rosaos.processes.worker" in line:
         return "worker"
+    if pid in hosts:  # a host forked from the kernel (rosaos.devices.host_zygote) has its command line
+        return f"device host {hosts[pid]}"
     # Workers are forked from the fork server and keep its command line: tell them by parent.
-    if is_fork_server(parent(pid), kernel):
+    if is_fork_server(parent(pid), kernel, hosts):
         return "worker (forked)"
-    if is_fork_server(pid, kernel):
+    if is_fork_server(pid, kernel, hosts):
         return "fork server"
     if "rosaos.devices.host" in line:
         return f"device host {hosts.get(pid, '?')}"
@@ -214,6 +223,7 @@ def one_run(idle: float) -> dict[str, Any]:
         "processes": processes,
         "pss_total_mib": round(total / 1024, 1),
         "pss_without_reachy_daemon_mib": round((total - daemon) / 1024, 1),
+        "uss_total_mib": round(sum(p.get("uss", 0) for p in processes) / 1024, 1),
     }
 
 
@@ -243,6 +253,7 @@ def main() -> None:
         ("the same, all but the Reachy (s)", [run["all_but_reachy_healthy_seconds"] or -1 for run in runs]),
         ("PSS, whole tree (MiB)", [run["pss_total_mib"] for run in runs]),
         ("PSS without Reachy daemon (MiB)", [run["pss_without_reachy_daemon_mib"] for run in runs]),
+        ("USS, whole tree (MiB)", [run["uss_total_mib"] for run in runs]),
         ("processes", [len(run["processes"]) for run in runs]),
     ):
         summary.add_row(label, f"{min(values):g}", f"{statistics.median(values):g}", f"{max(values):g}")
@@ -250,10 +261,12 @@ def main() -> None:
     last = Table(title="PSS by process (last run)")
     last.add_column("role")
     last.add_column("PSS MiB", justify="right")
+    last.add_column("USS MiB", justify="right")
     last.add_column("RSS MiB", justify="right")
     for process in sorted(runs[-1]["processes"], key=lambda p: -p.get("pss", 0)):
         last.add_row(
-            process["role"], f"{process.get('pss', 0) / 1024:.1f}", f"{process.get('rss', 0) / 1024:.1f}"
+            process["role"],
+            *(f"{process.get(key, 0) / 1024:.1f}" for key in ("pss", "uss", "rss")),
         )
     console.print(last)
     console.print(f"statuses at the banner (last run): {runs[-1]['statuses_at_banner']}")

@@ -15,6 +15,7 @@ from rosaos.auth import token_path
 from rosaos.cli.console import console as terminal
 from rosaos.cli.up_progress import ONE_LINE_EACH, device_line, report_devices
 from rosaos.config import ConfigError, RosaosConfig, load_config
+from rosaos.devices import host_zygote
 from rosaos.devices.world import build_world
 from rosaos.drivers import DeviceError
 from rosaos.kernel.runtime import Kernel, KernelError
@@ -73,9 +74,11 @@ def up_command(
         config = load_for_cli(config_path, **overrides)
         registry = load_drivers()
         world = build_world(config, registry)
+        # Now, with the kernel's modules imported and before any thread or file: the first device
+        # host and the fork server then share their memory with the kernel (see
+        # rosaos.devices.host_zygote and rosaos.processes.zygote).
+        host_zygote.prefork()
         if config.kernel.fork_server:
-            # Now, with the kernel's modules imported and before any thread or file: the fork
-            # server then shares their memory with the kernel (see rosaos.processes.zygote).
             prefork()
         kernel = Kernel(config, world)
     except (ConfigError, ModelError) as error:
@@ -122,6 +125,7 @@ async def _serve(kernel: Kernel, console: Console, err: Console) -> int:
             if task is not None:
                 task.cancel()
         await kernel.stop()
+        host_zygote.discard()  # a world with no local device never used it
     console.print("Stopped. Unhandled events stay queued for the next start.", markup=False)
     return 0
 

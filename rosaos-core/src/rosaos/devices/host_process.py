@@ -16,6 +16,8 @@ from typing import Any
 from rosaos.devices.heartbeat import is_tick
 from rosaos.devices.host import HostJob
 from rosaos.devices.host_logging import open_rotated_log
+from rosaos.devices.host_zygote import ForkedHost
+from rosaos.devices.host_zygote import take as zygote_take
 from rosaos.drivers import DeviceError
 
 log = logging.getLogger("rosaos.devices.host")
@@ -24,7 +26,7 @@ log = logging.getLogger("rosaos.devices.host")
 class HostProcess:
     """A running device host, seen from the supervisor: spawn it, read its handshake, stop it."""
 
-    def __init__(self, process: asyncio.subprocess.Process, log_file: Path) -> None:
+    def __init__(self, process: asyncio.subprocess.Process | ForkedHost, log_file: Path) -> None:
         self.process = process
         self.log_file = log_file
         """The host's stderr: driver output, uvicorn warnings, tracebacks."""
@@ -157,19 +159,24 @@ class HostProcess:
     @classmethod
     async def _start(cls, log_file: Path) -> HostProcess:
         log_handle = await asyncio.to_thread(open_rotated_log, log_file)
+        process: asyncio.subprocess.Process | ForkedHost | None = None
         try:
-            process = await asyncio.create_subprocess_exec(
-                sys.executable,
-                "-P",  # the working directory must not shadow a module (a stray h2.py)
-                "-m",
-                "rosaos.devices.host",
-                stdin=asyncio.subprocess.PIPE,
-                stdout=asyncio.subprocess.PIPE,
-                stderr=log_handle,
-                # Its own process group: Ctrl-C in the terminal reaches the supervisor only, which
-                # then stops hosts in order; killpg also reaches anything a driver spawned.
-                start_new_session=True,
-            )
+            # ``rosaos up``'s first host is forked from the kernel (rosaos.devices.host_zygote).
+            if (zygote := zygote_take()) is not None:
+                process = await zygote.become(log_handle.fileno())
+            if process is None:
+                process = await asyncio.create_subprocess_exec(
+                    sys.executable,
+                    "-P",  # the working directory must not shadow a module (a stray h2.py)
+                    "-m",
+                    "rosaos.devices.host",
+                    stdin=asyncio.subprocess.PIPE,
+                    stdout=asyncio.subprocess.PIPE,
+                    stderr=log_handle,
+                    # Its own process group: Ctrl-C in the terminal reaches the supervisor only, which
+                    # then stops hosts in order; killpg also reaches anything a driver spawned.
+                    start_new_session=True,
+                )
         finally:
             log_handle.close()
         return cls(process, log_file)
