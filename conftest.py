@@ -12,12 +12,15 @@ anyone remembering to mark it:
   the copier template.
 
 ``./scripts/test --quick`` runs ``-m "not e2e and not browser and not slow"``; CI runs everything,
-the modules with slow tests first (:func:`_slow_modules_first`).
+the modules with slow tests first (:func:`_slow_modules_first`), and a test with many long
+parameters in parts both workers take (:data:`SPLIT`).
 """
 
 from __future__ import annotations
 
+from collections import Counter
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -46,6 +49,19 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 
 SLOW_TIERS = ("e2e", "browser", "slow")
 
+SPLIT: dict[str, int] = {
+    "rosaos-core/tests/intents/test_bench_tasks.py::test_bench_task_runs_on_simulators": 4,
+}
+"""Tests handed to the xdist workers in this many parts instead of with their module.
+
+``--dist loadscope`` gives a whole module to one worker, so that its module-scoped set-up runs once.
+The bench tasks on simulators are 89 parameters of 2-20 s each, mostly a robot simulator moving in
+real time: 400 s in one module, which one worker ran alone while the other one ran everything else
+(and at the end of the run, as the module came after the e2e ones). In parts (every fourth
+parameter, so each part has robots, lamps and conversations) they go out first, and each worker's
+share of them runs beside the other's; a part costs its module's set-up again (the shared Reachy
+daemon, seconds)."""
+
 
 def _slow_modules_first(items: list[pytest.Item]) -> None:
     """Put the modules with an e2e test first, then browser, then slow ones, then the rest; each
@@ -62,4 +78,79 @@ def _slow_modules_first(items: list[pytest.Item]) -> None:
         name = getattr(getattr(item, "module", None), "__name__", "")
         tier = next((i for i, t in enumerate(SLOW_TIERS) if item.get_closest_marker(t)), len(SLOW_TIERS))
         rank[name] = min(rank.get(name, tier), tier)
-    items.sort(key=lambda item: rank[getattr(getattr(item, "module", None), "__name__", "")])
+
+    def order(item: pytest.Item) -> int:
+        if _split_function(item.nodeid) in SPLIT:
+            return -1  # the longest work of all, in parts that both workers take (SPLIT)
+        return rank[getattr(getattr(item, "module", None), "__name__", "")]
+
+    items.sort(key=order)
+
+
+def _split_function(nodeid: str) -> str:
+    """``path::test`` of a node id, without its parameters."""
+    return nodeid.split("[", 1)[0]
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
+    """``--dist loadscope``, with the tests in :data:`SPLIT` handed out in parts of their own."""
+    if config.getvalue("dist") != "loadscope":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class SplitScopeScheduling(LoadScopeScheduling):
+        """A scope per module (or class), but a :data:`SPLIT` test's parameters go round-robin
+        into parts, each a scope of its own."""
+
+        def __init__(self, config: pytest.Config, log: Any = None) -> None:
+            super().__init__(config, log)
+            self._parts: dict[str, str] = {}
+            self._seen: Counter[str] = Counter()
+
+        def _split_scope(self, nodeid: str) -> str:
+            function = _split_function(nodeid)
+            if function not in SPLIT:
+                scope: str = super()._split_scope(nodeid)
+                return scope
+            if nodeid not in self._parts:  # first met in collection order, so parts are stable
+                self._parts[nodeid] = f"{function}[part {self._seen[function] % SPLIT[function] + 1}]"
+                self._seen[function] += 1
+            return self._parts[nodeid]
+
+    return SplitScopeScheduling(config, log)
+
+
+_WORKERS: dict[str, list[float]] = {}
+"""Per xdist worker, as the controller sees its reports: first start, last stop, seconds in tests."""
+_LAST_MODULE: dict[str, str] = {}
+
+
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    """Note when each xdist worker ran tests (controller only), for :func:`pytest_terminal_summary`."""
+    node = getattr(report, "node", None)
+    if node is None or not report.stop:
+        return
+    name = str(node.gateway.id)
+    first, last, busy = _WORKERS.setdefault(name, [report.start, report.stop, 0.0])
+    _WORKERS[name] = [min(first, report.start), max(last, report.stop), busy + report.stop - report.start]
+    if report.stop >= last:
+        _LAST_MODULE[name] = report.nodeid.split("::", 1)[0]
+
+
+def pytest_terminal_summary(terminalreporter: Any) -> None:
+    """How busy each xdist worker was and when it ran out of work: the run is as long as the later
+    one, so a worker that ends minutes before the other says the order needs a look (SPLIT,
+    :func:`_slow_modules_first`)."""
+    if not _WORKERS:
+        return
+    began = min(first for first, _, _ in _WORKERS.values())
+    ends = sorted(last for _, last, _ in _WORKERS.values())
+    terminalreporter.section("xdist workers")
+    for name, (_, last, busy) in sorted(_WORKERS.items()):
+        terminalreporter.write_line(
+            f"{name}: {busy:.0f} s in tests, its last test ended at {last - began:.0f} s ({_LAST_MODULE[name]})"
+        )
+    terminalreporter.write_line(
+        f"the first worker out of work waited {ends[-1] - ends[0]:.0f} s for the last"
+    )

@@ -55,13 +55,21 @@ def wheels(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
 
 @pytest.fixture(scope="module")
 def venv(tmp_path_factory: pytest.TempPathFactory, wheels: dict[str, Path]) -> Path:
-    """A fresh venv with the two wheels installed by plain pip, pinned by constraints.txt."""
+    """A fresh venv with the two wheels installed by plain pip, pinned by constraints.txt.
+
+    The pip is the dev venv's (``pip==`` in constraints.txt), pointed at the new venv with
+    ``--python``: the one ``venv`` bundles is years older, and its resolver took most of this
+    module's minute. ``--no-compile``: bytecode is written on first import instead, and nothing
+    here is about it."""
     venv = tmp_path_factory.mktemp("wheels-venv") / "venv"
-    run([sys.executable, "-m", "venv", str(venv)])
-    pip = [str(venv / "bin" / "python"), "-m", "pip", "install", "--quiet", "--disable-pip-version-check"]
+    run([sys.executable, "-m", "venv", "--without-pip", str(venv)])
+    pip = [sys.executable, "-m", "pip", "--python", str(venv / "bin" / "python"), "install"]
     run(
         [
             *pip,
+            "--quiet",
+            "--disable-pip-version-check",
+            "--no-compile",
             "--constraint",
             str(REPO / "constraints.txt"),
             str(wheels["rosaos"]),

@@ -13,6 +13,7 @@ from collections.abc import Awaitable, Callable, Sequence
 from pathlib import Path
 from typing import Any
 
+from rosaos.clock import LOOP_CLOCK, Clock
 from rosaos.devices.heartbeat import is_tick
 from rosaos.devices.host import HostJob
 from rosaos.devices.host_logging import open_rotated_log
@@ -36,22 +37,24 @@ class HostProcess:
         self.errors: dict[str, str] = {}
         """Instances of a batch that could not start, and why."""
         self.last_tick = 0.0
-        """Event-loop time of the host's last heartbeat line (:mod:`rosaos.devices.heartbeat`)."""
+        """When the host's last heartbeat line came (:mod:`rosaos.devices.heartbeat`), on ``clock``."""
+        self.clock: Clock = LOOP_CLOCK
+        """What ``last_tick`` is read on: the supervisor's clock, which its checks compare it with."""
         self._ticks: asyncio.Task[None] | None = None
         self._joining: dict[str, asyncio.Future[dict[str, Any]]] = {}
         """Instances sent to a running shared host (:meth:`join`), waiting for their line."""
 
-    def follow_heartbeat(self) -> None:
+    def follow_heartbeat(self, clock: Clock = LOOP_CLOCK) -> None:
         """Read the host's heartbeat lines from now on (after the handshake), into ``last_tick``."""
-        self.last_tick = asyncio.get_running_loop().time()
+        self.clock = clock
+        self.last_tick = clock.now()
         self._ticks = asyncio.create_task(self._read_ticks())
 
     async def _read_ticks(self) -> None:
         stdout = self.process.stdout
         assert stdout is not None
-        loop = asyncio.get_running_loop()
         while line := await stdout.readline():  # any line is a sign of life
-            self.last_tick = loop.time()
+            self.last_tick = self.clock.now()
             if line.startswith(b'{"instance"'):  # the answer of an instance that joined late
                 reply = _reply(line)
                 waiting = self._joining.pop(str(reply.get("instance")), None)
@@ -93,7 +96,7 @@ class HostProcess:
 
     @classmethod
     async def spawn(
-        cls, job: HostJob, log_file: Path, start_timeout: float, stop_grace: float
+        cls, job: HostJob, log_file: Path, start_timeout: float, stop_grace: float, clock: Clock = LOOP_CLOCK
     ) -> HostProcess:
         """Start a host for ``job`` and wait for its ready line; DeviceError says why it did not come up."""
         host = await cls._start(log_file)
@@ -107,7 +110,7 @@ class HostProcess:
             reason = reply[0].get("error") or await asyncio.to_thread(_tail, log_file)
             raise DeviceError(f"{reason} (log: {log_file})")
         host.url = str(reply[0]["url"])
-        host.follow_heartbeat()
+        host.follow_heartbeat(clock)
         return host
 
     @classmethod
@@ -118,6 +121,7 @@ class HostProcess:
         start_timeout: float,
         stop_grace: float,
         on_ready: Callable[[HostProcess, str, str], Awaitable[None]] | None = None,
+        clock: Clock = LOOP_CLOCK,
     ) -> HostProcess:
         """Start one host for several instances; ``urls`` has those that serve, ``errors`` the rest.
 
@@ -153,7 +157,7 @@ class HostProcess:
             await host.stop(stop_grace)
             tail = await asyncio.to_thread(_tail, log_file)
             raise DeviceError(f"no instance of the shared host started: {tail} (log: {log_file})")
-        host.follow_heartbeat()
+        host.follow_heartbeat(clock)
         return host
 
     @classmethod

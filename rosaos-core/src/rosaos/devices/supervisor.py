@@ -42,7 +42,7 @@ from typing import Any
 from urllib.parse import urlsplit
 
 from rosaos.auth import token_path
-from rosaos.clock import LOOP_CLOCK, Clock
+from rosaos.clock import LOOP_CLOCK, Clock, sleep_unless
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.directory import DirectoryEntry, SafeStopOutcome, safe_stop_entry
 from rosaos.devices.host import START_TIMEOUT, HostJob
@@ -134,8 +134,8 @@ class DeviceSupervisor:
     ) -> None:
         self.world = world
         self.clock = clock
-        """What a remote instance's checks wait on, ``health_interval`` apart (tests move a
-        :class:`~rosaos.testing.manual_clock.ManualClock`)."""
+        """What the health checks wait on, ``health_interval`` apart, and what a local host's
+        heartbeat is timed on (tests move a :class:`~rosaos.testing.manual_clock.ManualClock`)."""
         self._background_go = asyncio.Event()
         """Background-start instances wait for this: at once, or :meth:`release_background` when
         ``defer_background`` (``rosaos up`` lets the other devices and the workers boot first)."""
@@ -295,6 +295,12 @@ class DeviceSupervisor:
             for name, d in self._devices.items()
         }
 
+    def last_beat(self, name: str) -> float | None:
+        """When the host serving ``name`` last wrote a line (its heartbeat), on :attr:`clock`; None
+        while no host runs it. What its health checks judge (:mod:`rosaos.devices.liveness`)."""
+        hosted = self._devices.get(name)
+        return None if hosted is None or hosted.host is None else hosted.host.last_tick
+
     async def safe_stop_all(self, per_device_timeout: float = 5.0) -> list[SafeStopOutcome]:
         """Call ``safe_stop`` on every reachable instance at once; failures are reported, not raised."""
         entries = [e for e in self.directory().values() if e.url]
@@ -376,14 +382,21 @@ class DeviceSupervisor:
         jobs = [self._job(hosted) for hosted in now]
         if len(group) == 1:
             log_file = self.log_file(group[0].instance.name)
-            host = await HostProcess.spawn(jobs[0], log_file, self.start_timeout, self.stop_grace)
+            host = await HostProcess.spawn(
+                jobs[0], log_file, self.start_timeout, self.stop_grace, clock=self.clock
+            )
             host.urls[group[0].instance.name] = host.url
         else:
             log_file = self.log_file(SHARED_HOST)
             arrivals = _Arrivals(self, now)
             try:
                 host = await HostProcess.spawn_batch(
-                    jobs, log_file, self.start_timeout, self.stop_grace, on_ready=arrivals.ready
+                    jobs,
+                    log_file,
+                    self.start_timeout,
+                    self.stop_grace,
+                    on_ready=arrivals.ready,
+                    clock=self.clock,
                 )
             except BaseException:
                 await arrivals.close(cancel=True)
@@ -463,11 +476,13 @@ class DeviceSupervisor:
         host = served.host
         assert host is not None
         exited = asyncio.create_task(host.wait())
+        gone = asyncio.Event()
+        exited.add_done_callback(lambda _: gone.set())
         joining = [asyncio.create_task(self._join_later(group, hosted, host)) for hosted in later]
         rule = LivenessRule(self.unhealthy_after)
         try:
             while True:
-                await asyncio.wait({exited}, timeout=self.health_interval)
+                await sleep_unless(self.clock, self.health_interval, gone)
                 if exited.done():
                     error = await host.exit_reason()
                     log.warning("%s: %s", _names(group), error)
@@ -501,7 +516,7 @@ class DeviceSupervisor:
 
     def _beating(self, host: HostProcess) -> bool:
         """The host's one liveness signal: a heartbeat within the last ``health_timeout`` (plus a beat)."""
-        return asyncio.get_running_loop().time() - host.last_tick <= self.health_timeout + self.heartbeat
+        return self.clock.now() - host.last_tick <= self.health_timeout + self.heartbeat
 
     async def _real_call(self, hosted: _Hosted, timeout: float) -> str | None:
         """``get_state`` on one instance: None when it answered, else the error."""
