@@ -2,7 +2,8 @@
 
 Starts the real command, as a user would, in a fresh data directory on a free port, waits for the
 banner, lets it idle for a moment, then reads every process of its tree from /proc: PSS (the
-shared pages split among the processes that map them, so the sum is the tree's real cost), RSS,
+shared pages split among the processes that map them, so the sum is the tree's real cost), USS
+(its private pages, which other processes on the machine cannot deflate), RSS,
 and a role from its command line (kernel, worker, fork server, device host of which instance, the
 Reachy daemon). Linux only (/proc/PID/smaps_rollup). It measures, it does not assert.
 

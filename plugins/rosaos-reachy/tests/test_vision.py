@@ -116,3 +116,16 @@ def test_pixel_offsets_become_head_turns_toward_them() -> None:
     yaw, pitch = pixel_to_angles(600, 100, 640, 480, fx=457)
     assert yaw < 0 and pitch < 0  # right of centre: turn right; above centre: look up
     assert pixel_to_angles(320, 240, 640, 480, fx=457) == (0.0, 0.0)
+
+
+def test_the_sim_camera_draws_its_scene_at_the_first_frame_and_refuses_an_unreadable_picture_at_once(
+    tmp_path: Path,
+) -> None:
+    camera = SimCamera.build(None)
+    assert camera._scene is None  # 8 MiB the device host does not hold until someone looks
+    assert camera.frame(Posture(HeadPose(), (10, 10), 0)).shape == (480, 640, 3)
+    assert camera._scene is not None
+    (tmp_path / "notes.png").write_text("not a picture", encoding="utf-8")
+    for unreadable in (tmp_path / "notes.png", tmp_path / "missing.png"):
+        with pytest.raises(DeviceError, match="not an image OpenCV can read"):
+            SimCamera.build(unreadable)

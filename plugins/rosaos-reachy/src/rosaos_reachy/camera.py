@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -45,26 +45,29 @@ def pixel_to_angles(u: float, v: float, width: int, height: int, fx: float) -> t
 
 @dataclass
 class SimCamera:
-    """A camera looking at a flat scene; the head's yaw and pitch pan the view across it."""
+    """A camera looking at a flat scene; the head's yaw and pitch pan the view across it.
 
-    scene: Image
+    The scene (three frames wide and tall, 8 MiB) is drawn at the first frame, not at start: most
+    runs never look through the camera, and the device host would hold it all the while.
+    """
+
+    image: Path | None = None
     fx: float = focal_px(FRAME_W, SIM_HFOV_DEG)
+    _scene: Image | None = field(default=None, repr=False)
 
     @classmethod
     def build(cls, image: Path | None) -> SimCamera:
-        """A scene three frames wide and tall: the generated backdrop, with ``image`` in the middle."""
-        scene = _backdrop(FRAME_W * 3, FRAME_H * 3)
-        if image is not None:
-            picture = cv2.imread(str(image))
-            if picture is None:
-                raise DeviceError(f"sim camera_image {image}: not an image OpenCV can read (JPEG, PNG)")
-            scale = min(FRAME_W / picture.shape[1], FRAME_H / picture.shape[0])
-            if scale < 1.0:  # fit the view at yaw 0; smaller pictures keep their size
-                picture = cv2.resize(picture, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
-            h, w = picture.shape[:2]
-            top, left = (scene.shape[0] - h) // 2, (scene.shape[1] - w) // 2
-            scene[top : top + h, left : left + w] = picture
-        return cls(scene)
+        """The camera for the sim's ``camera_image``; DeviceError now if OpenCV cannot read it."""
+        if image is not None and not cv2.haveImageReader(str(image)):
+            raise DeviceError(f"sim camera_image {image}: not an image OpenCV can read (JPEG, PNG)")
+        return cls(image)
+
+    @property
+    def scene(self) -> Image:
+        """The generated backdrop, with ``image`` in the middle (drawn once, on first use)."""
+        if self._scene is None:
+            self._scene = _scene(self.image)
+        return self._scene
 
     def frame(self, posture: Posture) -> Image:
         """What the camera sees with the head at ``posture`` (its yaw and pitch)."""
@@ -80,6 +83,21 @@ class SimCamera:
             view, label, (8, FRAME_H - 10), cv2.FONT_HERSHEY_SIMPLEX, 0.45, (255, 255, 255), 1, cv2.LINE_AA
         )
         return view
+
+
+def _scene(image: Path | None) -> Image:
+    scene = _backdrop(FRAME_W * 3, FRAME_H * 3)
+    if image is not None:
+        picture = cv2.imread(str(image))
+        if picture is None:
+            raise DeviceError(f"sim camera_image {image}: not an image OpenCV can read (JPEG, PNG)")
+        scale = min(FRAME_W / picture.shape[1], FRAME_H / picture.shape[0])
+        if scale < 1.0:  # fit the view at yaw 0; smaller pictures keep their size
+            picture = cv2.resize(picture, None, fx=scale, fy=scale, interpolation=cv2.INTER_AREA)
+        h, w = picture.shape[:2]
+        top, left = (scene.shape[0] - h) // 2, (scene.shape[1] - w) // 2
+        scene[top : top + h, left : left + w] = picture
+    return scene
 
 
 def _backdrop(width: int, height: int) -> Image:
