@@ -16,7 +16,6 @@ import logging
 import os
 import signal
 from collections.abc import AsyncIterator
-from pathlib import Path
 
 import pytest
 import pytest_asyncio
@@ -27,7 +26,9 @@ from rosaos.testing.manual_clock import ManualClock
 
 from .devices_support import drivers_for_tests, eventually, pid_alive, requires_tapo, world_of
 
-pytestmark = [pytest.mark.slow, requires_tapo]  # device host processes
+# Device host processes; one event loop for the module, so one supervisor serves every test (each
+# leaves its host beating and healthy, restarted or not).
+pytestmark = [pytest.mark.slow, requires_tapo, pytest.mark.asyncio(loop_scope="module")]
 
 TOKEN = "heartbeat-test-token"
 INTERVAL = 5.0
@@ -36,10 +37,13 @@ MISSES = 3
 """The default ``unhealthy_after``: missed checks in a row before the real call."""
 
 
-@pytest_asyncio.fixture
-async def watched(data_dir: Path) -> AsyncIterator[tuple[DeviceSupervisor, ManualClock]]:
+@pytest_asyncio.fixture(scope="module", loop_scope="module")
+async def watched(
+    tmp_path_factory: pytest.TempPathFactory,
+) -> AsyncIterator[tuple[DeviceSupervisor, ManualClock]]:
     """A supervisor serving one Tapo simulator, checking it on a manual clock."""
     clock = ManualClock()
+    data_dir = tmp_path_factory.mktemp("heartbeat") / "data"
     world = world_of(
         drivers_for_tests(with_tapo=True), data_dir, lamp={"driver": "tapo", "sim": {"on": False}}
     )
@@ -75,18 +79,18 @@ async def test_a_beating_host_stays_healthy_check_after_check(
     watched: tuple[DeviceSupervisor, ManualClock],
 ) -> None:
     supervisor, clock = watched
-    pid = host_pid(supervisor)
+    pid, restarts = host_pid(supervisor), supervisor.directory()["lamp"].restarts
     for _ in range(MISSES + 1):  # more checks than a silent host would be allowed
         await check(supervisor, clock, beat_first=True)
         assert supervisor.directory()["lamp"].status == "healthy"
-    assert (host_pid(supervisor), supervisor.directory()["lamp"].restarts) == (pid, 0)
+    assert (host_pid(supervisor), supervisor.directory()["lamp"].restarts) == (pid, restarts)
 
 
 async def test_a_host_frozen_for_fewer_checks_than_allowed_is_late_not_restarted(
     watched: tuple[DeviceSupervisor, ManualClock], caplog: pytest.LogCaptureFixture
 ) -> None:
     supervisor, clock = watched
-    pid = host_pid(supervisor)
+    pid, restarts = host_pid(supervisor), supervisor.directory()["lamp"].restarts
     caplog.set_level(logging.INFO, logger="rosaos.devices.supervisor")
     os.kill(pid, signal.SIGSTOP)  # a driver hung for a while: no beat, no answer
     try:
@@ -99,14 +103,14 @@ async def test_a_host_frozen_for_fewer_checks_than_allowed_is_late_not_restarted
     await check(supervisor, clock, beat_first=True)  # it beats again before the check that would ask
     await check(supervisor, clock, beat_first=True)
     assert supervisor.directory()["lamp"].status == "healthy"
-    assert (host_pid(supervisor), supervisor.directory()["lamp"].restarts) == (pid, 0)
+    assert (host_pid(supervisor), supervisor.directory()["lamp"].restarts) == (pid, restarts)
 
 
 async def test_a_host_that_stops_beating_is_asked_once_then_restarted(
     watched: tuple[DeviceSupervisor, ManualClock],
 ) -> None:
     supervisor, clock = watched
-    pid = host_pid(supervisor)
+    pid, restarts = host_pid(supervisor), supervisor.directory()["lamp"].restarts
     os.kill(pid, signal.SIGSTOP)  # alive, but neither beats nor answers: a hung driver
     try:
         # A beat already in the pipe when it froze may still count for the first check.
@@ -120,7 +124,7 @@ async def test_a_host_that_stops_beating_is_asked_once_then_restarted(
         await eventually(
             lambda: (
                 supervisor.directory()["lamp"].status == "healthy"
-                and supervisor.directory()["lamp"].restarts == 1
+                and supervisor.directory()["lamp"].restarts == restarts + 1
             )
         )
     finally:
