@@ -13,7 +13,8 @@ scripted ``FunctionModel``s (``benchmarks/bench_models.py``) instead of an LLM:
    start-up being measured). Both models stamp the path (``CLOCK_MONOTONIC``, shared by all
    processes), so the total is broken down by stage.
 2. **Throughput** of the event queue and the kernel loop with a no-op kernel model: a separate
-   load-generator process posts ``--events`` chats from ``--clients`` concurrent httpx clients;
+   load-generator process posts ``--events`` chats from ``--clients`` concurrent clients (raw
+   HTTP/1.1 on kept-open sockets; ``--load-client httpx`` for the httpx clients used before);
    the store's own commit and handled time stamps give the enqueue and end-to-end rates.
 3. **Memory** (RSS, and its anonymous part) of a warm worker, a device host and the kernel.
 
@@ -51,7 +52,7 @@ from kernel_bench_harness import EXPERIMENTS, FORK_SERVER, HERE, enable_tcp_node
 from kernel_bench_latency import latency
 from kernel_bench_report import report
 from kernel_bench_resources import machine, worker_start
-from kernel_bench_throughput import load_generator, throughput
+from kernel_bench_throughput import load_generator, raw_load_generator, throughput
 
 DEFAULT_JSON = HERE / "results" / "kernel.json"
 SECTIONS = ("warm", "cold", "throughput", "worker-start")
@@ -79,7 +80,7 @@ async def run(options: argparse.Namespace) -> dict[str, Any]:
         if "throughput" in sections:
             with phase("round trips and throughput"):
                 results["round_trips"], results["throughput"] = await throughput(
-                    options.events, options.clients, options.round_trips
+                    options.events, options.clients, options.round_trips, options.load_client
                 )
         if "worker-start" in sections and options.worker_starts:
             with phase("worker start-up"):
@@ -134,7 +135,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         help="kernels with [kernel] fork_server = false: each one-off worker starts a new Python",
     )
     parser.add_argument(
-        "--load-generator", nargs=3, metavar=("URL", "COUNT", "CLIENTS"), help=argparse.SUPPRESS
+        "--load-client",
+        choices=("raw", "httpx"),
+        default="raw",
+        help="the throughput test's clients: raw HTTP/1.1 sockets (default) or httpx (see the README)",
+    )
+    parser.add_argument(
+        "--load-generator", nargs=4, metavar=("URL", "COUNT", "CLIENTS", "KIND"), help=argparse.SUPPRESS
     )
     options = parser.parse_args(argv)
     defaults = {
@@ -154,9 +161,10 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 def main(argv: list[str] | None = None) -> None:
     options = parse_args(argv)
     if options.load_generator:
-        url, count, clients = options.load_generator
+        url, count, clients, kind = options.load_generator
         token = sys.stdin.read().strip()
-        print(json.dumps(asyncio.run(load_generator(url, int(count), int(clients), token))))
+        generate = raw_load_generator if kind == "raw" else load_generator
+        print(json.dumps(asyncio.run(generate(url, int(count), int(clients), token))))
         return
     results = asyncio.run(run(options))
     results["json"] = str(options.json)

@@ -42,7 +42,7 @@ def report(results: dict[str, Any]) -> None:
 
     if t := results.get("throughput"):
         table = Table(
-            title=f"Throughput: {t['events']} events from {t['clients']} clients, no-op kernel model"
+            title=f"Throughput: {t['events']} events from {t['clients']} {t.get('load_client', 'httpx')} clients, no-op kernel model"
         )
         table.add_column("measure")
         table.add_column("value", justify="right")

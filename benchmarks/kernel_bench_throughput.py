@@ -2,8 +2,9 @@
 
 A kernel with a no-op model (and no pool) first times single requests while idle, then takes
 ``--events`` chats from a separate load-generator process: ``kernel.py --load-generator URL COUNT
-CLIENTS``, reading the API token on stdin, so its httpx clients do not share the kernel's event
-loop. The store's own commit and handled time stamps give the enqueue and end-to-end rates.
+CLIENTS KIND``, reading the API token on stdin, so its clients do not share the kernel's event
+loop. ``KIND`` is ``raw`` (HTTP/1.1 written on kept-open sockets: :func:`raw_load_generator`) or
+``httpx`` (the clients used until issue 26, whose own CPU cost capped the rate on 2 cores). The store's own commit and handled time stamps give the enqueue and end-to-end rates.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ ENTRY_POINT = HERE / "kernel.py"
 
 
 async def throughput(
-    count: int, clients: int, round_trip_samples: int
+    count: int, clients: int, round_trip_samples: int, load_client: str = "raw"
 ) -> tuple[dict[str, Any], dict[str, Any]]:
     """Post ``count`` chats from ``clients`` clients in another process; time enqueue and handling.
 
@@ -69,6 +70,7 @@ async def throughput(
             kernel.url,
             str(count),
             str(clients),
+            load_client,
             stdin=asyncio.subprocess.PIPE,
             stdout=asyncio.subprocess.PIPE,
         )
@@ -89,6 +91,7 @@ async def throughput(
     return single, {
         "events": count,
         "clients": clients,
+        "load_client": load_client,
         "stored": stored,
         "errors": load["errors"],
         "enqueue_seconds": load["last_ack"] - load["first_send"],
@@ -130,6 +133,59 @@ async def load_generator(url: str, count: int, clients: int, token: str) -> dict
                     ids.append(response.json()["id"])
                 else:
                     errors += 1
+
+    start = asyncio.Event()
+    tasks = [asyncio.create_task(client()) for _ in range(clients)]
+    await asyncio.sleep(0.5)
+    first_send = time.time()
+    start.set()
+    await asyncio.gather(*tasks)
+    last_ack = time.time()
+    return {
+        "first_send": first_send,
+        "last_ack": last_ack,
+        "latencies_ms": latencies,
+        "ids": [min(ids), max(ids)],
+        "errors": errors,
+    }
+
+
+async def raw_load_generator(url: str, count: int, clients: int, token: str) -> dict[str, Any]:
+    """As :func:`load_generator`, but each client writes HTTP/1.1 on a kept-open socket itself.
+
+    httpx spends about 1.2 ms of CPU per request (measured in this load generator, issue 26): on
+    2 cores the generator then takes one core from the kernel it measures, and caps the rate near
+    800/s whatever the kernel does. These clients send the same request (same headers and body,
+    keep-alive) and read the whole answer, for about a tenth of that.
+    """
+    parsed = httpx.URL(url)
+    remaining = iter(range(count))
+    latencies: list[float] = []
+    ids: list[int] = []
+    errors = 0
+
+    async def client() -> None:
+        nonlocal errors
+        reader, writer = await asyncio.open_connection(parsed.host, parsed.port)
+        head = (
+            f"POST /chat HTTP/1.1\r\nhost: {parsed.host}:{parsed.port}\r\nauthorization: Bearer {token}\r\n"
+        )
+        await start.wait()
+        for index in remaining:
+            body = json.dumps({"text": f"noop {index}"}).encode()
+            sent = time.perf_counter()
+            writer.write(
+                f"{head}content-type: application/json\r\ncontent-length: {len(body)}\r\n\r\n".encode() + body
+            )
+            status_line, *headers = (await reader.readuntil(b"\r\n\r\n")).decode("latin-1").split("\r\n")
+            length = next(int(h.split(":", 1)[1]) for h in headers if h.lower().startswith("content-length:"))
+            answer = await reader.readexactly(length)
+            latencies.append((time.perf_counter() - sent) * 1000)
+            if status_line.split()[1] == "202":
+                ids.append(json.loads(answer)["id"])
+            else:
+                errors += 1
+        writer.close()
 
     start = asyncio.Event()
     tasks = [asyncio.create_task(client()) for _ in range(clients)]

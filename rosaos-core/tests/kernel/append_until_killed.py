@@ -1,7 +1,9 @@
 """Appends events to the store given on the command line until it is killed (test_durability).
 
 Each line on stdout reports something already committed: ``appended ID N`` or ``handled ID``.
-Every other event is marked handled, as a kernel working through the queue would.
+Every other event is marked handled, as a kernel working through the queue would. With a second
+argument ``TASKS``, that many appenders run at once (event ``N`` is appended by task ``N % TASKS``),
+so the store commits them in groups, as it does for concurrent ``POST /chat``.
 """
 
 from __future__ import annotations
@@ -14,9 +16,12 @@ from rosaos.events.types import UserText, UserTypedEvent
 from rosaos.kernel.event_store import EventStore
 
 
-async def main(path: Path) -> None:
+async def main(path: Path, tasks: int) -> None:
     store = await EventStore.open(path)
-    n = 0
+    await asyncio.gather(*(append_forever(store, first, tasks) for first in range(tasks)))
+
+
+async def append_forever(store: EventStore, n: int, step: int) -> None:
     while True:
         event = UserTypedEvent(
             kind="user_typed",
@@ -29,8 +34,8 @@ async def main(path: Path) -> None:
         if n % 2 == 0:
             await store.mark_handled(appended.id)
             print(f"handled {appended.id}", flush=True)
-        n += 1
+        n += step
 
 
 if __name__ == "__main__":
-    asyncio.run(main(Path(sys.argv[1])))
+    asyncio.run(main(Path(sys.argv[1]), int(sys.argv[2]) if len(sys.argv) > 2 else 1))

@@ -18,10 +18,11 @@ APPENDER = Path(__file__).parent / "append_until_killed.py"
 ACKNOWLEDGED_BEFORE_KILL = 150
 
 
-async def run_until_killed(path: Path) -> tuple[dict[int, int], set[int]]:
-    """Run the appender, SIGKILL it mid-stream; return {event id: n} acknowledged and ids handled."""
+async def run_until_killed(path: Path, tasks: int = 1) -> tuple[dict[int, int], set[int]]:
+    """Run the appender (``tasks`` appending at once), SIGKILL it mid-stream; return
+    {event id: n} acknowledged and ids handled."""
     process = await asyncio.create_subprocess_exec(
-        sys.executable, str(APPENDER), str(path), stdout=asyncio.subprocess.PIPE
+        sys.executable, str(APPENDER), str(path), str(tasks), stdout=asyncio.subprocess.PIPE
     )
     assert process.stdout is not None
     acknowledged: dict[int, int] = {}
@@ -91,5 +92,32 @@ async def test_every_committed_event_is_there_exactly_once_after_sigkill(tmp_pat
             await store.mark_handled(event.id)
         unhandled = sorted(set(stored) - handled)
         assert delivered == (unhandled if was_committed else [*unhandled, retried.id])
+    finally:
+        await store.close()
+
+
+async def test_appends_committed_together_are_each_there_after_sigkill(tmp_path: Path) -> None:
+    """Seven appenders at once: the store commits their appends in groups (``Database``'s group
+    commit), and still no id is answered before its group is on disk."""
+    tasks = 7
+    path = tmp_path / "kernel.sqlite3"
+    acknowledged, handled = await run_until_killed(path, tasks)
+
+    store = await EventStore.open(path)
+    try:
+        stored = {}
+        for event_id in range(1, max(acknowledged) + tasks + 2):
+            event = await store.get(event_id)
+            if event is not None:
+                stored[event.id] = event
+        for event_id, n in acknowledged.items():
+            assert stored[event_id].idempotency_key == f"key-{n}"
+            assert stored[event_id].payload == UserText(text=f"event {n}")
+        keys = [event.idempotency_key for event in stored.values()]
+        assert len(keys) == len(set(keys))
+        # Each appender had at most one append in flight when the kill came.
+        assert 0 <= len(stored) - len(acknowledged) <= tasks
+        assert all(stored[event_id].handled for event_id in handled)
+        assert sorted(stored) == list(range(1, len(stored) + 1)), "ids are given without gaps"
     finally:
         await store.close()
