@@ -93,6 +93,15 @@ async def test_local_voice_and_rate_are_used() -> None:
     assert wav_duration(slow) > wav_duration(fast)
 
 
+async def test_without_the_espeak_command_the_library_speaks_with_each_speakers_rate(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("PATH", str(tmp_path))  # no espeak-ng command: pyttsx3 over libespeak-ng
+    slow = await LocalTts(ReachySettings(local_rate=100)).synthesize("one two three")
+    fast = await LocalTts(ReachySettings(local_rate=300)).synthesize("one two three")
+    assert wav_duration(slow) > 1.5 * wav_duration(fast)
+
+
 async def test_asking_for_a_robot_speaker_that_is_not_there_says_so(tmp_path: Path) -> None:
     with pytest.raises(DeviceError, match="no speaker"):
         await speaker(tmp_path, audio_output="robot").say("hello")

@@ -59,7 +59,7 @@ class ReachySettings(DeviceSettings):
     tts_engines: list[TtsEngineName] = Field(
         default=["elevenlabs", "groq", "openai", "local"],
         description="Text-to-speech engines, tried in order; one without a key is skipped. "
-        "'local' (pyttsx3 + espeak-ng, offline) is always the last resort.",
+        "'local' (espeak-ng, offline) is always the last resort.",
     )
     audio_output: AudioOutput = Field(
         default="auto",

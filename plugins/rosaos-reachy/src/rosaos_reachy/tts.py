@@ -2,8 +2,8 @@
 
 - :class:`ElevenLabsTts`: ElevenLabs' REST API (raw 16 kHz PCM, wrapped as WAV here).
 - :class:`OpenAISpeechTts`: any OpenAI-compatible ``POST /audio/speech``; Groq's is one of them.
-- :class:`LocalTts`: pyttsx3 driving espeak-ng, entirely offline. Always available on Debian
-  with the ``espeak-ng`` package; the ``espeak-ng`` command is the fallback if pyttsx3 fails.
+- :class:`LocalTts`: espeak-ng, entirely offline. Always available on Debian with the
+  ``espeak-ng`` package; pyttsx3 over libespeak-ng is the fallback where the command is missing.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ import io
 import shutil
 import subprocess
 import tempfile
+import threading
 import wave
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
@@ -136,9 +137,14 @@ class OpenAISpeechTts:
 
 
 class LocalTts:
-    """pyttsx3 with espeak-ng: offline, instant, robotic.
+    """espeak-ng: offline, instant, robotic.
 
-    pyttsx3 keeps driver state per engine, so every call runs on one dedicated thread.
+    The ``espeak-ng`` command is run once per sentence, with this speaker's rate and voice on its
+    command line (about 10 ms for a sentence, as fast as the library in process). In process,
+    libespeak-ng keeps one rate and voice for the whole process and pyttsx3 hands every caller the
+    same engine, so two speakers could hear each other's settings (CI run 11: a rate-100 and a
+    rate-300 sentence came out the same length); the library is used only where the command is
+    missing, one sentence at a time, on one thread.
     """
 
     name = "local"
@@ -158,44 +164,49 @@ class LocalTts:
     def _synthesize(self, text: str) -> bytes:
         with tempfile.TemporaryDirectory(prefix="rosaos-tts-") as tmp:
             path = Path(tmp) / "speech.wav"
-            problem = self._pyttsx3(text, path)
-            if problem is not None:
-                self._espeak_cli(text, path, problem)
+            program = shutil.which("espeak-ng") or shutil.which("espeak")
+            if program is not None:
+                self._espeak_cli(program, text, path)
+            else:
+                problem = self._pyttsx3(text, path)
+                if problem is not None:
+                    raise TtsError(f"no espeak-ng command, and {problem}: apt-get install espeak-ng")
             data = path.read_bytes()
         wav_duration(data)
         return data
 
-    def _pyttsx3(self, text: str, path: Path) -> str | None:
-        try:
-            import pyttsx3  # imported here: it loads libespeak-ng at import
+    def _espeak_cli(self, program: str, text: str, path: Path) -> None:
+        command = [program, "-s", str(self.rate), "-w", str(path)]
+        if self.voice:
+            command += ["-v", self.voice.split("/")[-1]]
+        # "--" ends the options: a sentence that starts with "-" is spoken, not read as a flag.
+        result = subprocess.run([*command, "--", text], capture_output=True, timeout=60, check=False)
+        if result.returncode != 0 or not path.is_file():
+            raise TtsError(f"espeak-ng failed: {result.stderr.decode(errors='replace').strip()}")
 
-            if self._engine is None:
-                self._engine = pyttsx3.init("espeak")
-            engine = self._engine
-            # pyttsx3 hands every caller in a process the same espeak engine, so another speaker's
-            # rate or voice may be set on it since: set ours before each sentence.
-            engine.setProperty("rate", self.rate)
-            if self.voice:
-                engine.setProperty("voice", self.voice)
-            engine.save_to_file(text, str(path))
-            engine.runAndWait()
-        except Exception as error:  # a missing libespeak-ng shows up as OSError/RuntimeError
-            self._engine = None
-            return f"pyttsx3: {type(error).__name__}: {error}"
+    def _pyttsx3(self, text: str, path: Path) -> str | None:
+        with _LIBRARY_LOCK:
+            try:
+                import pyttsx3  # imported here: it loads libespeak-ng at import
+
+                if self._engine is None:
+                    self._engine = pyttsx3.init("espeak")
+                engine = self._engine
+                engine.setProperty("rate", self.rate)
+                if self.voice:
+                    engine.setProperty("voice", self.voice)
+                engine.save_to_file(text, str(path))
+                engine.runAndWait()
+            except Exception as error:  # a missing libespeak-ng shows up as OSError/RuntimeError
+                self._engine = None
+                return f"pyttsx3: {type(error).__name__}: {error}"
         if not path.is_file() or path.stat().st_size <= 44:
             return "pyttsx3 wrote no audio"
         return None
 
-    def _espeak_cli(self, text: str, path: Path, problem: str) -> None:
-        program = shutil.which("espeak-ng") or shutil.which("espeak")
-        if program is None:
-            raise TtsError(f"{problem}; and no espeak-ng command: apt-get install espeak-ng")
-        command = [program, "-s", str(self.rate), "-w", str(path)]
-        if self.voice:
-            command += ["-v", self.voice.split("/")[-1]]
-        result = subprocess.run([*command, text], capture_output=True, timeout=60, check=False)
-        if result.returncode != 0 or not path.is_file():
-            raise TtsError(f"{problem}; espeak-ng failed: {result.stderr.decode(errors='replace').strip()}")
+
+_LIBRARY_LOCK = threading.Lock()
+"""libespeak-ng is one engine per process: one sentence at a time across every speaker."""
 
 
 def build_engines(settings: ReachySettings) -> list[TtsEngine]:
