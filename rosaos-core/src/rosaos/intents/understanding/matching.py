@@ -37,6 +37,7 @@ from rosaos.intents.grammar.ha_intents import NO_AREA, load_ha_intents
 from rosaos.intents.grammar.intents_file import IntentsFile
 from rosaos.intents.grammar.phrases import confirms, conjunctions, pronouns
 from rosaos.intents.grammar.vocabulary import ARTICLES, DeviceVocabulary
+from rosaos.intents.understanding.absent_kinds import AbsentKinds
 from rosaos.intents.understanding.compose.reader import Composer
 from rosaos.intents.understanding.compose.speech import normalise, remark
 from rosaos.intents.understanding.fuzzy import FuzzyMatcher
@@ -129,6 +130,7 @@ class IntentMatcher:
             grammars.append(Grammar(self._ha, self._ha_lists, True, None))
         self._unknown_names = UnknownNames(self.context, grammars, self._recognize)
         self._composer = Composer(self.context, devices, language)
+        self._absent_kinds = AbsentKinds(self.context)
 
     def _driver_intents(self) -> list[_DriverIntents]:
         by_driver: dict[str, list[DeviceVocabulary]] = {}
@@ -186,6 +188,9 @@ class IntentMatcher:
         text = " ".join(text.split())
         if not text:
             return no_match(self.context, text)
+        absent = self._absent_kinds.refusal(text)
+        if absent is not None:  # "the fan in the bedroom" with no fan: never the bedroom's lamp
+            return MatchResult("no_match", text, reply=absent, refusal=True)
         return understand(
             text,
             focus,
