@@ -17,6 +17,7 @@ import pytest_asyncio
 
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.events.callback import WorkerCallback
+from rosaos.events.plan import Plan, PlanStep
 from rosaos.processes.manager import EmergencyStop, LaunchRefused, ProcessManager
 from rosaos.processes.pool import WorkerPool
 
@@ -242,3 +243,18 @@ async def test_terminate_while_the_worker_is_being_spawned_kills_it_once_it_exis
     assert not pid_alive(info.worker_pid)
     assert (await endings.wait(process_id)).status == "terminated"
     await manager.stop()
+
+
+async def test_a_launch_waits_behind_a_short_planned_holder_then_runs_once(
+    manager: ProcessManager, endings: Endings, devices: dict[str, LoopbackDevice]
+) -> None:
+    """ "Turn on the lamp", then at once "make it green": the second runs after the first."""
+    plan = Plan(steps=[PlanStep(device="lamp", tool="set_level", args={"level": 10})], reply="Set.")
+    first = await manager.launch("set the lamp to 10", ["lamp"], plan=plan)
+    assert manager.leases.held_by(first.id)  # the holder still runs when the second arrives
+    second = await manager.launch("set the lamp level", ["lamp"])
+    assert second.id == first.id + 1
+    assert manager.get(first.id).state == "ok"
+    assert (await endings.wait(second.id)).status == "ok"
+    assert [p.id for p in manager.list(include_ended=True)].count(second.id) == 1
+    assert devices["lamp"].state["level"] == 42

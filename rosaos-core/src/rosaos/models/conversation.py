@@ -173,3 +173,28 @@ def content_text(content: Any) -> str:
     if isinstance(content, list) and content and isinstance(content[0], dict) and "msg" in content[0]:
         return "; ".join(str(item.get("msg")) for item in content)  # pydantic validation errors
     return str(content)
+
+
+def last_command_devices(messages: Sequence[ModelMessage], launch: str = "launch_process") -> frozenset[str]:
+    """The devices the user's latest command launched processes on, before the current turn.
+
+    "Make it green" or "a bit dimmer than that" right after "turn on the lamp" means the lamp,
+    whether or not its process has ended: the launch is in the history either way. Turns started
+    by other events (a callback's follow-up, a notice) are not the user's command; a command that
+    launched nothing (a question) is skipped. Empty when there is none."""
+    earlier = list(messages[: len(messages) - len(current_turn(messages))])
+    launched: set[str] = set()
+    for message in reversed(earlier):
+        if isinstance(message, ModelResponse):
+            for call in message.tool_calls:
+                if call.tool_name.endswith(launch):
+                    devices = call.args_as_dict().get("devices")
+                    launched.update(d for d in devices or () if isinstance(d, str))
+            continue
+        event = request_event(message)
+        if event is None:
+            continue  # tool results inside a turn
+        if said(event) is not None and launched:
+            return frozenset(launched)
+        launched.clear()
+    return frozenset()

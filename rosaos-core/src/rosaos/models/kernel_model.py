@@ -44,7 +44,7 @@ from pydantic_ai.settings import ModelSettings
 from rosaos.events.callback import WorkerCallback
 from rosaos.events.plan import Plan
 from rosaos.events.types import DeviceNotice, ErrorReport, Event
-from rosaos.intents.grammar.phrases import phrase
+from rosaos.intents.grammar.phrases import phrase, pronouns
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.planning.follow_ups import callback_response, plan_follow_up
 from rosaos.intents.understanding.matching import IntentMatcher, MatchResult
@@ -57,6 +57,7 @@ from rosaos.models.conversation import (
     callback_of,
     content_text,
     current_turn,
+    last_command_devices,
     request_event,
     responses_by,
     said,
@@ -102,13 +103,14 @@ class LocalIntentModel(Model):
         """The provider, for telemetry: rosaOS itself."""
         return "rosaos"
 
-    def match(self, text: str) -> MatchResult:
-        """What ``text`` asks for: processes to launch, or the reply instead (see ``IntentMatcher``)."""
+    def match(self, text: str, focus: frozenset[str] | None = None) -> MatchResult:
+        """What ``text`` asks for: processes to launch, or the reply instead (see ``IntentMatcher``);
+        ``focus`` limits it to those devices."""
         if self.memory is not None:  # "Rex, sit" means "the dog, sit" once someone said so
             text = resolve_aliases(text, self.memory.aliases())
             # "set my reading light" means the 40 % the user said they like it at
             text = apply_preferences(text, self.memory.preferences())
-        return self.matcher.match(text)
+        return self.matcher.match(text, focus)
 
     def handles_event(self, event: Event) -> bool:
         """Whether this model answers ``event`` exactly, so an LLM is not needed.
@@ -169,7 +171,7 @@ class LocalIntentModel(Model):
             return [TextPart(before + self._acknowledge(outcomes))]
         text = said(event)
         if text is not None:
-            return self._command(text, tools, self._open_question(messages))
+            return self._command(text, tools, self._open_question(messages), last_command_devices(messages))
         if callback is not None:
             reply = self._callback_reply(callback)
             chained = callback_response(callback, _launch_tool(tools), reply)
@@ -197,7 +199,11 @@ class LocalIntentModel(Model):
         return previous if asked.kind == "clarify" and asked.reply == reply else None
 
     def _command(
-        self, text: str, tools: Sequence[str], open_question: str | None = None
+        self,
+        text: str,
+        tools: Sequence[str],
+        open_question: str | None = None,
+        previous: frozenset[str] = frozenset(),
     ) -> list[ModelResponsePart]:
         # An answer to "which one?" ("the kitchen light") completes the question's sentence; on
         # its own it would read as "turn on the kitchen light".
@@ -207,6 +213,8 @@ class LocalIntentModel(Model):
             or plan_follow_up(text, self.match, self.language, self.matcher.literal)
             or self.match(text)
         )
+        if answered is None and previous:
+            result = self._about_previous(text, result, previous)
         if not result.is_exact:
             return [TextPart(result.reply)]
         launch = _launch_tool(tools)
@@ -217,6 +225,17 @@ class LocalIntentModel(Model):
                 )
             ]
         return [ToolCallPart(launch, process.launch_args) for process in result.processes]
+
+    def _about_previous(self, text: str, result: MatchResult, previous: frozenset[str]) -> MatchResult:
+        """``text`` read as about the previous command's devices, when it names no device and
+        either refers back ("make it green") or is not understood alone ("a bit dimmer than
+        that" asks which one): the person means what they just acted on."""
+        named, words = self.matcher.context.named_in(text)
+        refers = bool(set(words) & (pronouns(self.language) | {"that", "this"}))
+        if named or not (refers or not result.is_exact):
+            return result
+        focused = self.match(text, previous)
+        return focused if focused.is_exact else result
 
     def _acknowledge(self, outcomes: list[ToolOutcome]) -> str:
         replies: list[str] = []

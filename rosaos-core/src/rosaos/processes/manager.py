@@ -28,6 +28,7 @@ from rosaos.processes.jobs import GrantedDevice, WorkerJob
 from rosaos.processes.leases import LeaseRefused, LeaseTable
 from rosaos.processes.pool import PoolError, WorkerPool
 from rosaos.processes.protocol import Progress
+from rosaos.processes.queue_behind import QUEUE_WAIT, Refused, wait_behind
 
 log = logging.getLogger("rosaos.processes.manager")
 
@@ -122,6 +123,8 @@ class ProcessManager:
         """The pool's start, when :meth:`start_in_background` began it."""
         """Waits until the named devices have had their first start attempt (the supervisor's ``settle``)."""
         self.starting_wait = starting_wait
+        self.queue_wait = QUEUE_WAIT
+        """Seconds a launch waits behind a short process holding its device (:mod:`.queue_behind`)."""
         self.emergency_stop = emergency_stop
         """The latched emergency stop, or None. While latched every launch is refused. The kernel
         keeps it on disk and passes it in at start, so a restart does not unlatch it."""
@@ -207,11 +210,23 @@ class ProcessManager:
         if not task:
             raise LaunchRefused("the task is empty; describe what the process should do")
         endpoints = await self._started(devices)
-        process_id = self._next_id
         try:
-            granted = self.leases.acquire(process_id, task, devices, endpoints)
+            granted = self.leases.acquire(self._next_id, task, devices, endpoints)
         except LeaseRefused as refusal:
-            raise LaunchRefused(str(refusal)) from None
+            # Held by a short plan the user started a moment ago: run after it, not refuse.
+            try:
+                await wait_behind(refusal, self._get, self.queue_wait)
+            except Refused as why:
+                raise LaunchRefused(str(why)) from None
+            if self.emergency_stop is not None:
+                raise LaunchRefused(
+                    f"emergency stop was latched while this waited ({self.emergency_stop.reason})"
+                ) from None
+            try:
+                granted = self.leases.acquire(self._next_id, task, devices, endpoints)
+            except LeaseRefused as again:
+                raise LaunchRefused(str(again)) from None
+        process_id = self._next_id
         self._next_id += 1
         job = WorkerJob(
             process_id=process_id,
