@@ -41,6 +41,9 @@ _REQUEST_FRAMES = (
     r"you\s+(?:can|could|may|might\s+as\s+well|should)(?:\s+(?:now|just|please))?(?:\s+go\s+ahead\s+and)?",
     r"i(?:'d|\s+would)\s+(?:like|love)(?:\s+you|\s+it\s+if\s+you)?(?:\s+to)?",
     r"i\s+(?:want|need)\s+you\s+to",
+    # "please you say hello": a learner's "you" before the imperative, not a subject of a remark
+    r"you(?=\s+(?:say|tell|announce|look|turn|switch|put|play|make|set|dim|go|move|come|give|show|shout|"
+    r"nod|shake|wake|dance|greet|walk|drive|dock)\b)",
     r"i\s+(?:want|wanna)(?:\s+to)?(?=\s+(?:turn|switch|set|make|hear|listen))",
     r"(?:how|what)\s+about(?:\s+you)?",
     r"let's",
@@ -152,6 +155,15 @@ _MODERATE = {"bright": "dimmer", "loud": "quieter"}
 number follows ("not too bright, 30 percent": the number)."""
 
 
+_THERE = re.compile(
+    r"^(?P<verb>look|glance|peek|turn|face|point)(?P<how>\s+(?:your\s+)?(?:head|eyes|face))?\s+(?:at|to|towards?)\s+"
+    r"(?:the|that|this|my|our)\s+[\w' -]+?\s*,\s*(?:it's|it\s+is|its|they're|they\s+are|he's|she's)\s+"
+    r"(?:(?:just|right|over)\s+)?(?:on|to|at)\s+(?:your|the)\s+(?P<side>left|right)(?:\s+(?:hand\s+)?side)?$"
+)
+"""A thing to look at and where it is said after it ("look at the window, it's on your left"):
+the direction is where to look."""
+
+
 def _moderate(found: re.Match[str]) -> str:
     return found.group(2) or _MODERATE[found.group(1)]
 
@@ -165,6 +177,7 @@ def normalise(text: str) -> str:
     text = re.sub(r"\s+", " ", text).strip()
     text = re.sub(r"\brise and shine\b", "wake up", text)  # an idiom: its "and" joins no two commands
     text = _HEDGE.sub(r"\1 \2", spell_numbers(text))
+    text = _THERE.sub(r"\g<verb>\g<how> to your \g<side>", text)
     return name_places(_NOT_TOO.sub(_moderate, text))
 
 
