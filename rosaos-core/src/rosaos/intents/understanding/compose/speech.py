@@ -185,7 +185,7 @@ _DEVICE = r"(?P<device>(?:my|the|our|this|that)\s+(?:\w+\s+){0,3}?\w+)"
 _WISHES = (
     # "I want my lamp to be purple", "we'd like the speaker to be at 30": the wish is the command
     re.compile(
-        r"^(?:(?:i|we)\s+(?:really\s+)?(?:want|wanna|need)|(?:i|we)(?:'d|\s+would)\s+(?:like|love|prefer))\s+"
+        r"^(?:(?:i|we)\s+(?:really\s+)?(?:want|wanna|need)|(?:i|we)(?:'d|\s+would)\s+(?:really\s+)?(?:like|love|prefer))\s+"
         rf"{_DEVICE}\s+to\s+be\s+(?P<state>.+)$"
     ),
     # "can we have the lamp at 40 percent", "could I get the lamp a bit warmer"
