@@ -90,7 +90,9 @@ _PLAY = re.compile(
     r"^(?:play|put on|queue up|throw on|blast|hear|listen to|have|get|give me|start|start playing|go with)"
     r"\s+(?P<query>.+)$"
 )
-_BY = re.compile(r"^(?:something|anything|some\s+(?:music|songs?|tunes?|tracks?)|a\s+(?:song|track|tune))\s+(?:by|from)\s+\S")
+_BY = re.compile(
+    r"^(?:something|anything|some\s+(?:music|songs?|tunes?|tracks?)|a\s+(?:song|track|tune))\s+(?:by|from)\s+\S"
+)
 """Music said by who made it, with no verb: "something by the Beatles" asks for it played."""
 _SPLIT_PARTICLE = re.compile(
     r"^(put|throw|stick)\s+(something|anything|some\s+\w+(?:\s+\w+)?|a\s+(?:song|track|tune)|music)\s+on\b"

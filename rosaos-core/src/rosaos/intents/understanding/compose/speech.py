@@ -149,7 +149,9 @@ _HEDGE = re.compile(
     r"(\d+(?:\.\d+)?(?:\s*(?:%|percent\b)|(?=\s*(?:,|$))))"
 )
 """A hedged number after "to", "at" or a comma ("like 30 percent", "to about 40"): the number."""
-_NOT_TOO = re.compile(r"\bnot\s+(?:too|so|very|overly)\s+(bright|loud)(?:ly)?\b(?:\s*,?\s*(\d+(?:\.\d+)?\s*(?:%|percent)))?")
+_NOT_TOO = re.compile(
+    r"\bnot\s+(?:too|so|very|overly)\s+(bright|loud)(?:ly)?\b(?:\s*,?\s*(\d+(?:\.\d+)?\s*(?:%|percent)))?"
+)
 _MODERATE = {"bright": "dimmer", "loud": "quieter"}
 """"not too bright" is a request for a moderate level, not a negation: dimmer, unless a
 number follows ("not too bright, 30 percent": the number)."""
@@ -225,9 +227,12 @@ def wished(text: str) -> Wish | None:
     previous = None
     while previous != plain:
         previous = plain
-        plain = _LEAD_ADDRESS.sub("", _LEAD.sub("", plain)).strip()
         plain = _TAIL.sub("", plain).strip()
-    return _wish(plain)
+        wish = _wish(plain)  # before "I'd like" is stripped as a request frame
+        if wish is not None:
+            return wish
+        plain = _LEAD_ADDRESS.sub("", _LEAD.sub("", plain)).strip()
+    return None
 
 
 def command_words(text: str) -> str:
@@ -236,10 +241,10 @@ def command_words(text: str) -> str:
     previous = None
     while previous != text:
         previous = text
+        wish = _wish(text)  # before "I'd like" is stripped as a request frame
+        text = wish.command if wish is not None else text
         text = _LEAD_ADDRESS.sub("", _LEAD.sub("", text)).strip()
         text = _TAIL.sub("", text).strip()
-        wish = _wish(text)
-        text = wish.command if wish is not None else text
     return text
 
 
