@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import gc
 import json
 import os
 import socket
@@ -27,6 +26,10 @@ import sys
 import threading
 from dataclasses import dataclass
 from typing import IO
+
+from rosaos.prefork import detach
+from rosaos.prefork import end as end_child
+from rosaos.prefork import fork_waiting as prefork_child
 
 MESSAGE_LIMIT = 256 * 1024
 """Bytes of the one message (the environment) the zygote reads."""
@@ -113,9 +116,7 @@ class HostZygote:
 
     def discard(self) -> None:
         """Close the zygote's socket (it exits) and reap it."""
-        self.sock.close()
-        with contextlib.suppress(ChildProcessError):
-            os.waitpid(self.pid, 0)
+        end_child(self.pid, self.sock)
 
 
 def prefork() -> HostZygote | None:
@@ -130,24 +131,10 @@ def prefork() -> HostZygote | None:
     import rosaos.devices.host
     import rosaos.devices.host_batch  # noqa: F401
 
-    try:
-        ours, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
-    except OSError:
+    forked = prefork_child(_wait_then_host)
+    if forked is None:
         return None
-    gc.collect()
-    gc.freeze()  # the kernel's collector must not write to what the host shares with it
-    sys.stdout.flush()
-    sys.stderr.flush()
-    pid = os.fork()
-    if pid == 0:
-        ours.close()
-        code = 1
-        try:
-            code = _wait_then_host(theirs)
-        finally:
-            os._exit(code)
-    theirs.close()
-    _waiting = HostZygote(pid, ours)
+    _waiting = HostZygote(*forked)
     return _waiting
 
 
@@ -166,13 +153,7 @@ def discard() -> None:
 
 def _wait_then_host(sock: socket.socket) -> int:
     """In the child: drop the kernel's files, wait for :meth:`HostZygote.become`, then host."""
-    os.setsid()  # its own session and group, as ``start_new_session``: the supervisor kills it by group
-    devnull = os.open(os.devnull, os.O_RDWR)
-    os.dup2(devnull, 0)
-    os.dup2(devnull, 1)  # a waiting zygote must not hold the kernel's stdout open
-    os.close(devnull)
-    os.closerange(3, sock.fileno())
-    os.closerange(sock.fileno() + 1, _max_fd())
+    detach(sock)  # the supervisor kills it by group; stdin, stdout and log come with the message
     try:
         message, fds, _, _ = socket.recv_fds(sock, MESSAGE_LIMIT, 3)
     except OSError:
@@ -202,9 +183,3 @@ def _wait_then_host(sock: socket.socket) -> int:
 def _pipe(fd: int, mode: str) -> IO[bytes]:
     """An unbuffered file over one end of a pipe, for the event loop's pipe transports."""
     return os.fdopen(fd, mode, buffering=0)
-
-
-def _max_fd() -> int:
-    with contextlib.suppress(OSError, ValueError):
-        return int(os.sysconf("SC_OPEN_MAX"))
-    return 1024

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
-import gc
 import json
 import os
 import socket
@@ -27,6 +26,10 @@ import threading
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
+
+from rosaos.prefork import detach
+from rosaos.prefork import end as end_child
+from rosaos.prefork import fork_waiting as prefork_child
 
 MESSAGE_LIMIT = 64 * 1024
 REAP_TRIES = 500
@@ -74,9 +77,7 @@ class Zygote:
 
     def discard(self) -> None:
         """Close the zygote's socket (it exits) and reap it."""
-        self.sock.close()
-        with contextlib.suppress(ChildProcessError):
-            os.waitpid(self.pid, 0)
+        end_child(self.pid, self.sock)
 
 
 def prefork() -> Zygote | None:
@@ -91,24 +92,10 @@ def prefork() -> Zygote | None:
 
     forkserver.import_worker_modules()  # the kernel has most of it; the rest is shared from here on
     since = _process_start_time()
-    try:
-        ours, theirs = socket.socketpair(socket.AF_UNIX, socket.SOCK_SEQPACKET)
-    except OSError:
+    forked = prefork_child(lambda sock: _wait_then_serve(sock, since))
+    if forked is None:
         return None
-    gc.collect()
-    gc.freeze()  # the kernel's collector must not write to what the fork server shares with it
-    sys.stdout.flush()
-    sys.stderr.flush()
-    pid = os.fork()
-    if pid == 0:
-        ours.close()
-        code = 1
-        try:
-            code = _wait_then_serve(theirs, since)
-        finally:
-            os._exit(code)
-    theirs.close()
-    _waiting = Zygote(pid, ours)
+    _waiting = Zygote(*forked)
     return _waiting
 
 
@@ -121,13 +108,7 @@ def take() -> Zygote | None:
 
 def _wait_then_serve(sock: socket.socket, since: float) -> int:
     """In the child: drop the kernel's files, wait for :meth:`Zygote.become`, then serve."""
-    os.setsid()  # its own session and group, as ``start_new_session``: the pool kills it by group
-    devnull = os.open(os.devnull, os.O_RDWR)
-    os.dup2(devnull, 0)
-    os.dup2(devnull, 1)  # a parked server must not hold the kernel's stdout open
-    os.close(devnull)
-    os.closerange(3, sock.fileno())
-    os.closerange(sock.fileno() + 1, _max_fd())
+    detach(sock)  # the pool kills it by group; a parked server must not hold the kernel's stdout
     message = sock.recv(MESSAGE_LIMIT)
     if not message:  # the kernel died, discarded it, or adopted a parked server instead
         return 0
@@ -148,12 +129,6 @@ def _wait_then_serve(sock: socket.socket, since: float) -> int:
     park = (str(request["park"][0]), str(request["park"][1])) if request["park"] else None
     forkserver.serve(sock, park, [str(module) for module in request["preload"]], since)
     return 0
-
-
-def _max_fd() -> int:
-    with contextlib.suppress(OSError, ValueError):
-        return int(os.sysconf("SC_OPEN_MAX"))
-    return 1024
 
 
 def _process_start_time() -> float:
