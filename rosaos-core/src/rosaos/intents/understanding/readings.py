@@ -92,9 +92,12 @@ _OCCASION = re.compile(
 """An occasion or purpose after the music ("… while we work", "… for dinner", "… to relax"):
 why it is wanted, never words of its title, so the search never gets them."""
 _SOME = re.compile(
-    r"^(?:some|something|anything|a\s+bit\s+of|a\s+little)\s+(?:(?:music|songs?|tunes?|tracks?)\s+)?(?:by\s+|from\s+)?(?=\S)",
+    r"^(?:(?:something|anything|some\s+(?:music|songs?|tunes?|tracks?))\s+(?:by|from)\s+"
+    r"|(?:some|a\s+bit\s+of|a\s+little)\s+(?!(?:by|from)\b))(?=\S)",
     re.IGNORECASE,
 )
+""""some Miles Davis", "something by the Beatles": how much, not words of a title ("something I
+love" is searched whole)."""
 
 
 def slot_values(result: RecognizeResult) -> dict[str, Any]:
