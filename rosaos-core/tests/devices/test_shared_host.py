@@ -65,6 +65,8 @@ async def test_a_killed_shared_host_restarts_its_instances_and_says_so(data_dir:
         old_pid = pids(data_dir)["kitchen_light"]
         assert old_pid is not None
         urls = {name: e.url for name, e in supervisor.directory().items()}
+        epochs = {name: e.server_epoch for name, e in supervisor.directory().items()}
+        assert epochs == {"kitchen_light": f"pid-{old_pid}", "desk_lamp": f"pid-{old_pid}"}
         os.kill(old_pid, signal.SIGKILL)
         await eventually(
             lambda: all(e.status == "healthy" and e.restarts == 1 for e in supervisor.directory().values())
@@ -73,6 +75,8 @@ async def test_a_killed_shared_host_restarts_its_instances_and_says_so(data_dir:
         new = pids(data_dir)
         assert new["kitchen_light"] == new["desk_lamp"] not in (None, old_pid)
         assert {name: e.url for name, e in supervisor.directory().items()} == urls  # same ports again
+        # ...but a new server, which knows no session a worker kept (processes/worker.py)
+        assert {e.server_epoch for e in supervisor.directory().values()} == {f"pid-{new['kitchen_light']}"}
     for name in ("kitchen_light", "desk_lamp"):
         assert (name, "healthy", "restarting") in changes
         assert changes.index((name, "healthy", "restarting")) < max(

@@ -14,7 +14,7 @@ import pytest
 from rosaos.devices.serve import serve_http
 from rosaos.events.plan import Plan, PlanStep
 from rosaos.models.select import ModelSpec
-from rosaos.processes.worker import SESSIONS, run_job
+from rosaos.processes.worker import SESSIONS, TRUSTED_FOR, DeviceSessions, run_job
 
 from .processes_support import (
     TOKEN,
@@ -243,6 +243,54 @@ async def test_a_device_restarted_at_the_same_url_gets_a_fresh_session(kernel: K
     state["level"] = 0
     async with serve_http(build_test_device("heater", state), TOKEN, port=port):
         callback = await run_job(make_job(kernel, "sets_level", [heater]))
+    assert (callback.status, state["level"]) == ("ok", 42)
+
+
+def with_epoch(job: Any, epoch: str | None) -> Any:
+    devices = [device.model_copy(update={"server_epoch": epoch}) for device in job.devices]
+    return job.model_copy(update={"devices": devices})
+
+
+async def test_a_kept_session_of_the_same_server_is_trusted_for_a_while_without_a_check(
+    kernel: KernelStandIn, devices: dict[str, LoopbackDevice]
+) -> None:
+    now = [0.0]
+    sessions = DeviceSessions(clock=lambda: now[0])
+    lamp = with_epoch(make_job(kernel, "sets_level", [devices["lamp"]]), "pid-7").devices[0]
+    opened = await sessions.toolset(lamp)
+    checks: list[str] = []
+    list_tools = opened.client.list_tools
+
+    async def counted() -> Any:
+        checks.append("tools/list")
+        return await list_tools()
+
+    opened.client.list_tools = counted  # type: ignore[method-assign]
+    try:
+        now[0] = TRUSTED_FOR / 2
+        assert await sessions.toolset(lamp) is opened
+        assert checks == []  # same server, used lately: no round trip before the job
+        now[0] += TRUSTED_FOR
+        assert await sessions.toolset(lamp) is opened
+        assert checks == ["tools/list"]  # idle too long: the server may have ended it
+        assert await sessions.toolset(lamp.model_copy(update={"server_epoch": None})) is opened
+        assert checks == ["tools/list"] * 2  # a server the kernel cannot name: always checked
+    finally:
+        await sessions.close_all()
+
+
+async def test_a_device_restarted_under_a_new_server_epoch_gets_a_fresh_session(
+    kernel: KernelStandIn,
+) -> None:
+    state: dict[str, Any] = {"level": 0}
+    async with serve_http(build_test_device("heater", state), TOKEN) as served:
+        heater = LoopbackDevice("heater", served.url, state)
+        port = int(served.url.rsplit(":", 1)[1].split("/")[0])
+        first = await run_job(with_epoch(make_job(kernel, "sets_level", [heater]), "pid-1"))
+        assert first.status == "ok"
+    state["level"] = 0
+    async with serve_http(build_test_device("heater", state), TOKEN, port=port):
+        callback = await run_job(with_epoch(make_job(kernel, "sets_level", [heater]), "pid-2"))
     assert (callback.status, state["level"]) == ("ok", 42)
 
 

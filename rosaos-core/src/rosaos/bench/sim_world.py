@@ -104,6 +104,8 @@ class _Served:
     url: str | None = None
     port: int = 0
     error: str | None = None
+    launches: int = 0
+    """Servers started for it so far: a restarted one (same URL) knows no earlier session."""
     task: asyncio.Task[None] | None = None
     stop: asyncio.Event = dataclasses.field(default_factory=asyncio.Event)
 
@@ -151,6 +153,7 @@ class SimDevices:
                 status=served.status,
                 remote=False,
                 error=served.error,
+                server_epoch=f"sim-{served.launches}",
             )
             for name, served in self._served.items()
         }
@@ -216,6 +219,7 @@ class SimDevices:
 
     async def _launch(self, served: _Served) -> None:
         served.stop = asyncio.Event()
+        served.launches += 1
         ready: asyncio.Future[str] = asyncio.get_running_loop().create_future()
         served.task = asyncio.create_task(
             self._serve(served, ready), name=f"bench device {served.instance.name}"

@@ -23,6 +23,10 @@ class DirectoryEntry(BaseModel):
     remote: bool
     error: str | None = None
     restarts: int = 0
+    server_epoch: str | None = None
+    """Names the server process serving it now (a new value: a new server, which knows no session
+    opened before). None: the kernel cannot tell (a remote device), so a worker checks its kept
+    session before each job (:class:`rosaos.processes.worker.DeviceSessions`)."""
 
 
 @dataclass

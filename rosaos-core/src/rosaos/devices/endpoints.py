@@ -34,6 +34,8 @@ class DeviceEndpoint:
     on_request_tools: tuple[str, ...] = ()
     """Tools a process model gets only when its task asks for them (``DriverSpec.on_request_tools``)."""
     on_request_pattern: str | None = None
+    server_epoch: str | None = None
+    """Names the server process serving it now (``DirectoryEntry.server_epoch``); None: unknown."""
     host: str = ""
     """The host process that serves it (:meth:`DeviceHosting.host_of`); empty: its own. The kernel
     reads the notices of every device on one host with one request."""

@@ -291,6 +291,7 @@ class DeviceSupervisor:
                 remote=d.instance.is_remote,
                 error=d.error,
                 restarts=d.restarts,
+                server_epoch=None if d.instance.is_remote or d.host is None else f"pid-{d.host.pid}",
             )
             for name, d in self._devices.items()
         }

@@ -51,6 +51,7 @@ class DeviceDirectory:
                 on_request_tools=tuple(spec.on_request_tools),
                 on_request_pattern=spec.on_request_pattern,
                 host=self._hosting.host_of(name),
+                server_epoch=entry.server_epoch,
             )
         self._cached = (version, endpoints)
         return endpoints

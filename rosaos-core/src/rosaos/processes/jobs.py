@@ -45,6 +45,9 @@ class GrantedDevice(BaseModel):
     """Tools a process model is offered only when its task asks for them (:mod:`rosaos.processes.tool_offer`)."""
     on_request_pattern: str | None = None
     """The words by which a task asks for them (a case-insensitive regular expression)."""
+    server_epoch: str | None = None
+    """Names the server process serving the device now, as the kernel knows it: a worker's kept
+    session with the same epoch needs no check before the job; None (a remote device): check it."""
 
 
 class WorkerJob(BaseModel):

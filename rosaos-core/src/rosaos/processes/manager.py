@@ -376,6 +376,7 @@ def _granted(endpoint: DeviceEndpoint, asked: bool = True) -> GrantedDevice:
         tools=list(endpoint.attached_tools) if attached_only else None,
         on_request_tools=list(endpoint.on_request_tools),
         on_request_pattern=endpoint.on_request_pattern,
+        server_epoch=endpoint.server_epoch,
     )
 
 

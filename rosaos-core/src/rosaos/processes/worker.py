@@ -23,6 +23,7 @@ import contextlib
 import logging
 import os
 import sys
+import time
 from collections.abc import Awaitable, Callable, Sequence
 from typing import IO, Any
 
@@ -61,6 +62,9 @@ log = logging.getLogger("rosaos.processes.worker")
 
 CONNECT_TIMEOUT = 10.0
 """Seconds to open an MCP session with one granted device."""
+TRUSTED_FOR = 60.0
+"""Seconds a kept device session is used without a check while its server is the same one (well
+under the server's 30-minute idle expiry of a session)."""
 ORPHAN_STOP_TIMEOUT = 3.0
 """Seconds each device's ``safe_stop`` may take when the kernel died under a running job."""
 LINE_LIMIT = 16 * 1024 * 1024
@@ -139,14 +143,21 @@ class DeviceSessions:
     """MCP sessions to devices, kept open across the jobs of this worker.
 
     Opening a session and listing its tools cost more than the tool call itself; a warm worker
-    that keeps them answers the next job on the same device at once. A kept session is checked
-    with one ``tools/list`` round trip (~4 ms; MCP ``ping`` is not served by our FastMCP version)
-    and reopened if its device went away (a restarted host keeps its URL).
+    that keeps them answers the next job on the same device at once. A kept session may be stale:
+    a restarted host keeps its URL but knows no earlier session, and a server ends a session idle
+    for 30 minutes. It is trusted without a check when the kernel names the same server process
+    (``server_epoch``) as when it was opened or last checked and it was used within
+    :data:`TRUSTED_FOR` seconds; otherwise one ``tools/list`` round trip (~4 ms, a third of an
+    offline command; MCP ``ping`` is not served by our FastMCP version) checks it first, and it is
+    reopened if its device went away. A session that failed in a job is closed (:meth:`forget`).
     """
 
-    def __init__(self) -> None:
+    def __init__(self, clock: Callable[[], float] = time.monotonic) -> None:
         self._open: dict[tuple[str, str], MCPToolset[Any]] = {}
         self._images: dict[tuple[str, str], int | None] = {}
+        self._checked: dict[tuple[str, str], tuple[str | None, float]] = {}
+        """Per session: the server epoch it was last known good under, and when (``clock``)."""
+        self._clock = clock
 
     async def toolset(self, device: GrantedDevice, images: int | None = None) -> MCPToolset[Any]:
         key = (device.url, device.token)
@@ -154,16 +165,27 @@ class DeviceSessions:
         if kept is not None and self._images.get(key) != images:  # the images header is per session
             await self._close(key)
             kept = None
+        if kept is not None and self._trusted(key, device.server_epoch):
+            self._checked[key] = (device.server_epoch, self._clock())
+            return kept
         if kept is not None:
             try:
                 async with asyncio.timeout(CONNECT_TIMEOUT):
                     await kept.client.list_tools()
+                self._checked[key] = (device.server_epoch, self._clock())
                 return kept
             except Exception:
                 await self._close(key)
         toolset = await _connect(device, images)
         self._open[key], self._images[key] = toolset, images
+        self._checked[key] = (device.server_epoch, self._clock())
         return toolset
+
+    def _trusted(self, key: tuple[str, str], epoch: str | None) -> bool:
+        checked = self._checked.get(key)
+        if epoch is None or checked is None:
+            return False
+        return checked[0] == epoch and self._clock() - checked[1] < TRUSTED_FOR
 
     async def forget(self, devices: Sequence[GrantedDevice]) -> None:
         """Close the sessions of a job that failed: the next job starts from fresh ones."""
@@ -176,6 +198,7 @@ class DeviceSessions:
 
     async def _close(self, key: tuple[str, str]) -> None:
         self._images.pop(key, None)
+        self._checked.pop(key, None)
         toolset = self._open.pop(key, None)
         if toolset is not None:
             with contextlib.suppress(Exception):
