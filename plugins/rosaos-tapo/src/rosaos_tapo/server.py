@@ -96,8 +96,9 @@ def build_server(ctx: DeviceContext, backend: TapoBackend) -> FastMCP:
         """Set a named colour or white, and turn the light on.
 
         Colours: red, orange, amber, yellow, lime, green, teal, cyan, sky blue, blue, indigo,
-        purple, violet, magenta, pink. Whites: white, warm white, soft white, candlelight,
-        cool white, daylight.
+        purple, violet, magenta, pink, turquoise, aqua, navy, navy blue, royal blue,
+        lavender, lilac, fuchsia, hot pink, crimson, scarlet, coral, gold, mint, emerald.
+        Whites: white, warm white, soft white, candlelight, cool white, daylight.
         """
         try:
             color = lookup_color(name)

@@ -93,6 +93,10 @@ _CANCEL_FILLER = frozenset(
 _SET_PREFIX = re.compile(
     r"^(?:please )?(?:set|start|make) (?:a |an |me a )?(?:timer|alarm|reminder)(?: for)?\s*"
 )
+_SPOKEN = re.compile(
+    r"\b(?:say|announce|tell\s+(?!me\b)\w+|let\s+\w+\s+know|shout|call\s+out|inform\s+\w+)\s+(?:that\s+)?\w"
+)
+"""A verb of speech and its content: a time in the content is what is said, not when to say it."""
 _TOKEN = re.compile(r"\d+(?:\.\d+)?|[a-z]+")
 
 
@@ -169,9 +173,11 @@ def _set(said: str, now: datetime) -> SetTimer | None:
                 )
         return None
     # "turn off the light in ten minutes" / "stop the music at 11 pm": the time comes last.
+    # Not inside words to say: "announce that the meeting starts in five minutes" says them now.
+    spoken = _SPOKEN.search(said)
     for marker in (" tomorrow at ", " in ", " after ", " at "):
         start = said.rfind(marker)
-        while start > 0:
+        while start > 0 and (spoken is None or start < spoken.start()):
             found = _timing(said[start + 1 :], now)
             if found is not None:
                 return SetTimer(_action(said[:start]), found.in_seconds, found.at, found.weak)

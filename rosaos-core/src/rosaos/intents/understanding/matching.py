@@ -39,7 +39,7 @@ from rosaos.intents.grammar.phrases import confirms, conjunctions, pronouns
 from rosaos.intents.grammar.vocabulary import ARTICLES, DeviceVocabulary
 from rosaos.intents.understanding.absent_kinds import AbsentKinds
 from rosaos.intents.understanding.compose.reader import Composer
-from rosaos.intents.understanding.compose.speech import normalise, remark
+from rosaos.intents.understanding.compose.speech import normalise, remark, wished
 from rosaos.intents.understanding.fuzzy import FuzzyMatcher
 from rosaos.intents.understanding.generalize import understand
 from rosaos.intents.understanding.match_result import MatchResult, ProcessPlan, build_result, no_match
@@ -191,6 +191,15 @@ class IntentMatcher:
         absent = self._absent_kinds.refusal(text)
         if absent is not None:  # "the fan in the bedroom" with no fan: never the bedroom's lamp
             return MatchResult("no_match", text, reply=absent, refusal=True)
+        wish = wished(text)
+        if wish is not None:
+            # A wish is read as its command; if that is not understood, the wish was about a
+            # state this device has not (an unknown colour): say so, never change something else.
+            meant = self.match(wish.command, focus)
+            if meant.kind != "no_match":
+                return meant
+            reply = f'Sorry, I don\'t know "{wish.state}" as a colour or setting of {wish.device}.'
+            return MatchResult("no_match", text, reply=reply, refusal=True)
         return understand(
             text,
             focus,

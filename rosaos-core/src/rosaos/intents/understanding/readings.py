@@ -69,6 +69,37 @@ _DESCRIBED = re.compile(
 """A track said by what it is about ("the sun song", "that rain song by …"): no title says "the … song"."""
 
 
+_WHO = r"(?:we|i|you|they|he|she|i'm|we're|you're|they're|everyone|everybody|people|the\s+kids|the\s+guests|guests)"
+_OCCASIONS = (
+    r"dinner|lunch|breakfast|brunch|supper|(?:a\s+|the\s+)?party|guests|company|work|working|studying|"
+    r"study|homework|reading|cooking|cleaning|(?:a\s+|my\s+|the\s+)?workout|exercise|(?:the\s+)?gym|running|"
+    r"(?:the\s+)?drive|driving|(?:a\s+|the\s+)?road\s+trip|(?:the\s+|my\s+)?commute|bedtime|sleep|sleeping|"
+    r"focus|focusing|concentration|meditation|yoga|relaxing|relaxation|(?:the\s+)?background|date\s+night|"
+    r"movie\s+night|game\s+night|tonight|this\s+evening|the\s+evening|this\s+morning|the\s+morning|"
+    r"a\s+while|now|(?:the\s+)?kids|(?:the\s+)?children"
+)
+_PURPOSES = (
+    r"relax|unwind|chill(?:\s+out)?|wind\s+down|focus|concentrate|study|work|sleep|fall\s+asleep|dance|"
+    r"wake\s+(?:me\s+|us\s+)?up|cook|read|clean|calm\s+down|cheer\s+(?:me|us)\s+up|set\s+the\s+mood|"
+    r"get\s+(?:me\s+|us\s+)?going|work\s+out|get\s+pumped|de-?stress|meditate"
+)
+_OCCASION = re.compile(
+    rf"\s*,?\s+(?:(?:while|whilst|as|when)\s+(?:{_WHO}\s+.+|\w+ing(?:\s+.+)?)"
+    rf"|(?:during|for|over|with|in)\s+(?:our\s+|my\s+|the\s+|some\s+)?(?:{_OCCASIONS})(?:\s+(?:tonight|later|time))?"
+    rf"|(?:to|so\s+{_WHO}\s+can)\s+(?:help\s+(?:me|us)\s+)?(?:{_PURPOSES})(?:\s+(?:to|by|with))?)$",
+    re.IGNORECASE,
+)
+"""An occasion or purpose after the music ("… while we work", "… for dinner", "… to relax"):
+why it is wanted, never words of its title, so the search never gets them."""
+_SOME = re.compile(
+    r"^(?:(?:something|anything|some\s+(?:music|songs?|tunes?|tracks?))\s+(?:by|from)\s+"
+    r"|(?:some|a\s+bit\s+of|a\s+little)\s+(?!(?:by|from)\b))(?=\S)",
+    re.IGNORECASE,
+)
+""""some Miles Davis", "something by the Beatles": how much, not words of a title ("something I
+love" is searched whole)."""
+
+
 def slot_values(result: RecognizeResult) -> dict[str, Any]:
     """Matched slots by name. Whole numbers become ``int``: hassil returns 20.0 for "20 percent"."""
     values: dict[str, Any] = {}
@@ -89,6 +120,7 @@ def search_words(query: str) -> str:
     sun song by the Beatles") is searched by its words ("sun by the Beatles"); a "please" at the
     end is politeness, not part of a title."""
     query = re.sub(r"[\s,]+please$", "", query, flags=re.IGNORECASE)
+    query = _SOME.sub("", _OCCASION.sub("", query)) or query
     return _DESCRIBED.sub(r"\g<what>\g<rest>", query)
 
 

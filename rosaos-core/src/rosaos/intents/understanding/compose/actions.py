@@ -90,6 +90,14 @@ _PLAY = re.compile(
     r"^(?:play|put on|queue up|throw on|blast|hear|listen to|have|get|give me|start|start playing|go with)"
     r"\s+(?P<query>.+)$"
 )
+_BY = re.compile(
+    r"^(?:something|anything|some\s+(?:music|songs?|tunes?|tracks?)|a\s+(?:song|track|tune))\s+(?:by|from)\s+\S"
+)
+"""Music said by who made it, with no verb: "something by the Beatles" asks for it played."""
+_SPLIT_PARTICLE = re.compile(
+    r"^(put|throw|stick)\s+(something|anything|some\s+\w+(?:\s+\w+)?|a\s+(?:song|track|tune)|music)\s+on\b"
+)
+""""put something on by …": the particle after its object, said as "put on something by …"."""
 _PLAY_VERBS = ("play", "put on", "queue", "throw on", "listen", "hear")
 """Verbs that play whatever follows; the others of :data:`_PLAY` ("have", "get") only a genre."""
 _PLAYED_WORDS = re.compile(
@@ -240,6 +248,9 @@ def read_action(clause: str, colours: frozenset[str], genres: frozenset[str] = f
         return Said("wake", rest=_cut(plain, _WAKE))
     if _SLEEP.search(plain):
         return Said("sleep", rest=_cut(plain, _SLEEP))
+    clause = _SPLIT_PARTICLE.sub(r"\1 on \2", clause)
+    if _BY.match(clause):
+        clause = f"play {clause}"
     played = _PLAY.match(clause)
     if played and (clause.startswith(_PLAY_VERBS) or _genre(played.group("query"), genres)):
         query = re.sub(

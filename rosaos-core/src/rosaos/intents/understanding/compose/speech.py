@@ -12,6 +12,7 @@ commas. What stays is never guessed at: negations and questions are recognised
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass
 
 from rosaos.intents.understanding.compose.places import name_places
 from rosaos.intents.understanding.compose.quantities import spell_numbers
@@ -40,6 +41,9 @@ _REQUEST_FRAMES = (
     r"you\s+(?:can|could|may|might\s+as\s+well|should)(?:\s+(?:now|just|please))?(?:\s+go\s+ahead\s+and)?",
     r"i(?:'d|\s+would)\s+(?:like|love)(?:\s+you|\s+it\s+if\s+you)?(?:\s+to)?",
     r"i\s+(?:want|need)\s+you\s+to",
+    # "please you say hello": a learner's "you" before the imperative, not a subject of a remark
+    r"you(?=\s+(?:say|tell|announce|look|turn|switch|put|play|make|set|dim|go|move|come|give|show|shout|"
+    r"nod|shake|wake|dance|greet|walk|drive|dock)\b)",
     r"i\s+(?:want|wanna)(?:\s+to)?(?=\s+(?:turn|switch|set|make|hear|listen))",
     r"(?:how|what)\s+about(?:\s+you)?",
     r"let's",
@@ -140,6 +144,32 @@ _STOP = re.compile(
 )
 
 
+_HEDGE = re.compile(
+    r"(,|\bto|\bat)\s+(?:like|say|about|around|roughly|approximately|something\s+like|maybe|more\s+or\s+less)\s+"
+    r"(\d+(?:\.\d+)?(?:\s*(?:%|percent\b)|(?=\s*(?:,|$))))"
+)
+"""A hedged number after "to", "at" or a comma ("like 30 percent", "to about 40"): the number."""
+_NOT_TOO = re.compile(
+    r"\bnot\s+(?:too|so|very|overly)\s+(bright|loud)(?:ly)?\b(?:\s*,?\s*(\d+(?:\.\d+)?\s*(?:%|percent)))?"
+)
+_MODERATE = {"bright": "dimmer", "loud": "quieter"}
+""""not too bright" is a request for a moderate level, not a negation: dimmer, unless a
+number follows ("not too bright, 30 percent": the number)."""
+
+
+_THERE = re.compile(
+    r"^(?P<verb>look|glance|peek|turn|face|point)(?P<how>\s+(?:your\s+)?(?:head|eyes|face))?\s+(?:at|to|towards?)\s+"
+    r"(?:the|that|this|my|our)\s+[\w' -]+?\s*,\s*(?:it's|it\s+is|its|they're|they\s+are|he's|she's)\s+"
+    r"(?:(?:just|right|over)\s+)?(?:on|to|at)\s+(?:your|the)\s+(?P<side>left|right)(?:\s+(?:hand\s+)?side)?$"
+)
+"""A thing to look at and where it is said after it ("look at the window, it's on your left"):
+the direction is where to look."""
+
+
+def _moderate(found: re.Match[str]) -> str:
+    return found.group(2) or _MODERATE[found.group(1)]
+
+
 def normalise(text: str) -> str:
     """Lowercase, plain apostrophes, number words as digits, rooms by their own word ("where we
     cook": the kitchen, before "where" can be read as the start of a reason), no end punctuation."""
@@ -148,14 +178,71 @@ def normalise(text: str) -> str:
     text = re.sub(r"[\"“”!?.]+(?=\s|$)", " ", text)
     text = re.sub(r"\s+", " ", text).strip()
     text = re.sub(r"\brise and shine\b", "wake up", text)  # an idiom: its "and" joins no two commands
-    return name_places(spell_numbers(text))
+    text = _HEDGE.sub(r"\1 \2", spell_numbers(text))
+    text = _THERE.sub(r"\g<verb>\g<how> to your \g<side>", text)
+    return name_places(_NOT_TOO.sub(_moderate, text))
+
+
+_DEVICE = r"(?P<device>(?:my|the|our|this|that)\s+(?:\w+\s+){0,3}?\w+)"
+_WISHES = (
+    # "I want my lamp to be purple", "we'd like the speaker to be at 30": the wish is the command
+    re.compile(
+        r"^(?:(?:i|we)\s+(?:really\s+)?(?:want|wanna|need)|(?:i|we)(?:'d|\s+would)\s+(?:really\s+)?(?:like|love|prefer))\s+"
+        rf"{_DEVICE}\s+to\s+be\s+(?P<state>.+)$"
+    ),
+    # "can we have the lamp at 40 percent", "could I get the lamp a bit warmer"
+    re.compile(
+        rf"^(?:can|could|may)\s+(?:we|i)\s+(?:have|get)\s+{_DEVICE}\s+"
+        r"(?P<state>(?:at|to|on|off)\b.*|.*\b(?:\d+\s*(?:%|percent)|brighter|dimmer|louder|quieter|warmer|cooler)$)"
+    ),
+)
+
+
+@dataclass(frozen=True)
+class Wish:
+    """A wish for a device's state ("I want my lamp to be purple") and the command it asks for."""
+
+    command: str
+    device: str
+    state: str
+
+
+def _wish(text: str) -> Wish | None:
+    """A wish for a device's state as the command it asks for: "make the lamp purple", "set the
+    lamp to 40 percent". Only a device phrase and a state; "I'd like some jazz" is no wish."""
+    for wish in _WISHES:
+        found = wish.match(text)
+        if found is not None:
+            device, state = found.group("device"), found.group("state")
+            level = re.match(r"^(?:at|to)\s+(.+)$", state)
+            command = f"set {device} to {level.group(1)}" if level else f"make {device} {state}"
+            return Wish(command, device, level.group(1) if level else state)
+    return None
+
+
+def wished(text: str) -> Wish | None:
+    """The wish ``text`` says, if it says one, before any template reads it as something else
+    ("I want the lamp to be plaid" once turned the lamp on at 100 %)."""
+    plain = text.lower().replace("\u2019", "'").strip(" .!?")
+    previous = None
+    while previous != plain:
+        previous = plain
+        plain = _TAIL.sub("", plain).strip()
+        wish = _wish(plain)  # before "I'd like" is stripped as a request frame
+        if wish is not None:
+            return wish
+        plain = _LEAD_ADDRESS.sub("", _LEAD.sub("", plain)).strip()
+    return None
 
 
 def command_words(text: str) -> str:
-    """``text`` without the discourse around its command, at both ends, as often as it is there."""
+    """``text`` without the discourse around its command, at both ends, as often as it is there;
+    a wish for a state said as the command (:func:`_wish`)."""
     previous = None
     while previous != text:
         previous = text
+        wish = _wish(text)  # before "I'd like" is stripped as a request frame
+        text = wish.command if wish is not None else text
         text = _LEAD_ADDRESS.sub("", _LEAD.sub("", text)).strip()
         text = _TAIL.sub("", text).strip()
     return text
