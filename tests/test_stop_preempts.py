@@ -19,6 +19,7 @@ import pytest
 import pytest_asyncio
 
 from rosaos.kernel.runtime import Kernel
+from rosaos.processes.queue_behind import QUEUE_WAIT
 
 from .cli_process import ROSAOS
 from .e2e_support import (
@@ -155,6 +156,9 @@ async def test_chat_wait_exits_non_zero_when_its_launch_is_refused(
     kernel: Kernel, home: Path, walking_dog: WalkingDog
 ) -> None:
     walk = await walking_dog("walk the dog forward two meters")
+    # A launch waits behind a short plan that holds its device (processes/queue_behind.py); with
+    # no wait allowed, the held dog is refused at once, which is what this exit code is about.
+    kernel.manager.queue_wait = 0
     try:
         command = [ROSAOS, "chat", "-c", str(home / "rosaos.toml"), "--url", kernel.url]
         refused = await _run([*command, "-m", "turn the dog left", "--wait"])
@@ -163,6 +167,7 @@ async def test_chat_wait_exits_non_zero_when_its_launch_is_refused(
         stopped = await _run([*command, "-m", "stop the dog", "--wait"])
         assert stopped.returncode == 0, stopped.stdout + stopped.stderr
     finally:
+        kernel.manager.queue_wait = QUEUE_WAIT
         await kernel.manager.terminate(walk["id"])
 
 
