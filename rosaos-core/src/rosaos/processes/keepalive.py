@@ -109,10 +109,6 @@ class DeviceLink:
     async def run(self) -> None:
         url = keepalive_url(self.device.url)
         headers = {**owner_headers(), "Authorization": f"Bearer {self.device.token}"}
-        # The job's own MCP requests carry the owner header and count as heard from (only a tool
-        # call arms the deadman): the first keepalive can wait an interval, and a short job (a
-        # light switch) sends none, instead of a request competing with its call for the CPU.
-        await asyncio.sleep(KEEPALIVE_INTERVAL)
         while True:
             # A fresh client after each failure: a connection into a silent network stays stuck.
             async with httpx.AsyncClient(timeout=KEEPALIVE_INTERVAL, verify=shared_context()) as http:
