@@ -125,7 +125,7 @@ async def test_a_bare_stop_stops_the_moving_robot_and_then_the_music(
     assert (await process(api, walk["id"]))["state"] == "terminated"
     assert (await device_state(kernel, "spotify"))["is_playing"] is False
     # The robot is stopped (and named) first, the music after it.
-    assert reply.index("dog") < reply.index("spotify"), reply
+    assert reply.index("dog") < reply.index("Spotify"), reply  # a product is named as one
 
 
 async def test_a_question_is_answered_while_a_search_holds_the_robot_and_stop_ends_the_search(

@@ -31,7 +31,7 @@ from pydantic import BaseModel
 from rosaos.devices.client import DeviceClient
 from rosaos.devices.endpoints import DeviceEndpoint
 from rosaos.drivers import DeviceError, Halt
-from rosaos.intents.grammar.state_words import doing
+from rosaos.intents.grammar.state_words import called, doing
 from rosaos.processes.manager import ProcessInfo, ProcessManager
 
 HALT_ORDER: tuple[Halt, ...] = ("motion", "speech", "sound")
@@ -82,12 +82,15 @@ class Stopper:
         manager: ProcessManager,
         endpoints: Callable[[], Mapping[str, DeviceEndpoint]],
         halts: Callable[[str], Sequence[Halt]],
-        display: Callable[[str], str] = lambda name: name.replace("_", " "),
     ) -> None:
         self._manager = manager
         self._endpoints = endpoints
         self._halts = halts
-        self._display = display
+
+    def _called(self, name: str) -> str:
+        """How the reply names a device: "the kitchen light", but "Spotify" (:func:`called`)."""
+        endpoint = self._endpoints().get(name)
+        return called(name, endpoint.driver if endpoint is not None else "")
 
     async def stop(
         self, devices: Sequence[str] = (), answered: Callable[[str], None] | None = None
@@ -190,14 +193,14 @@ class Stopper:
         """One sentence per device stopped, then the other tasks ended (the stop's reply)."""
         sentences = []
         for device in stopped:
-            name = self._display(device.device)
+            the = self._called(device.device)
             if device.processes:
                 tasks = "; ".join(f"'{p.task}' (process {p.id})" for p in device.processes)
-                sentence = f"Stopped the {name}: it was doing {tasks}, now terminated."
+                sentence = f"Stopped {the}: it was doing {tasks}, now terminated."
             elif device.was in ("moving", "speaking", "playing"):
-                sentence = f"Stopped the {name}: it was {device.was}."
+                sentence = f"Stopped {the}: it was {device.was}."
             else:
-                sentence = f"Sent the {name} a stop; it was not doing anything."
+                sentence = f"Sent {the} a stop; it was not doing anything."
             if not device.safe_stop:
                 sentence += f" Its safe stop is NOT confirmed: {device.detail}"
             sentences.append(sentence)
@@ -208,7 +211,7 @@ class Stopper:
             sentences.append(f"Terminated {tasks}.")
         if not sentences:
             if explicit:
-                listed = ", ".join(f"the {self._display(name)}" for name in names)
+                listed = ", ".join(self._called(name) for name in names)
                 return f"Nothing to stop on {listed}."
             return "Nothing was moving, speaking or playing, and no task was running."
         return " ".join(sentences)
