@@ -14,7 +14,7 @@ import json
 import os
 import sys
 import time
-from collections.abc import Awaitable, Callable
+from collections.abc import Awaitable, Callable, Coroutine
 from typing import TYPE_CHECKING, Any
 
 import httpx
@@ -119,6 +119,7 @@ async def load_generator(url: str, count: int, clients: int, token: str) -> dict
     ids: list[int] = []
     errors = 0
     headers = {"Authorization": f"Bearer {token}"}
+    start = asyncio.Event()
 
     async def client() -> None:
         nonlocal errors
@@ -134,13 +135,7 @@ async def load_generator(url: str, count: int, clients: int, token: str) -> dict
                 else:
                     errors += 1
 
-    start = asyncio.Event()
-    tasks = [asyncio.create_task(client()) for _ in range(clients)]
-    await asyncio.sleep(0.5)
-    first_send = time.time()
-    start.set()
-    await asyncio.gather(*tasks)
-    last_ack = time.time()
+    first_send, last_ack = await _race(clients, client, start)
     return {
         "first_send": first_send,
         "last_ack": last_ack,
@@ -163,6 +158,7 @@ async def raw_load_generator(url: str, count: int, clients: int, token: str) -> 
     latencies: list[float] = []
     ids: list[int] = []
     errors = 0
+    start = asyncio.Event()
 
     async def client() -> None:
         nonlocal errors
@@ -187,13 +183,7 @@ async def raw_load_generator(url: str, count: int, clients: int, token: str) -> 
                 errors += 1
         writer.close()
 
-    start = asyncio.Event()
-    tasks = [asyncio.create_task(client()) for _ in range(clients)]
-    await asyncio.sleep(0.5)
-    first_send = time.time()
-    start.set()
-    await asyncio.gather(*tasks)
-    last_ack = time.time()
+    first_send, last_ack = await _race(clients, client, start)
     return {
         "first_send": first_send,
         "last_ack": last_ack,
@@ -201,6 +191,19 @@ async def raw_load_generator(url: str, count: int, clients: int, token: str) -> 
         "ids": [min(ids), max(ids)],
         "errors": errors,
     }
+
+
+async def _race(
+    clients: int, client: Callable[[], Coroutine[Any, Any, None]], start: asyncio.Event
+) -> tuple[float, float]:
+    """Run ``clients`` copies of ``client``; each connects, then waits for ``start``. The wall
+    clock at the start and after the last answer."""
+    tasks = [asyncio.create_task(client()) for _ in range(clients)]
+    await asyncio.sleep(0.5)  # every client connected before the clock starts
+    first_send = time.time()
+    start.set()
+    await asyncio.gather(*tasks)
+    return first_send, time.time()
 
 
 async def round_trips(kernel: Kernel, times: int) -> dict[str, Any]:
