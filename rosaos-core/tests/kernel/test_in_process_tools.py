@@ -110,3 +110,16 @@ async def test_each_call_runs_the_tool_once() -> None:
     server = _server()
     await _call(KernelToolset(server), "launch_process", {"devices": ["kitchen_light"]})
     assert server.calls == ["launch_process"]  # type: ignore[attr-defined]
+
+
+async def test_the_tools_are_built_once_per_listing_and_as_the_session_lists_them() -> None:
+    server = _server()
+    ctx: RunContext[Any] = RunContext(deps=None, model=TestModel(), usage=RunUsage())
+    kernel_tools = KernelToolset(server)
+    async with kernel_tools, MCPToolset(server, tool_error_behavior="failed") as plain:
+        first, second = await kernel_tools.get_tools(ctx), await kernel_tools.get_tools(ctx)
+        listed = await plain.get_tools(ctx)
+    assert all(first[name] is second[name] for name in first), "built again for the same listing"
+    assert {name: tool.tool_def for name, tool in first.items()} == {
+        name: tool.tool_def for name, tool in listed.items()
+    }
