@@ -25,31 +25,22 @@ from fastmcp import FastMCP
 from fastmcp.client.client import CallToolResult
 from fastmcp.exceptions import DisabledError, FastMCPError, NotFoundError
 from mcp import types as mcp_types
-from pydantic_ai import ModelRetry, RunContext, ToolFailed
-from pydantic_ai.mcp import MCPToolset, _map_mcp_call_tool_result  # the wire path's own mapping
+from pydantic_ai import ModelRetry, ToolFailed
+from pydantic_ai.mcp import _map_mcp_call_tool_result  # the wire path's own mapping
 from pydantic_ai.messages import ToolReturnPart
-from pydantic_ai.toolsets import ToolsetTool
+
+from rosaos.processes.listed_tools import ListedToolset
 
 
-class KernelToolset(MCPToolset[None]):
-    """An :class:`MCPToolset` over an in-process FastMCP server whose calls skip the MCP session."""
+class KernelToolset(ListedToolset):
+    """An MCP toolset over an in-process FastMCP server whose calls skip the MCP session (and whose
+    tool definitions are built once per listing, :class:`ListedToolset`)."""
 
     def __init__(self, server: FastMCP) -> None:
         # "failed": a refused launch comes back as a failed tool result the model reads and acts on;
         # "retry" would count refusals against a retry budget and end the run on the second one.
         super().__init__(server, tool_error_behavior="failed")
         self._server = server
-        self._built: tuple[list[mcp_types.Tool], int, dict[str, ToolsetTool[None]]] | None = None
-
-    async def get_tools(self, ctx: RunContext[None]) -> dict[str, ToolsetTool[None]]:
-        """The tools as pydantic-ai builds them from the server's list, built again only when the
-        list changes (pydantic-ai caches the list, but validated every tool's schema again on each
-        turn: 0.5 ms of the offline command's path)."""
-        listed = await self.list_tools()
-        built = self._built
-        if built is None or built[0] is not listed or built[1] != ctx.max_retries:
-            built = self._built = (listed, ctx.max_retries, await super().get_tools(ctx))
-        return dict(built[2])
 
     async def direct_call_tool(
         self,
