@@ -211,6 +211,8 @@ class Composer:
             after = index + 1
             while (
                 clause.said is None
+                and clause.reference.named
+                and not clause.reference.unknown
                 and after + 1 < len(parsed)
                 and parsed[after].said is None
                 and not parsed[after].reference.named

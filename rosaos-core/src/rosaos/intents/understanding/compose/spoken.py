@@ -6,7 +6,7 @@ command or a device:
 
 - **Hesitations and self-repairs anywhere in a clause.** Fillers such as "um", "uh", "erm" are
   never words of a command; "like", "you know", "I mean" are not when set off by commas ("play,
-  like, some jazz"); "kind of"/"sort of" before a gradable word hedge it ("kind of low"); a
+  like, some jazz"); "kind of"/"sort of" before a gradable word hedge it ("kind of low", never the album "Kind of Blue"); a
   function word said twice is a restart ("turn the, um, the lamp off"). Words to be *said* ("say
   um, hello") are the user's own and are kept as they are.
 - **A setting said after the music**: "play X at volume 25", "put on some jazz, volume 30",
@@ -33,7 +33,6 @@ _HEDGE = re.compile(
     r"\b(?:kind\s+of|sort\s+of|kinda|sorta)\s+(?=(?:really\s+|very\s+)?(?:low|high|dim|dimmer|bright|brighter|"
     r"loud|louder|quiet|quieter|soft|softer|warm|warmer|cool|cooler|cold|dark|darker|slow|slowly|fast|quick|"
     r"quickly|soft|softly|gently|red|blue|green|yellow|orange|purple|pink|white)\b)",
-    re.IGNORECASE,
 )
 """A hedge before a gradable or colour word: "kind of low" is low ("Kind of Blue" keeps its case)."""
 _RESTARTED = (
@@ -73,9 +72,10 @@ _TELL = re.compile(
 )
 """Words told to someone: "tell the dog (that) I love it", "tell my robot it's a good boy"."""
 _BEINGS = (
-    r"(?:dog|doggy|doggie|doggo|puppy|pup|robot|bot|cat|kitty|kids|children|baby|guests|family|team|"
-    r"everyone|everybody|reachy|turtlebot|turtle|puppypi)"
+    r"(?:dog|doggy|doggie|doggo|puppy|pup|robot|bot|cat|kitty|reachy|turtlebot|turtle|puppypi)"
 )
+"""Who words may be said *to* and not be part of them: a pet or a robot ("say good night to
+everyone" is words for everyone, said as written)."""
 _SAY_TO = re.compile(
     rf"^(?P<say>.*?\bsay\s+(?!to\b).+?)\s+to\s+(?:(?:the|my|our|your)\s+)?(?:[\w'-]+\s+)?{_BEINGS}[\s,.!?]*$",
     re.IGNORECASE,
