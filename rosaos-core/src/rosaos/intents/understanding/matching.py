@@ -39,8 +39,8 @@ from rosaos.intents.grammar.phrases import confirms, conjunctions, pronouns
 from rosaos.intents.grammar.vocabulary import ARTICLES, DeviceVocabulary
 from rosaos.intents.understanding.absent_kinds import AbsentKinds
 from rosaos.intents.understanding.compose.reader import Composer
-from rosaos.intents.understanding.compose.spoken import tidy
 from rosaos.intents.understanding.compose.speech import normalise, remark, wished
+from rosaos.intents.understanding.compose.spoken import tidy
 from rosaos.intents.understanding.fuzzy import FuzzyMatcher
 from rosaos.intents.understanding.generalize import understand
 from rosaos.intents.understanding.match_result import MatchResult, ProcessPlan, build_result, no_match

@@ -20,7 +20,9 @@ from __future__ import annotations
 
 import re
 
-_SPEECH_VERB = re.compile(r"\b(?:say|says|tell|announce|speak|repeat|shout|whisper|read\s+out)\b", re.IGNORECASE)
+_SPEECH_VERB = re.compile(
+    r"\b(?:say|says|tell|announce|speak|repeat|shout|whisper|read\s+out)\b", re.IGNORECASE
+)
 """Where words to be said may start: hesitations after it are the user's own words."""
 _HESITATION = re.compile(r"(?:,\s*)?\b(?:u+m+|u+h+|uhm+|e+r+m*|ehm|hmm+)\b(?:\s*,)?", re.IGNORECASE)
 """Sounds that are never words of a command, with the commas that set them off."""
@@ -34,11 +36,12 @@ _HEDGE = re.compile(
     r"loud|louder|quiet|quieter|soft|softer|warm|warmer|cool|cooler|cold|dark|darker|slow|slowly|fast|quick|"
     r"quickly|soft|softly|gently|red|blue|green|yellow|orange|purple|pink|white)\b)",
 )
-"""A hedge before a gradable or colour word: "kind of low" is low ("Kind of Blue" keeps its case)."""
+"""A hedge before a gradable or colour word: "kind of low" is low; "Kind of Blue" is a title (case kept)."""
 _RESTARTED = (
-    "the a an my our your this that these those it its to on off in at up down turn switch set make "
-    "play put can could you please and of with for"
-).split()
+    "the", "a", "an", "my", "our", "your", "this", "that", "these", "those", "it", "its", "to", "on", "off",
+    "in", "at", "up", "down", "turn", "switch", "set", "make", "play", "put", "can", "could", "you",
+    "please", "and", "of", "with", "for",
+)  # fmt: skip
 _REPEAT = re.compile(rf"\b({'|'.join(_RESTARTED)})(?:\s*,\s*|\s+)\1\b", re.IGNORECASE)
 """A function word or command verb said twice, a restart: "turn off the, the lamp"."""
 
@@ -50,7 +53,7 @@ _SETTING = re.compile(
     rf"|(?:at|with)\s+{_NUMBER.replace('?P<n>', '?P<m>')}(?:\s*%|\s+percent)?\s+(?:volume|loudness)"
     rf"|(?:at|with)\s+(?:(?:a|the)\s+)?(?P<level>full|max|maximum|top|high|low|quiet|soft|medium)\s+volume"
     rf"|(?P<how>(?:(?:really|very|pretty|nice\s+and|super)\s+)?(?:loud|loudly|quietly|softly|gently))"
-    rf")[\s,.!?]*$",
+    rf")(?:[\s,]+(?:please|thanks|thank\s+you|for\s+me))?[\s,.!?]*$",
     re.IGNORECASE,
 )
 """Music, then how loud: "play X at volume 25", "put on jazz, volume 30", "play X loud"."""
@@ -71,9 +74,7 @@ _TELL = re.compile(
     re.IGNORECASE,
 )
 """Words told to someone: "tell the dog (that) I love it", "tell my robot it's a good boy"."""
-_BEINGS = (
-    r"(?:dog|doggy|doggie|doggo|puppy|pup|robot|bot|cat|kitty|reachy|turtlebot|turtle|puppypi)"
-)
+_BEINGS = r"(?:dog|doggy|doggie|doggo|puppy|pup|robot|bot|cat|kitty|reachy|turtlebot|turtle|puppypi)"
 """Who words may be said *to* and not be part of them: a pet or a robot ("say good night to
 everyone" is words for everyone, said as written)."""
 _SAY_TO = re.compile(
@@ -85,7 +86,12 @@ _SECOND_PERSON = [
     (re.compile(r"\b(?:it|he|she)\s+is\b", re.IGNORECASE), "you are"),
     (re.compile(r"\b(?:it|he|she)\s+was\b", re.IGNORECASE), "you were"),
     (re.compile(r"\b(?:it|he|she)\s+has\b", re.IGNORECASE), "you have"),
-    (re.compile(r"\b(?:it's|he's|she's)\b(?!\s+(?:time|late|early|getting|raining|cold|hot)\b)", re.IGNORECASE), "you're"),
+    (
+        re.compile(
+            r"\b(?:it's|he's|she's)\b(?!\s+(?:time|late|early|getting|raining|cold|hot)\b)", re.IGNORECASE
+        ),
+        "you're",
+    ),
     (re.compile(r"\b(?:itself|himself|herself)\b", re.IGNORECASE), "yourself"),
     (re.compile(r"\b(?:its|his)\b", re.IGNORECASE), "your"),
     (re.compile(r"\bher(?=\s+(?!so\b|very\b|too\b|a\s+lot\b|lots\b|much\b)[a-z])", re.IGNORECASE), "your"),
