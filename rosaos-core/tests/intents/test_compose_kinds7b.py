@@ -67,6 +67,32 @@ def test_a_device_is_named_by_what_it_is_next_to(
     assert _calls(home.match(said)) == expected
 
 
+@pytest.fixture(scope="module")
+def house() -> IntentMatcher:
+    devices = {
+        "reading": DeviceConfig(driver="tapo", description="Reading lamp next to the armchair in the study"),
+        "floor": DeviceConfig(driver="tapo", description="Floor lamp in the living room, next to the window"),
+        "night": DeviceConfig(driver="tapo", description="Night light in the nursery"),
+        "porch": DeviceConfig(driver="tapo", description="Light outside by the front door"),
+    }
+    return IntentMatcher(sources_from_config(devices, load_drivers()), "en")
+
+
+@pytest.mark.parametrize(
+    ("said", "expected"),
+    [
+        ("switch on the one next to the chair", [("reading", "turn_on", {})]),
+        ("turn on the light in the baby's room", [("night", "turn_on", {})]),
+        ("turn off the light by the door", [("porch", "turn_off", {})]),
+        ("turn on the light by the window", [("floor", "turn_on", {})]),
+    ],
+)
+def test_a_part_of_a_compound_word_or_who_uses_a_room_names_it(
+    house: IntentMatcher, said: str, expected: list[Call]
+) -> None:
+    assert _calls(house.match(said)) == expected
+
+
 def test_the_one_in_a_room_with_two_asks_which(home: IntentMatcher) -> None:
     result = home.match("turn our bedroom one on")
     assert result.kind == "clarify" and not result.processes

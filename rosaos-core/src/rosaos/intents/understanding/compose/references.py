@@ -154,7 +154,8 @@ MIN_PREFIX = 4
 _TAILS = ("side", "stand", "top", "well", "case", "way", "post", "board", "shelf", "light", "lamp")
 """Second halves of compound words: "bed" is said for the bedside, "desk" for the desktop, "night"
 for the nightstand ("bedroom" is not one: a bed is in the bedroom, but "by the bed" is not every
-light there)."""
+light there). A second half of five letters or more is said for the whole too ("chair" for the
+armchair)."""
 _REMEMBERED_WORDS = 4096
 
 
@@ -234,6 +235,8 @@ class References:
                 for tail in _TAILS:
                     if own.endswith(tail) and len(own) - len(tail) >= 3:
                         self._compounds.setdefault(own[: -len(tail)].rstrip("-"), set()).add(known.name)
+                for start in range(3, len(own) - 4):  # "chair" for the armchair: its second half
+                    self._compounds.setdefault(own[start:], set()).add(known.name)
         self._said: dict[str, frozenset[str]] = {}
 
     def resolve(self, phrase: str) -> Reference:
@@ -381,7 +384,11 @@ class References:
         found = self._said.get(word)
         if found is None:
             said = singular(word)
-            names = set(self._exact.get(said, ())) | self._compounds.get(word, set())
+            names = (
+                set(self._exact.get(said, ()))
+                | self._compounds.get(word, set())
+                | self._compounds.get(said, set())
+            )
             if len(said) >= MIN_PREFIX:
                 names |= self._prefixes.get(said, set())  # a known word that starts with it
                 for end in range(MIN_PREFIX, len(said)):  # a known word it starts with
