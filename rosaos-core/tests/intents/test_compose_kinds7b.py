@@ -173,3 +173,53 @@ def test_words_told_to_the_dog_are_said_to_it_never_an_order_to_it(
     lab: IntentMatcher, said: str, spoken: str
 ) -> None:
     assert _calls(lab.match(said)) == [("reachy", "speak", {"text": spoken})]
+
+
+@pytest.mark.parametrize(
+    ("said", "expected"),
+    [
+        ("can you play like some jazz", [("speaker", "play", {"query": "jazz"})]),
+        ("turn off the stupid kitchen light", [("kitchen", "turn_off", {})]),
+        ("turn on the damn dining light please", [("dining", "turn_on", {})]),
+        ("play some jazz or something", [("speaker", "play", {"query": "jazz"})]),
+        ("play something like jazz", [("speaker", "play", {"query": "something like jazz"})]),
+    ],
+)
+def test_feeling_words_and_vague_tails_say_nothing_of_which(
+    home: IntentMatcher, said: str, expected: list[Call]
+) -> None:
+    assert _calls(home.match(said)) == expected
+
+
+@pytest.mark.parametrize(
+    ("said", "query", "volume"),
+    [
+        ("play Jolene at a low volume", "Jolene", 25),
+        ("play jazz at max volume", "jazz", 100),
+        ("put some jazz on at volume 40", "jazz", 40),
+        ("play something by Miles Davis, not too loud", "Miles Davis", 35),
+        ("put on some classical music nice and quiet", "classical music", 25),
+    ],
+)
+def test_more_ways_to_say_how_loud(home: IntentMatcher, said: str, query: str, volume: int) -> None:
+    assert _calls(home.match(said)) == [
+        ("speaker", "play", {"query": query}),
+        ("speaker", "set_volume", {"volume": volume}),
+    ]
+
+
+@pytest.mark.parametrize(
+    "said",
+    [
+        "good night reachy, sleep well",
+        "alright little robot, bedtime",
+        "thanks reachy, you can rest now",
+        "alright reachy, that's all for today, off to sleep you go",
+    ],
+)
+def test_good_night_to_a_robot_is_sleep(lab: IntentMatcher, said: str) -> None:
+    assert _calls(lab.match(said)) == [("reachy", "sleep", {})]
+
+
+def test_the_front_door_is_a_place_not_a_pose(house: IntentMatcher) -> None:
+    assert _calls(house.match("um turn off the light by the front door")) == [("porch", "turn_off", {})]

@@ -37,6 +37,21 @@ _HEDGE = re.compile(
     r"quickly|soft|softly|gently|red|blue|green|yellow|orange|purple|pink|white)\b)",
 )
 """A hedge before a gradable or colour word: "kind of low" is low; "Kind of Blue" is a title (case kept)."""
+_EXPLETIVE = re.compile(
+    r"\b(?:damn|darn|dang|goddamn|freaking|frigging|frickin[g']?|flipping|bloody|blasted|effing|fucking|"
+    r"stupid|silly|dumb)\s+(?=[a-z])",
+    re.IGNORECASE,
+)
+"""A word of feeling before what it is said of ("the stupid lamp", "the damn music"): never which one."""
+_VAGUE_TAIL = re.compile(
+    r"\s+or\s+(?:something|whatever|anything)(?:\s+like\s+(?:that|it))?\b", re.IGNORECASE
+)
+""""jazz or something": the thing asked for, not a choice between two."""
+_LIKE = re.compile(
+    r"\b(play|put\s+on|throw\s+on|turn|switch|set|make|dim|give\s+me)\s+like\s+(?=(?:some|a|an|the|my|it)\b)",
+    re.IGNORECASE,
+)
+""""play like some jazz": "like" between a verb and its object is a filler, "something like jazz" is not."""
 _RESTARTED = (
     "the", "a", "an", "my", "our", "your", "this", "that", "these", "those", "it", "its", "to", "on", "off",
     "in", "at", "up", "down", "turn", "switch", "set", "make", "play", "put", "can", "could", "you",
@@ -45,27 +60,30 @@ _RESTARTED = (
 _REPEAT = re.compile(rf"\b({'|'.join(_RESTARTED)})(?:\s*,\s*|\s+)\1\b", re.IGNORECASE)
 """A function word or command verb said twice, a restart: "turn off the, the lamp"."""
 
-_PLAY = r"\b(?:play|put\s+on|throw\s+on|queue\s+up|blast|start\s+playing)\b"
-_NUMBER = r"(?P<n>\d+(?:\.\d+)?|[a-z]+(?:[ -][a-z]+)?)"
+_PLAY = r"\b(?:play|put|throw|stick|queue\s+up|blast|start\s+playing)\b"
+_TENS = r"(?:twenty|thirty|forty|fifty|sixty|seventy|eighty|ninety)"
+_UNITS = (
+    r"(?:zero|one|two|three|four|five|six|seven|eight|nine|ten|eleven|twelve|thirteen|fourteen|fifteen|"
+    r"sixteen|seventeen|eighteen|nineteen|(?:a|one)\s+hundred)"
+)
+_NUMBER = rf"(?P<n>\d+(?:\.\d+)?|{_TENS}(?:[ -](?:one|two|three|four|five|six|seven|eight|nine))?|{_UNITS})"
 _SETTING = re.compile(
     rf"^(?P<music>.*{_PLAY}.+?)(?:\s*,\s*|\s+)(?:"
     rf"(?:(?:at|with|on)\s+)?(?:(?:a|the)\s+)?volume\s+(?:(?:at|to|of|on)\s+)?{_NUMBER}(?:\s*%|\s+percent)?"
     rf"|(?:at|with)\s+{_NUMBER.replace('?P<n>', '?P<m>')}(?:\s*%|\s+percent)?\s+(?:volume|loudness)"
     rf"|(?:at|with)\s+(?:(?:a|the)\s+)?(?P<level>full|max|maximum|top|high|low|quiet|soft|medium)\s+volume"
-    rf"|(?P<how>(?:(?:really|very|pretty|nice\s+and|super)\s+)?(?:loud|loudly|quietly|softly|gently))"
+    rf"|(?P<how>(?:(?:really|very|pretty|nice\s+and|super|not\s+too|not\s+so)\s+)?"
+    rf"(?:loud|loudly|quiet|quietly|soft|softly|gently))"
     rf")(?:[\s,]+(?:please|thanks|thank\s+you|for\s+me))?[\s,.!?]*$",
     re.IGNORECASE,
 )
 """Music, then how loud: "play X at volume 25", "put on jazz, volume 30", "play X loud"."""
 _LEVELS = {
-    "full": 100, "max": 100, "maximum": 100, "top": 100, "high": 80, "medium": 50,
+    "full": 100, "max": 100, "maximum": 100, "top": 100, "high": 80, "medium": 35,
     "low": 25, "quiet": 25, "soft": 25,
     "loud": 80, "loudly": 80, "quietly": 25, "softly": 25, "gently": 25,
 }  # fmt: skip
 """Volume for a word of loudness said with the music: loud is well above the usual half."""
-_NUMBER_WORD = re.compile(r"^(?:\d|zero|one|two|three|four|five|six|seven|eight|nine|ten|eleven|twelve|"
-                          r"thirteen|fourteen|fifteen|sixteen|seventeen|eighteen|nineteen|twenty|thirty|"
-                          r"forty|fifty|sixty|seventy|eighty|ninety|hundred|a hundred)", re.IGNORECASE)  # fmt: skip
 
 _TELL = re.compile(
     r"^(?P<lead>.*?\b)tell\s+(?P<who>(?:the|my|our|your)\s+(?:[\w'-]+\s+)??[\w'-]+)\s+(?:that\s+)?"
@@ -78,7 +96,7 @@ _BEINGS = r"(?:dog|doggy|doggie|doggo|puppy|pup|robot|bot|cat|kitty|reachy|turtl
 """Who words may be said *to* and not be part of them: a pet or a robot ("say good night to
 everyone" is words for everyone, said as written)."""
 _SAY_TO = re.compile(
-    rf"^(?P<say>.*?\bsay\s+(?!to\b).+?)\s+to\s+(?:(?:the|my|our|your)\s+)?(?:[\w'-]+\s+)?{_BEINGS}[\s,.!?]*$",
+    rf"^(?P<say>.*?\bsay\s+(?!to\b).+?)\s+to\s+(?:(?:the|my|our|your)\s+)?(?:[\w'-]+\s+)?{_BEINGS}(?:[\s,]+(?:please|now|for\s+me))?[\s,.!?]*$",
     re.IGNORECASE,
 )
 """Words, then who they are for: "say I love you to the doggy"."""
@@ -117,6 +135,9 @@ def _without_hesitations(text: str) -> str:
         text = _HESITATION.sub(" ", text)
         text = _ASIDE.sub(" ", text)
         text = _HEDGE.sub("", text)
+        text = _EXPLETIVE.sub("", text)
+        text = _VAGUE_TAIL.sub("", text)
+        text = _LIKE.sub(r"\1 ", text)
         text = _REPEAT.sub(r"\1", text)
     text = re.sub(r"\s+([,.!?])", r"\1", text)
     text = re.sub(r"^[\s,]+|(?<=\s),\s*", "", text)
@@ -128,11 +149,11 @@ def _setting(text: str) -> str:
     if found is None:
         return text
     number = found.group("n") or found.group("m")
-    if number is not None and _NUMBER_WORD.match(number) is None:
-        return text  # "play it at volume eleven" is a number; "at volume control" is not one
-    if found.group("how") and re.search(r"\b(?:something|anything|music|songs|stuff)$", found.group("music")):
+    if found.group("how") and re.search(r"\b(?:something|anything|stuff)$", found.group("music")):
         return text  # "play something quiet": what to play, not how loud
     word = (found.group("level") or found.group("how") or "").lower().split()
+    if word[:2] == ["not", "too"] or word[:2] == ["not", "so"]:
+        word = ["medium"]  # "not too loud": below the usual half, never loud
     level = number if number is not None else str(_LEVELS.get(word[-1], 0)) if word else None
     if level is None or level == "0":
         return text
