@@ -7,8 +7,8 @@ plays; ``demo-empty`` must search to its limit, say nobody was found and leave t
 The latencies go to docs/bench.md from ``--repeat 3`` runs; here only pass or fail is judged.
 
 ``demo-empty`` runs as written but for one setting of its turtlebot: ``search_seconds`` 30, not
-the default 120. Its search still ends by itself at its limit, moves to a search spot on the way
-and says nobody was found; the 90 s it no longer waits were most of CI's longest set-up.
+the default 120. Its search still ends by itself at its limit and says nobody was found; the
+90 s it no longer waits were most of CI's longest set-up.
 """
 
 from __future__ import annotations
@@ -26,8 +26,8 @@ DEMO = Path(__file__).resolve().parents[2] / "shared" / "bench" / "demo"
 
 pytestmark = pytest.mark.skipif(not DEMO.is_dir(), reason=f"{DEMO} is not next to this checkout")
 EMPTY_SEARCH_SECONDS = 30
-"""How long ``demo-empty``'s search looks (the turtlebot's ``search_seconds``): long enough for a
-full turn at the start and a move to the first search spot, even on a busy machine."""
+"""How long ``demo-empty``'s search looks (the turtlebot's ``search_seconds``): a full turn at the
+start and, on a machine that is not too busy, a move to the first search spot."""
 
 
 def rosaos_command() -> list[str]:
