@@ -24,6 +24,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
+from rosaos.intents.understanding.compose.complaints import complaint
 from rosaos.intents.understanding.compose.references import References
 from rosaos.intents.understanding.compose.speech import asks, remark
 
@@ -225,8 +226,8 @@ def read_stop(text: str, refs: DeviceRefs) -> StopRequest | None:
     ]
     rest = [
         clause
-        for index, (kind, clause, _) in enumerate(clauses)
-        if kind == "other" or (kind == "name" and index > first)
+        for index, (kind, clause, found) in enumerate(clauses)
+        if (kind == "other" and not _idle(clause, found)) or (kind == "name" and index > first)
     ]
     return StopRequest(tuple(dict.fromkeys(devices)), " and ".join(rest))
 
@@ -240,10 +241,27 @@ def _only_exclaimed(clauses: list[tuple[str, str, list[str]]]) -> bool:
         for clause, found in stops
     )
     asked = any(
-        kind == "other" and not remark(clause) and not asks(clause) and not _count_stops(clause)
+        kind == "other"
+        and (not remark(clause) or complaint(clause) is not None)  # "whoa, that's way too loud"
+        and not asks(clause)
+        and not _count_stops(clause)
         for kind, clause, _ in clauses
     )
     return exclaimed and asked
+
+
+_SETTING = re.compile(
+    r"\b(?:lights?|lighting|lamps?|bright\w*|dark\w*|dim\w*|loud\w*|quiet\w*|volume|music|songs?|"
+    r"warm\w*|cold\w*|colou?rs?)\b"
+)
+
+
+def _idle(clause: str, found: list[str]) -> bool:
+    """Whether ``clause``, said beside a stop, is only why ("stop the music, I need to
+    concentrate", "halt the dog, it's time to work"): a remark, a need or a feeling that names no
+    device and no setting. It is dropped, never run as a command of its own (the need once
+    switched a lamp on). A remark about a setting ("the music is too loud") still asks for it."""
+    return remark(clause) and not found and complaint(clause) is None and not _SETTING.search(clause)
 
 
 def _strip_interjections(words: list[str]) -> list[str]:

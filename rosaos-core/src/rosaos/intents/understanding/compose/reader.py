@@ -29,6 +29,7 @@ from rosaos.events.plan import PlanStep
 from rosaos.intents.grammar.capabilities import Capabilities, Capability
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.understanding.compose.actions import Said, read_action, restate
+from rosaos.intents.understanding.compose.complaints import complaint, vague_level
 from rosaos.intents.understanding.compose.references import Reference, References
 from rosaos.intents.understanding.compose.scenes import Scene, read_scene
 from rosaos.intents.understanding.compose.speech import (
@@ -174,8 +175,12 @@ class Composer:
             devices = () if about.unknown else about.devices
             return _Clause(text, None, Reference(), devices or self._felt(text))
         said = read_action(text, self.colours, self.genres)
-        if said is None and _OCCASION.match(text):
-            return _Clause(text, None, Reference())  # "…, time to work": when, not what
+        if said is None or (said.action == "level" and "change" in said.values):
+            said = vague_level(text) or said  # "really low", "nice and dim": a level, not a step
+        if _OCCASION.match(text) and (
+            said is None or not any(self._capability(d, said) for d in self.capabilities)
+        ):
+            return _Clause(text, None, Reference())  # "…, time to work/sleep": when, not what
         reference = self.references.resolve(said.rest if said else text)
         return _Clause(text, said, reference)
 
@@ -373,6 +378,8 @@ class Composer:
         """A need or a complaint → the action that meets it, on the one device that fits."""
         if _NEED_LIGHT.search(text):
             said = Said("level", {"level": 100}, family="brightness")
+        elif (complained := complaint(text)) is not None:
+            said = complained  # "way too loud", "a bit dark", "too blue": a step the other way
         elif _TOO_BRIGHT.search(text):
             said = Said("level", {"change": -20}, family="brightness")
         elif _TOO_LOUD.search(text):
