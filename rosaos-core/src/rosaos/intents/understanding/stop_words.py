@@ -24,7 +24,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
-from rosaos.intents.understanding.compose.complaints import complaint
+from rosaos.intents.understanding.compose.complaints import complaint, idle
 from rosaos.intents.understanding.compose.references import References
 from rosaos.intents.understanding.compose.speech import asks, remark
 
@@ -227,7 +227,8 @@ def read_stop(text: str, refs: DeviceRefs) -> StopRequest | None:
     rest = [
         clause
         for index, (kind, clause, found) in enumerate(clauses)
-        if (kind == "other" and not _idle(clause, found)) or (kind == "name" and index > first)
+        # a reason beside the stop ("…, I need to concentrate") is no command of its own
+        if (kind == "other" and not (idle(clause) and not found)) or (kind == "name" and index > first)
     ]
     return StopRequest(tuple(dict.fromkeys(devices)), " and ".join(rest))
 
@@ -249,19 +250,6 @@ def _only_exclaimed(clauses: list[tuple[str, str, list[str]]]) -> bool:
     )
     return exclaimed and asked
 
-
-_SETTING = re.compile(
-    r"\b(?:lights?|lighting|lamps?|bright\w*|dark\w*|dim\w*|loud\w*|quiet\w*|volume|music|songs?|"
-    r"warm\w*|cold\w*|colou?rs?)\b"
-)
-
-
-def _idle(clause: str, found: list[str]) -> bool:
-    """Whether ``clause``, said beside a stop, is only why ("stop the music, I need to
-    concentrate", "halt the dog, it's time to work"): a remark, a need or a feeling that names no
-    device and no setting. It is dropped, never run as a command of its own (the need once
-    switched a lamp on). A remark about a setting ("the music is too loud") still asks for it."""
-    return remark(clause) and not found and complaint(clause) is None and not _SETTING.search(clause)
 
 
 def _strip_interjections(words: list[str]) -> list[str]:

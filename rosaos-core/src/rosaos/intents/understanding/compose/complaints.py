@@ -14,9 +14,11 @@ and dim") is an absolute level, not a step: the intensifier moves it towards the
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 
 from rosaos.intents.understanding.compose.actions import SIZES, Said
 from rosaos.intents.understanding.compose.quantities import Size
+from rosaos.intents.understanding.compose.speech import command_words, normalise, remark
 
 _SMALL = r"(?:a\s+(?:little\s+|tiny\s+)?bit(?:\s+too)?|a\s+little(?:\s+too)?|a\s+tad(?:\s+too)?|slightly(?:\s+too)?|kinda(?:\s+too)?|somewhat(?:\s+too)?)"
 _LARGE = r"(?:way\s+too|far\s+too|much\s+too|waa+y\s+too|super|insanely|ridiculously|crazy|really\s+really|so\s+so|too\s+too)"
@@ -86,7 +88,10 @@ said plainly ("make it dim") and with an intensifier ("really dim")."""
 _STRONG = r"(?:really|very|super|extra|real|ultra)"
 _GENTLE = r"(?:nice|fairly|quite|pretty)"
 _SETTING_VERB = re.compile(r"^(?:make|set|keep|get|have|turn|put|bring)\b")
-_VAGUE_LEVEL = re.compile(rf"\b(?P<adjective>{'|'.join(_LEVELS)})$")
+_VAGUE_LEVEL = re.compile(
+    rf"\b(?P<adjective>{'|'.join(_LEVELS)})"
+    r"(?P<place>\s+(?:in|on|at|over|by)\s+(?:here|there|(?:the|my|our)\s+[\w' ]+)|\s+here)?$"
+)
 
 
 def vague_level(clause: str) -> Said | None:
@@ -110,4 +115,33 @@ def vague_level(clause: str) -> Said | None:
         family = "brightness"
     rest = re.sub(rf"\b(?:{_STRONG}|{_GENTLE}|to|at|on)$", " ", _SETTING_VERB.sub(" ", before))
     rest = re.sub(r"\b(?:the\s+)?(?:volume|brightness|level|sound)\b", " ", rest)
-    return Said("level", {"level": round(high if strong else plain)}, " ".join(rest.split()), family)
+    place = re.sub(r"\b(?:in|on|at|over|by)?\s*(?:here|there)\b", " ", found.group("place") or "")
+    return Said("level", {"level": round(high if strong else plain)}, " ".join(f"{rest} {place}".split()), family)
+
+
+_SETTING = re.compile(
+    r"\b(?:lights?|lighting|lamps?|bright\w*|dark\w*|dim\w*|loud\w*|quiet\w*|volume|music|songs?|"
+    r"warm\w*|cold\w*|colou?rs?)\b"
+)
+
+
+def idle(clause: str) -> bool:
+    """Whether ``clause`` (normalised) only says why, said beside a command: a remark, a need or
+    a feeling that names no setting ("I need to concentrate", "it's time to study", "my phone is
+    ringing"). Beside a command it is dropped, never run as a command of its own (such a need once
+    switched a lamp on). Whether it names a device is the caller's to check; a remark about a
+    setting ("the music is too loud") still asks for something."""
+    return remark(clause) and complaint(clause) is None and not _SETTING.search(clause)
+
+
+def without_idle(text: str, names: Callable[[str], bool]) -> str:
+    """``text`` without the idle clauses said after its first (:func:`idle`, naming no device by
+    ``names``), cut at commas; ``text`` itself when none is."""
+    pieces = [piece for piece in re.split(r"\s*[,;]\s*", text) if piece.strip(" .!?")]
+    kept = [pieces[0], *(piece for piece in pieces[1:] if not _idle_piece(piece, names))] if pieces else []
+    return ", ".join(kept) if len(kept) < len(pieces) else text
+
+
+def _idle_piece(piece: str, names: Callable[[str], bool]) -> bool:
+    plain = command_words(normalise(piece))
+    return bool(plain) and idle(plain) and not names(plain)
