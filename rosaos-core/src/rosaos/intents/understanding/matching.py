@@ -38,8 +38,8 @@ from rosaos.intents.grammar.intents_file import IntentsFile
 from rosaos.intents.grammar.phrases import confirms, conjunctions, pronouns
 from rosaos.intents.grammar.vocabulary import ARTICLES, DeviceVocabulary
 from rosaos.intents.understanding.absent_kinds import AbsentKinds
-from rosaos.intents.understanding.compose.reader import Composer
 from rosaos.intents.understanding.compose.complaints import without_idle
+from rosaos.intents.understanding.compose.reader import Composer
 from rosaos.intents.understanding.compose.speech import normalise, remark, says_stop, wished
 from rosaos.intents.understanding.fuzzy import FuzzyMatcher
 from rosaos.intents.understanding.generalize import understand

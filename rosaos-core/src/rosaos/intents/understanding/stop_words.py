@@ -251,7 +251,6 @@ def _only_exclaimed(clauses: list[tuple[str, str, list[str]]]) -> bool:
     return exclaimed and asked
 
 
-
 def _strip_interjections(words: list[str]) -> list[str]:
     text = f" {' '.join(words)} "
     for phrase in sorted(INTERJECTIONS, key=len, reverse=True):

@@ -116,9 +116,15 @@ def vague_level(clause: str) -> Said | None:
     rest = re.sub(rf"\b(?:{_STRONG}|{_GENTLE}|to|at|on)$", " ", _SETTING_VERB.sub(" ", before))
     rest = re.sub(r"\b(?:the\s+)?(?:volume|brightness|level|sound)\b", " ", rest)
     place = re.sub(r"\b(?:in|on|at|over|by)?\s*(?:here|there)\b", " ", found.group("place") or "")
-    return Said("level", {"level": round(high if strong else plain)}, " ".join(f"{rest} {place}".split()), family)
+    return Said(
+        "level", {"level": round(high if strong else plain)}, " ".join(f"{rest} {place}".split()), family
+    )
 
 
+_OCCASION = re.compile(
+    r"^(?:it's\s+|its\s+)?(?:about\s+)?time\s+(?:to|for)\s+[\w'-]+$|^(?:bedtime|good\s+night)$"
+)
+""""time to focus", "bedtime": when, one word after "time to" ("time to turn the lamp on" asks)."""
 _SETTING = re.compile(
     r"\b(?:lights?|lighting|lamps?|bright\w*|dark\w*|dim\w*|loud\w*|quiet\w*|volume|music|songs?|"
     r"warm\w*|cold\w*|colou?rs?)\b"
@@ -131,7 +137,8 @@ def idle(clause: str) -> bool:
     ringing"). Beside a command it is dropped, never run as a command of its own (such a need once
     switched a lamp on). Whether it names a device is the caller's to check; a remark about a
     setting ("the music is too loud") still asks for something."""
-    return remark(clause) and complaint(clause) is None and not _SETTING.search(clause)
+    said = remark(clause) or _OCCASION.match(clause) is not None
+    return said and complaint(clause) is None and not _SETTING.search(clause)
 
 
 def without_idle(text: str, names: Callable[[str], bool]) -> str:

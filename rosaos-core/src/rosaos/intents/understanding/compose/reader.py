@@ -168,7 +168,7 @@ class Composer:
         return build_result(self.context, text, readings, focus is not None)
 
     def _clause(self, text: str) -> _Clause:
-        if remark(text):
+        if remark(text) or (complaint(text) is not None and vague_level(text) is None):
             # "the baby is napping", "I'm heading out": why, not what. Its words are neither an
             # action ("out") nor a device this world lacks ("baby").
             about = self.references.resolve(text)
