@@ -55,10 +55,25 @@ def home() -> IntentMatcher:
 
 
 @pytest.mark.parametrize(
-    "said", ["whoa!", "whoa, stop", "whoa whoa", "woah woah woah", "whoa, the dog is too close"]
+    "said",
+    [
+        "whoa!",
+        "whoa, stop",
+        "whoa whoa",
+        "woah woah woah",
+        "whoa there",
+        "whoa, too fast",
+        "whoa whoa, way too close",
+    ],
 )
-def test_whoa_alone_or_with_a_stop_or_a_remark_still_stops(refs: DeviceRefs, said: str) -> None:
-    assert read_stop(said, refs) is not None
+def test_whoa_alone_or_with_a_stop_or_a_reason_still_stops_and_does_nothing_else(
+    refs: DeviceRefs, said: str
+) -> None:
+    assert read_stop(said, refs) == StopRequest((), "")
+
+
+def test_whoa_with_a_remark_about_a_robot_stops(refs: DeviceRefs) -> None:
+    assert read_stop("whoa, the dog is too close", refs) is not None
 
 
 @pytest.mark.parametrize(

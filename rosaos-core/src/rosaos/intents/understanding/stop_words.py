@@ -147,6 +147,8 @@ FILLERS = frozenset(
         "ask",
         "let",
         "to",
+        "there",
+        "easy",
     ]
 )
 """Words that carry no command: ignored around a stop (also the causative frame: "make the dog
@@ -228,7 +230,7 @@ def read_stop(text: str, refs: DeviceRefs) -> StopRequest | None:
         clause
         for index, (kind, clause, found) in enumerate(clauses)
         # a reason beside the stop ("…, I need to concentrate") is no command of its own
-        if (kind == "other" and not (idle(clause) and not found)) or (kind == "name" and index > first)
+        if (kind == "other" and not (_why(clause) and not found)) or (kind == "name" and index > first)
     ]
     return StopRequest(tuple(dict.fromkeys(devices)), " and ".join(rest))
 
@@ -243,12 +245,24 @@ def _only_exclaimed(clauses: list[tuple[str, str, list[str]]]) -> bool:
     )
     asked = any(
         kind == "other"
-        and (not remark(clause) or complaint(clause) is not None)  # "whoa, that's way too loud"
+        # "whoa, that's way too loud" asks for a step; "whoa, too fast" is a stop with its reason
+        and (complaint(clause) is not None or not (remark(clause) or _TOO.match(clause)))
         and not asks(clause)
         and not _count_stops(clause)
         for kind, clause, _ in clauses
     )
     return exclaimed and asked
+
+
+_TOO = re.compile(
+    r"^(?:(?:that's|it's|this is|you're)\s+)?(?:(?:way|far|much|a bit|a little)\s+)?(?:too|so)\s+\w+$"
+)
+
+
+def _why(clause: str) -> bool:
+    """A clause beside a stop that only says why: a reason ("I need to concentrate", :func:`idle`)
+    or "too fast" (a complaint about no setting this engine changes)."""
+    return idle(clause) or (_TOO.match(clause) is not None and complaint(clause) is None)
 
 
 def _strip_interjections(words: list[str]) -> list[str]:

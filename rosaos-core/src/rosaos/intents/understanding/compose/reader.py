@@ -168,15 +168,16 @@ class Composer:
         return build_result(self.context, text, readings, focus is not None)
 
     def _clause(self, text: str) -> _Clause:
-        if remark(text) or (complaint(text) is not None and vague_level(text) is None):
+        said = None if remark(text) else read_action(text, self.colours, self.genres)
+        if said is None or (said.action == "level" and "change" in said.values):
+            said = vague_level(text) or said  # "really low", "nice and dim": a level, not a step
+        if remark(text) or (_settable(said) and complaint(text) is not None and vague_level(text) is None):
             # "the baby is napping", "I'm heading out": why, not what. Its words are neither an
-            # action ("out") nor a device this world lacks ("baby").
+            # action ("out") nor a device this world lacks ("baby"). "This light is too cold" is
+            # a complaint (a step the other way, :meth:`_need`), not a white to set.
             about = self.references.resolve(text)
             devices = () if about.unknown else about.devices
             return _Clause(text, None, Reference(), devices or self._felt(text))
-        said = read_action(text, self.colours, self.genres)
-        if said is None or (said.action == "level" and "change" in said.values):
-            said = vague_level(text) or said  # "really low", "nice and dim": a level, not a step
         if _OCCASION.match(text) and (
             said is None or not any(self._capability(d, said) for d in self.capabilities)
         ):
@@ -401,6 +402,12 @@ class Composer:
         if len(able) > 1:
             return self.context.clarify(text, 0, RANK_DRIVER, fitting or able)
         return None
+
+
+def _settable(said: Said | None) -> bool:
+    """Whether ``said`` is at most a setting a complaint's words could be misread as ("too
+    cold" as a cold white): a play or a motion in the same clause is what is asked."""
+    return said is None or said.action in ("level", "colour", "colour_temperature")
 
 
 def _commentary(clause: str) -> bool:
