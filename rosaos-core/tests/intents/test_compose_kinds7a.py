@@ -231,3 +231,15 @@ def test_very_quiet_is_a_low_level_and_it_is_very_quiet_a_step_up(lab: IntentMat
 def test_a_share_of_the_current_level_is_never_read_as_a_level(lab: IntentMatcher, said: str) -> None:
     result = lab.match(said)
     assert not result.is_exact, _calls(result)
+
+
+@pytest.mark.parametrize("said", ["it's too cold in here", "it's way too warm in here"])
+def test_a_room_too_cold_is_no_light_to_change(lab: IntentMatcher, said: str) -> None:
+    assert not lab.match(said).processes
+
+
+@pytest.mark.parametrize("said", ["the dog is too loud", "the dog is way too bright"])
+def test_a_complaint_about_a_device_that_has_no_such_setting_changes_nothing_else(
+    lab: IntentMatcher, said: str
+) -> None:
+    assert not lab.match(said).processes

@@ -50,6 +50,11 @@ _DIRECTIONS: dict[str, tuple[str, int]] = {
 }
 """Adjective → the property it is about, and which way a complaint of it asks to change it (a
 colour that is "too cold" asks for a warmer white: a lower colour temperature)."""
+_FELT = frozenset({"cold", "cool", "icy", "warm"})
+"""Words said of a room as much as of a light: a complaint of the light only when it names one."""
+_OF_LIGHT = re.compile(
+    r"\b(?:lights?|lamps?|bulbs?|lighting|colou?r|white|glow)\b|^(?:this|that)(?:'s|\s+(?:is|looks|seems))\b"
+)
 _ADJECTIVE = "|".join(sorted(_DIRECTIONS, key=len, reverse=True))
 _COMPLAINT = re.compile(
     rf"\b(?:(?P<small>{_SMALL})|(?P<large>{_LARGE})|(?P<normal>{_NORMAL}))\s+(?P<adjective>{_ADJECTIVE})\b"
@@ -70,6 +75,8 @@ def complaint(clause: str) -> Said | None:
         return None
     size: Size = "small" if found.group("small") else "large" if found.group("large") else "normal"
     family, direction = _DIRECTIONS[found.group("adjective")]
+    if found.group("adjective") in _FELT and not _OF_LIGHT.search(clause):
+        return None  # "it's too cold in here" is the room, not the light: no thermostat here
     if family == "colour_temperature":
         return Said("colour_temperature", {"kelvin_change": direction * SIZES["kelvin_change"][size]})
     return Said("level", {"change": direction * SIZES["change"][size]}, family=family)

@@ -394,6 +394,8 @@ class Composer:
         if focus is not None:
             able = [device for device in able if device in focus]
         fitting = [device for device in able if device in reference.devices] if reference.named else []
+        if reference.named and not reference.unknown and not fitting:
+            return None  # "the dog is too loud", "too bright in the kitchen" (only a speaker there)
         if len(fitting) == 1 or (not fitting and len(able) == 1):
             [device] = fitting or able
             capability = self._capability(device, said)
