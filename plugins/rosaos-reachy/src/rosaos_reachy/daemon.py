@@ -30,6 +30,7 @@ from typing import Literal
 import httpx
 
 from rosaos.drivers import DeviceError
+from rosaos_reachy.sim_daemon import SCENE, default_model_cache
 
 log = logging.getLogger(__name__)
 
@@ -60,13 +61,19 @@ def _die_with_parent() -> None:  # runs in the child between fork and exec
         ctypes.CDLL("libc.so.6", use_errno=True).prctl(_PR_SET_PDEATHSIG, signal.SIGTERM)
 
 
-def daemon_command(mode: SimMode, port: int) -> list[str]:
-    """The ``reachy-mini-daemon`` command line for ``mode`` on ``port``."""
+def daemon_command(mode: SimMode, port: int, model_cache: Path | None = None) -> list[str]:
+    """The ``reachy-mini-daemon`` command line for ``mode`` on ``port``.
+
+    With ``model_cache``, MuJoCo runs through :mod:`rosaos_reachy.sim_daemon`, which loads the
+    scene pre-compiled from there (the same model, 160 MiB lighter at idle).
+    """
     script = Path(sys.executable).with_name("reachy-mini-daemon")
     program = (
         [str(script)] if script.exists() else [shutil.which("reachy-mini-daemon") or "reachy-mini-daemon"]
     )
-    sim = ["--sim", "--headless"] if mode == "mujoco" else ["--mockup-sim"]
+    if mode == "mujoco" and model_cache is not None:
+        program = [sys.executable, "-m", "rosaos_reachy.sim_daemon", "--model-cache", str(model_cache), "--"]
+    sim = ["--sim", "--headless", "--scene", SCENE] if mode == "mujoco" else ["--mockup-sim"]
     return [
         *program,
         *sim,
@@ -100,9 +107,17 @@ class SimDaemon:
 
     @classmethod
     async def start(
-        cls, wanted: Literal["auto", "mujoco", "mockup"], log_dir: Path, timeout: float
+        cls,
+        wanted: Literal["auto", "mujoco", "mockup"],
+        log_dir: Path,
+        timeout: float,
+        model_cache: Path | None = None,
     ) -> SimDaemon:
-        """Start the daemon (MuJoCo first unless ``mockup`` is wanted) and wait until it runs."""
+        """Start the daemon (MuJoCo first unless ``mockup`` is wanted) and wait until it runs.
+
+        ``model_cache`` keeps the compiled MuJoCo scene between starts (default: the user's cache
+        directory, shared by every data directory: the file is 80 MB).
+        """
         reason = mujoco_available()
         if wanted == "mujoco" and reason:
             raise DeviceError(f"sim physics 'mujoco' cannot run: {reason}; or set sim physics = 'mockup'")
@@ -110,7 +125,7 @@ class SimDaemon:
         modes: list[SimMode] = auto if wanted == "auto" else [wanted]
         failures: list[str] = []
         for mode in modes:
-            daemon = cls._spawn(mode, log_dir)
+            daemon = cls._spawn(mode, log_dir, model_cache or default_model_cache())
             try:
                 await daemon._wait_running(timeout)
             except DeviceError as error:
@@ -124,14 +139,14 @@ class SimDaemon:
         raise DeviceError("the simulated Reachy Mini daemon did not start: " + " | ".join(failures))
 
     @classmethod
-    def _spawn(cls, mode: SimMode, log_dir: Path) -> SimDaemon:
+    def _spawn(cls, mode: SimMode, log_dir: Path, model_cache: Path) -> SimDaemon:
         log_dir.mkdir(parents=True, exist_ok=True)
         port = free_port()
         log_file = log_dir / f"daemon-{mode}.log"
         env = dict(os.environ, HF_HUB_OFFLINE="1", PYTHONUNBUFFERED="1")  # no hub downloads, ever
         with log_file.open("wb") as out:
             process = subprocess.Popen(
-                daemon_command(mode, port),
+                daemon_command(mode, port, model_cache),
                 stdin=subprocess.DEVNULL,
                 stdout=out,
                 stderr=subprocess.STDOUT,
