@@ -134,7 +134,9 @@ def chat(
         bool,
         typer.Option(
             "--wait",
-            help="With -m: wait for the reply and every process it starts; exit 0 only if all succeed.",
+            help="With -m: wait for the reply and every process it starts. Exit 0 if it was done or "
+            "answered; 1 if something failed or was refused; 4 if nothing was done because it was "
+            "not understood or waits for your answer (the reason is on stderr).",
         ),
     ] = False,
     timeout: Annotated[

@@ -19,14 +19,31 @@ from rich.console import Console
 
 from rosaos.cli.console import console as terminal
 from rosaos.config import ConfigError
+from rosaos.events.outcome import TurnOutcome, as_outcome
 from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
 
 POLL_SECONDS = 0.1
 
 EXIT_OK = 0
 EXIT_FAILED = 1
+"""Something asked for failed or was refused: a launch, a stop, a process, a device or value the
+world has not (the kernel's ``refused`` outcome)."""
 EXIT_UNAVAILABLE = 2
 EXIT_TIMEOUT = 3
+EXIT_NOT_DONE = 4
+"""Nothing was done because the kernel did not understand, or asked a question ("which one?",
+"Did you mean …?") that waits for the user's answer."""
+
+_WHY: dict[TurnOutcome, str] = {
+    "refused": "nothing was done: the reply says what this world lacks; name a device, value or "
+    "place it has (`rosaos devices list`)",
+    "not_understood": "nothing was done: the message was not understood; say it another way "
+    '(`rosaos chat -m "what can you do?"` gives examples)',
+    "needs_answer": "nothing was done yet: the reply asks a question; answer it with another "
+    "`rosaos chat -m …`, or send the whole command again more precisely",
+    "needs_confirmation": 'nothing was done yet: the reply asks "Did you mean …?"; answer with '
+    "`rosaos chat -m yes --wait` to run it, or send the command again as suggested",
+}
 
 _STYLE = {
     "kernel_reply": "bold green",
@@ -81,6 +98,8 @@ class Conversation:
     errors: list[str] = field(default_factory=list)
     refusals: list[str] = field(default_factory=list)
     """Kernel tool calls refused for this message (a launch on a held device): not done."""
+    outcomes: list[TurnOutcome] = field(default_factory=list)
+    """How each kernel turn of this conversation ended (the typed ``outcome`` of its reply)."""
     processes: dict[int, dict[str, Any]] = field(default_factory=dict)
     callback_events: dict[int, int] = field(default_factory=dict)
     """callback event id → process id"""
@@ -113,6 +132,8 @@ class Conversation:
             return False
         if kind == "notice" and data.get("refused"):
             self.refusals.append(update["text"])  # a refused launch, a stop not confirmed
+        if kind in ("kernel_reply", "notice") and (outcome := as_outcome(data.get("outcome"))) is not None:
+            self.outcomes.append(outcome)
         if kind == "process_launched" and "process_id" in data:
             process_id = int(data["process_id"])
             self.processes.setdefault(process_id, {})
@@ -129,14 +150,42 @@ class Conversation:
         self.callback_events[event_id] = process_id
 
     @property
+    def outcome(self) -> TurnOutcome:
+        """The first turn that did nothing decides (later turns answer callbacks); else ``done``."""
+        return next((outcome for outcome in self.outcomes if outcome != "done"), "done")
+
+    @property
     def succeeded(self) -> bool:
+        return self.exit_code == EXIT_OK
+
+    @property
+    def exit_code(self) -> int:
+        """``EXIT_FAILED`` if anything asked for failed or was refused, ``EXIT_NOT_DONE`` if
+        nothing was done for want of understanding or an answer, else ``EXIT_OK``."""
         statuses = [p.get("status") for p in self.processes.values()]
-        return not self.errors and not self.refusals and all(status == "ok" for status in statuses)
+        if self.errors or self.refusals or any(status != "ok" for status in statuses):
+            return EXIT_FAILED
+        if self.outcome == "refused":
+            return EXIT_FAILED
+        return EXIT_NOT_DONE if self.outcome != "done" else EXIT_OK
+
+    def reason(self) -> str | None:
+        """One line for stderr: why the exit code is not 0, and what would work; None if it is 0."""
+        failed = {pid: p["status"] for pid, p in self.processes.items() if p.get("status") != "ok"}
+        if self.errors:
+            return f"the kernel reported an error: {printable(self.errors[-1])}"
+        if self.refusals:
+            return f"{printable(self.refusals[0])} (`rosaos ps` lists what holds each device)"
+        if failed:
+            pid, status = next(iter(failed.items()))
+            return f"process {pid} ended {status}; `rosaos log --process {pid}` shows its tool calls"
+        return _WHY.get(self.outcome)
 
     def summary(self) -> dict[str, Any]:
         return {
             "event_id": self.event_id,
             "ok": self.succeeded,
+            "outcome": self.outcome,
             "replies": self.replies,
             "errors": self.errors,
             "refusals": self.refusals,
@@ -167,7 +216,7 @@ async def send_and_wait(
                 if line:
                     console.print(line, style=_STYLE.get(update["kind"]), markup=False, highlight=False)
         if was_settled and (len(conversation.processes), len(conversation.joined)) == known:
-            return (EXIT_OK if conversation.succeeded else EXIT_FAILED), conversation
+            return conversation.exit_code, conversation
         await asyncio.sleep(POLL_SECONDS)
     conversation.errors.append(f"gave up waiting after {timeout:g} s")
     return EXIT_TIMEOUT, conversation
@@ -198,8 +247,9 @@ async def one_shot(client: KernelClient, text: str, wait: bool, timeout: float, 
     code, conversation = await send_and_wait(client, text, timeout, console)
     if json_output:
         print(json.dumps(conversation.summary(), indent=2, default=str))
-    elif code == EXIT_TIMEOUT:
-        print(f"rosaos chat: {printable(conversation.errors[-1])}", file=sys.stderr)
+    reason = conversation.errors[-1] if code == EXIT_TIMEOUT else conversation.reason()
+    if reason is not None:
+        print(f"rosaos chat: {printable(reason)}", file=sys.stderr)
     return code
 
 

@@ -30,6 +30,7 @@ from rosaos.kernel.short_turns import LaunchAckModel, relayable, relayed_message
 from rosaos.kernel.updates import UpdateKind, UpdateStream
 from rosaos.models.kernel_model import LocalIntentModel
 from rosaos.models.tool_schemas import KERNEL_HIDDEN, CompactToolsModel
+from rosaos.models.turn_outcome import turn_outcome
 
 log = logging.getLogger(__name__)
 
@@ -158,7 +159,7 @@ class KernelLoop:
             report = relayable(events[0]) if self.relay_reports else None
             if report is not None:  # nothing to decide: the process's report is the reply
                 self._remember(relayed_messages(prompt, report))
-                return [("kernel_reply", report, {"relayed": True})]
+                return [("kernel_reply", report, {"relayed": True, "outcome": "done"})]
         for attempt in range(1, MODEL_RETRIES + 1):
             try:
                 if engine:  # no agent run needed, and the engine reads the typed event: see offline_turn
@@ -198,8 +199,12 @@ class KernelLoop:
                 continue
             break
         outputs = tool_activity(new_messages)
+        # How the turn ended for what was asked, typed: `rosaos chat --wait` exits on it.
+        outcome = turn_outcome(new_messages)
         if output.strip():
-            outputs.append(("kernel_reply", output, {}))
+            outputs.append(("kernel_reply", output, {"outcome": outcome}))
+        elif outcome != "done":  # a silent turn that did nothing still says so
+            outputs.append(("notice", f"nothing was done ({outcome})", {"outcome": outcome}))
         self._remember(new_messages)
         return outputs
 

@@ -65,6 +65,7 @@ from rosaos.models.conversation import (
     turn_event,
 )
 from rosaos.models.memory_turn import is_memory_sentence, memory_turn
+from rosaos.models.turn_outcome import marked, unmatched
 from rosaos.notices.notice_plan import SILENCE, notice_response
 from rosaos.timers.timer_turn import is_timer_sentence, timer_turn
 
@@ -215,15 +216,12 @@ class LocalIntentModel(Model):
         )
         if answered is None and previous:
             result = self._about_previous(text, result, previous)
-        if not result.is_exact:
-            return [TextPart(result.reply)]
+        if not result.is_exact:  # nothing runs: say why, typed, for `rosaos chat --wait`
+            return [marked(result.reply, unmatched(result))]
         launch = _launch_tool(tools)
         if launch is None:  # misconfigured agent: say so rather than pretend
-            return [
-                TextPart(
-                    phrase(self.language, "launch_refused", reason=f"no {LAUNCH_TOOL} tool is available")
-                )
-            ]
+            reason = f"no {LAUNCH_TOOL} tool is available"
+            return [marked(phrase(self.language, "launch_refused", reason=reason), "refused")]
         return [ToolCallPart(launch, process.launch_args) for process in result.processes]
 
     def _about_previous(self, text: str, result: MatchResult, previous: frozenset[str]) -> MatchResult:

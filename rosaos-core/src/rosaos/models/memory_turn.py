@@ -42,6 +42,7 @@ from rosaos.models.conversation import (
     tool_outcomes,
     turn_event,
 )
+from rosaos.models.turn_outcome import marked
 
 Match = Callable[[str], MatchResult]
 
@@ -83,7 +84,7 @@ def _calls(
 ) -> list[ModelResponsePart]:
     if isinstance(request, UnknownPlace):
         known = ", ".join(place.name for place in store.places())
-        return [TextPart(f"I don't know a place called {request.name}. I know: {known}.")]
+        return [marked(f"I don't know a place called {request.name}. I know: {known}.", "refused")]
     if isinstance(request, RememberPlace):
         args: dict[str, Any] = {"name": request.name}
         if request.x is not None:

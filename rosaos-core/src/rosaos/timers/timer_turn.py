@@ -31,6 +31,7 @@ from rosaos.models.conversation import (
     tool_outcomes,
     turn_event,
 )
+from rosaos.models.turn_outcome import marked, unmatched
 from rosaos.timers.timer_phrases import (
     CancelTimer,
     ListTimers,
@@ -99,15 +100,16 @@ def _set(request: SetTimer, said: str, tools: Sequence[str], match: Match) -> li
         return None
     if not request.action:
         return [
-            TextPart(
-                "What should the timer do? Say, for example, 'turn off the kitchen light in ten minutes'."
+            marked(
+                "What should the timer do? Say, for example, 'turn off the kitchen light in ten minutes'.",
+                "needs_answer",
             )
         ]
     understood = match(request.action)
     if understood.kind == "clarify":  # a bare answer would not carry the timer: ask for all of it
-        return [TextPart(f"{understood.reply} Please say the timer again with the name.")]
+        return [marked(f"{understood.reply} Please say the timer again with the name.", "needs_answer")]
     if not understood.is_exact:
-        return [TextPart(f"I can't set a timer for that: {understood.reply}")]
+        return [marked(f"I can't set a timer for that: {understood.reply}", unmatched(understood))]
     timing: dict[str, Any] = {"in_seconds": request.in_seconds} if request.in_seconds else {"at": request.at}
     return _call(tools, "set_timer", {"action": request.action, **timing})
 
