@@ -6,7 +6,6 @@ from collections.abc import Iterable, Mapping, Sequence
 
 from fastmcp import FastMCP
 from pydantic_ai import Agent
-from pydantic_ai.mcp import MCPToolset
 from pydantic_ai.messages import (
     ModelMessage,
     ModelRequest,
@@ -18,6 +17,7 @@ from pydantic_ai.messages import (
 from pydantic_ai.models import Model
 
 from rosaos.devices.endpoints import DeviceEndpoint
+from rosaos.kernel.in_process_tools import KernelToolset
 
 DEFAULT_KERNEL_PROMPT = """\
 You are the kernel of rosaOS, an operating system for robots and smart devices. Events come \
@@ -98,10 +98,7 @@ def build_kernel_agent(model: Model, tools: FastMCP) -> Agent[None, str]:
     Its instructions are given per run, because the device list they include changes as devices
     come and go.
     """
-    # "failed": a refused launch comes back as a failed tool result the model reads and acts on;
-    # "retry" would count refusals against a retry budget and end the run on the second one.
-    toolset = MCPToolset(tools, tool_error_behavior="failed")
-    return Agent(model, toolsets=[toolset], name="rosaos-kernel")
+    return Agent(model, toolsets=[KernelToolset(tools)], name="rosaos-kernel")
 
 
 def trim_history(

@@ -24,6 +24,7 @@ import asyncio
 import json
 import sqlite3
 import time
+from collections.abc import Mapping
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -178,13 +179,15 @@ class EventStore:
 
         The wake-up comes from :meth:`append` in this process. Another process writing to the same
         file (a tool, a test) is only seen at the next call: wrap it in ``asyncio.timeout`` to poll.
+        After a wake-up it returns without counting again: the append that woke it committed an
+        event, and the caller's next :meth:`next_pending` reads it (one database hop fewer between
+        a ``POST /chat`` and the kernel's turn; the count is only for a call with nothing to wake it).
         """
-        while True:
-            # Clear before looking, so an append between the look and the wait still wakes us.
-            self._appended.clear()
-            if await self.pending_count():
-                return
-            await self._appended.wait()
+        # Clear before looking, so an append between the look and the wait still wakes us.
+        self._appended.clear()
+        if await self.pending_count():
+            return
+        await self._appended.wait()
 
     async def next_process_id(self) -> int:
         """A process id never given before, not even before a restart."""
@@ -203,6 +206,27 @@ class EventStore:
         await self.database.execute(
             "INSERT OR IGNORE INTO process_ids (id, time) VALUES (?, ?)", (process_id, time.time())
         )
+
+    async def set_values(self, values: Mapping[str, Any], note_process_id: int | None = None) -> None:
+        """Store several JSON values (and note a process id, as :meth:`note_process_id`) in one commit.
+
+        All or none, and one database hop: a launch records its id, its process and its cause
+        before the worker has the job, and three commits in a row were a millisecond of that path.
+        """
+        rows = [(key, json.dumps(value)) for key, value in values.items()]
+
+        def write(connection: sqlite3.Connection) -> None:
+            if note_process_id is not None:
+                connection.execute(
+                    "INSERT OR IGNORE INTO process_ids (id, time) VALUES (?, ?)",
+                    (note_process_id, time.time()),
+                )
+            connection.executemany(
+                "INSERT INTO kv (key, value) VALUES (?, ?) ON CONFLICT (key) DO UPDATE SET value = excluded.value",
+                rows,
+            )
+
+        await self.database.run(write)
 
     async def get_value(self, key: str) -> Any:
         """The kernel's own small state: the JSON value stored under ``key``, or None."""

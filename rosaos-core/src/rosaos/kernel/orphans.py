@@ -71,7 +71,10 @@ class LiveProcesses:
         self._kept_causes: dict[str, Any] | None = None
 
     async def launched(self, info: ProcessInfo, cause: LaunchCause | None = None) -> None:
-        """Remember a process that is being launched, and what launched it: call before it starts."""
+        """Remember a process that is being launched, and what launched it: call before it starts.
+
+        Its id (never given again, also after a restart), the process and its cause are one commit.
+        """
         async with self._lock:
             live = await self._read()
             process = LiveProcess(
@@ -86,13 +89,14 @@ class LiveProcesses:
             )
             live[info.id] = process
             self._written[str(info.id)] = process.model_dump(mode="json")
+            values: dict[str, Any] = {LIVE_PROCESSES_KEY: self._written}
             if cause is not None:
                 causes = await self._causes()
                 causes[_cause_key(cause)] = info.id
                 while len(causes) > CAUSES_KEPT:
                     del causes[next(iter(causes))]
-                await self._store.set_value(LAUNCH_CAUSES_KEY, causes)
-            await self._write()
+                values[LAUNCH_CAUSES_KEY] = causes
+            await self._store.set_values(values, note_process_id=info.id)
 
     async def launched_for(self, cause: LaunchCause) -> int | None:
         """The process a launch with this cause started before, if the store remembers one."""

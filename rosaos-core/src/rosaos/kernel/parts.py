@@ -124,8 +124,7 @@ class LaunchRecords:
             await self._pending_stops.before_grant(info.devices)
         except StopUndelivered as owed:
             raise LaunchRefused(str(owed)) from None
-        await self._store.note_process_id(info.id)
-        await self._live.launched(info, cause)
+        await self._live.launched(info, cause)  # notes its id too, in the same commit
 
     async def before_uncaused(self, info: ProcessInfo) -> None:
         """A launch no event step caused (a card control, a memory tool): recorded all the same."""

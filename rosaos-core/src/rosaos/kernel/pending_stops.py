@@ -42,6 +42,9 @@ class PendingStops:
         self._directory = directory
         self._report = report
         self._lock = asyncio.Lock()
+        self._pending: dict[str, dict[str, str]] | None = None
+        """The store's value, read once: this kernel is its only writer, and every launch asks
+        (a read per launch was a database hop on the way from a command to its worker)."""
 
     async def note(self, outcomes: Iterable[SafeStopOutcome]) -> None:
         """Remember every outcome that failed; forget the devices whose stop got through."""
@@ -53,7 +56,7 @@ class PendingStops:
                 else:
                     pending.setdefault(outcome.instance, {"since": datetime.now(UTC).isoformat()})
                     pending[outcome.instance]["detail"] = outcome.detail
-            await self._store.set_value(PENDING_STOPS_KEY, pending)
+            await self._save(pending)
 
     async def names(self) -> list[str]:
         return sorted(await self._read())
@@ -78,7 +81,7 @@ class PendingStops:
                 text = f"{outcome.instance}: the safe_stop that could not be delivered ({since}) was retried and done"
                 log.warning("%s", text)
                 await self._report(text, {"device": outcome.instance, "pending_since": since})
-            await self._store.set_value(PENDING_STOPS_KEY, pending)
+            await self._save(pending)
             return still
 
     async def before_grant(self, names: Iterable[str]) -> None:
@@ -101,7 +104,18 @@ class PendingStops:
                 log.exception("retrying the pending safe_stops failed")
 
     async def _read(self) -> dict[str, dict[str, str]]:
-        stored = await self._store.get_value(PENDING_STOPS_KEY)
-        if not isinstance(stored, dict):
-            return {}
-        return {str(k): dict(v) for k, v in stored.items() if isinstance(v, dict)}
+        if self._pending is None:
+            stored = await self._store.get_value(PENDING_STOPS_KEY)
+            self._pending = (
+                {str(k): dict(v) for k, v in stored.items() if isinstance(v, dict)}
+                if isinstance(stored, dict)
+                else {}
+            )
+        return self._pending
+
+    async def _save(self, pending: dict[str, dict[str, str]]) -> None:
+        try:
+            await self._store.set_value(PENDING_STOPS_KEY, pending)
+        except BaseException:
+            self._pending = None  # not written: the next read takes the store's word again
+            raise

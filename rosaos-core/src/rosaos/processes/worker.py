@@ -47,6 +47,7 @@ from rosaos.processes.final_call import FINAL_CALL_MODEL, FinalCallModel
 from rosaos.processes.jobs import GrantedDevice, WorkerJob
 from rosaos.processes.keepalive import DeadlineToolset, DeviceLink, keepalives, owner_headers
 from rosaos.processes.lease_guard import LeaseGuardModel
+from rosaos.processes.listed_tools import ListedToolset
 from rosaos.processes.outcome import judge
 from rosaos.processes.plan_runner import run_plan
 from rosaos.processes.prompts import job_text, process_system_prompt, tool_prefix
@@ -311,7 +312,7 @@ async def _connect(device: GrantedDevice, images: int | None = None) -> MCPTools
     )
     # 'failed': a device error (bulb offline, value refused) goes back to the model as a failed
     # tool result it can read and report, instead of ending the whole run.
-    toolset: MCPToolset[Any] = MCPToolset(client, id=device.name, tool_error_behavior="failed")
+    toolset: MCPToolset[Any] = ListedToolset(client, id=device.name, tool_error_behavior="failed")
     try:
         await toolset.__aenter__()
     except Exception as failure:
