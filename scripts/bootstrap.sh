@@ -85,8 +85,16 @@ install_python_packages() {
   local plugin
   shopt -s nullglob
   for plugin in "$ROOT"/plugins/*/; do editables+=(-e "$plugin"); done
-  VIRTUAL_ENV="$VENV" "$VENV/bin/uv" pip install --quiet --python "$VENV/bin/python" \
-    -c "$ROOT/constraints.txt" "${editables[@]}" --group "$ROOT/pyproject.toml:dev"
+  local install=("$VENV/bin/uv" pip install --quiet --python "$VENV/bin/python"
+    -c "$ROOT/constraints.txt" "${editables[@]}" --group "$ROOT/pyproject.toml:dev")
+  # From uv's cache alone first: every package is pinned in constraints.txt, so on a machine that
+  # installed these pins before this is the same set, without asking the index about each one. An
+  # online install revalidates every file, and where the index answers "modified" (this CI
+  # machine's mirror does) uv builds PyGObject from source again: about 55 s, 10 s from the cache.
+  # Anything not cached yet (a fresh machine, a new pin) makes it fail, and the online install runs.
+  if ! VIRTUAL_ENV="$VENV" "${install[@]}" --offline 2>/dev/null; then
+    VIRTUAL_ENV="$VENV" "${install[@]}"
+  fi
   # Write .pyc files now (up-to-date ones are skipped). Where PYTHONDONTWRITEBYTECODE is set, every
   # worker and device host would otherwise recompile fastmcp and pydantic-ai: ~5 s a start, not ~1 s.
   say "compiling bytecode"

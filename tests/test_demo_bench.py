@@ -5,6 +5,10 @@ rosbridge simulator with a person in the world, Tapo, Spotify), on the offline e
 key. ``demo`` must find the person and turn the lamp green while the dog walks and the music
 plays; ``demo-empty`` must search to its limit, say nobody was found and leave the lamp alone.
 The latencies go to docs/bench.md from ``--repeat 3`` runs; here only pass or fail is judged.
+
+``demo-empty`` runs as written but for one setting of its turtlebot: ``search_seconds`` 30, not
+the default 120. Its search still ends by itself at its limit and says nobody was found; the
+90 s it no longer waits were most of CI's longest set-up.
 """
 
 from __future__ import annotations
@@ -21,6 +25,9 @@ import pytest
 DEMO = Path(__file__).resolve().parents[2] / "shared" / "bench" / "demo"
 
 pytestmark = pytest.mark.skipif(not DEMO.is_dir(), reason=f"{DEMO} is not next to this checkout")
+EMPTY_SEARCH_SECONDS = 30
+"""How long ``demo-empty``'s search looks (the turtlebot's ``search_seconds``): a full turn at the
+start and, on a machine that is not too busy, a move to the first search spot."""
 
 
 def rosaos_command() -> list[str]:
@@ -31,11 +38,13 @@ def rosaos_command() -> list[str]:
 @pytest.fixture(scope="module")
 def result(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     """Both files' reports, merged. The two run side by side, each with its own data directory:
-    ``demo-empty`` spends most of its two minutes searching an empty world in real time, so the
-    pair takes little longer than ``demo-empty`` alone."""
+    ``demo-empty`` spends most of its time searching an empty world in real time, so the pair
+    takes little longer than the longer of the two alone."""
     runs = []
     for path in sorted(DEMO.glob("*.yaml")):
         home = tmp_path_factory.mktemp(path.stem)
+        if path.stem == "demo-empty":
+            path = shorter_empty_search(path, home)
         env = {
             **{k: v for k, v in os.environ.items() if not k.startswith("ROSAOS_")},
             "ROSAOS_DATA_DIR": str(home / "data"),
@@ -58,6 +67,19 @@ def result(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
         report["files"] += json.loads(stdout)["files"]
         report["returncode"] = max(report["returncode"], run.returncode)
     return report
+
+
+def shorter_empty_search(path: Path, home: Path) -> Path:
+    """``path``'s task file, its turtlebot searching for :data:`EMPTY_SEARCH_SECONDS` (a ``sim`` key
+    that the ros driver's settings declare is a setting), written under ``home``."""
+    text = path.read_text(encoding="utf-8")
+    sim = "sim: {profile: turtlebot4, people: []}"  # edited as text: YAML 1.1 would dump `on:` as true
+    assert text.count(sim) == 1, f"{path} no longer has one turtlebot with nobody to find: {sim}"
+    copy = home / path.name
+    copy.write_text(
+        text.replace(sim, f"{sim[:-1]}, search_seconds: {EMPTY_SEARCH_SECONDS}}}"), encoding="utf-8"
+    )
+    return copy
 
 
 def trials(result: dict[str, Any], task_id: str) -> list[dict[str, Any]]:

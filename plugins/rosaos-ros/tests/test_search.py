@@ -60,6 +60,23 @@ async def test_search_with_nobody_ends_in_time_within_its_distance_and_the_limit
     assert world.linear == 0 and world.angular == 0
 
 
+@pytest.mark.slow  # the simulated robot turns in real time until its limit
+async def test_a_search_without_max_seconds_looks_as_long_as_the_robots_setting_says(
+    open_robot: Any,
+) -> None:
+    totals: list[float | None] = []
+
+    async def on_progress(progress: float, total: float | None, message: str | None) -> None:
+        totals.append(total)
+
+    async with open_robot(sim={"docked": False, "people": []}, search_seconds=5) as robot:
+        answer = await robot.client.call_tool("search", {}, progress_handler=on_progress)
+    result = answer.structured_content
+    assert result["found"] is False and "nobody found" in result["outcome"], result
+    assert totals and set(totals) == {5.0}, totals  # every report counts towards the setting's 5 s
+    assert RosSettings().search_seconds == 120  # unset, a search looks for two minutes
+
+
 def test_search_spots_are_rings_within_the_distance_limit() -> None:
     run = SearchRun(backend=None, max_seconds=60, max_distance=3.0, progress=None, alive=None)  # type: ignore[arg-type]
     run.start = (1.0, 2.0, 0.5)

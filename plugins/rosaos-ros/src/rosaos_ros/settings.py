@@ -76,6 +76,11 @@ class RosSettings(DeviceSettings):
         description="The camera's horizontal field of view in degrees, for where detect_people places a person "
         "(an OAK-D's colour camera: 69; the simulator's: 70).",
     )
+    search_seconds: Annotated[float, Field(ge=5, le=600)] = Field(
+        default=120.0,
+        description="How long search looks when its call names no max_seconds: a small flat is "
+        "searched sooner, a warehouse takes longer.",
+    )
     connect_timeout: Annotated[float, Field(gt=0, le=120)] = Field(
         default=5.0, description="Seconds to wait for rosbridge at start before giving up."
     )

@@ -29,8 +29,14 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
             str, Field(min_length=1, max_length=40, description="What to look for; only people for now.")
         ] = "person",
         max_seconds: Annotated[
-            float, Field(ge=5, le=600, description="Give up after this many seconds.")
-        ] = 120.0,
+            float | None,
+            Field(
+                ge=5,
+                le=600,
+                description="Give up after this many seconds; default: the robot's search_seconds "
+                "setting (120 unless set).",
+            ),
+        ] = None,
         max_distance_m: Annotated[
             float,
             Field(
@@ -50,14 +56,16 @@ def register(mcp: FastMCP, backend: RosBackend) -> None:
         if target.strip().lower() not in TARGETS:
             raise ValueError(f"search finds people only, not {target!r}; use target='person'")
 
+        limit = backend.settings.search_seconds if max_seconds is None else max_seconds
+
         async def progress(elapsed: float, message: str) -> None:
-            await ctx.report_progress(progress=round(elapsed, 1), total=max_seconds, message=message)
+            await ctx.report_progress(progress=round(elapsed, 1), total=limit, message=message)
 
         async def alive() -> bool:
             request = ctx.request_context.request if ctx.request_context else None
             is_disconnected = getattr(request, "is_disconnected", None)
             return not (is_disconnected is not None and await is_disconnected())
 
-        result = await backend.search(max_seconds, max_distance_m, progress, alive)
-        await ctx.report_progress(progress=max_seconds, total=max_seconds, message=result["outcome"])
+        result = await backend.search(limit, max_distance_m, progress, alive)
+        await ctx.report_progress(progress=limit, total=limit, message=result["outcome"])
         return result

@@ -41,6 +41,7 @@ from rosaos.intents.understanding.absent_kinds import AbsentKinds
 from rosaos.intents.understanding.compose.complaints import without_idle
 from rosaos.intents.understanding.compose.reader import Composer
 from rosaos.intents.understanding.compose.speech import normalise, remark, says_stop, wished
+from rosaos.intents.understanding.compose.spoken import tidy
 from rosaos.intents.understanding.fuzzy import FuzzyMatcher
 from rosaos.intents.understanding.generalize import understand
 from rosaos.intents.understanding.match_result import MatchResult, ProcessPlan, build_result, no_match
@@ -186,7 +187,7 @@ class IntentMatcher:
         reading comes first; everyday phrasings and close guesses after it
         (:func:`rosaos.intents.understanding.generalize.understand`).
         """
-        text = " ".join(text.split())
+        text = tidy(" ".join(text.split()))  # "turn the, um, the lamp off", "play X, volume 30"
         if not text:
             return no_match(self.context, text)
         absent = self._absent_kinds.refusal(text)

@@ -63,7 +63,9 @@ _MODAL_WHO = re.compile(
 _SLEEP = re.compile(
     r"\b(?:go(?:es)?\s+(?:back\s+)?to\s+(?:sleep|bed)|(?:take|have)\s+a\s+(?:little\s+)?(?:nap|rest|snooze)"
     r"|(?:doze|nod)\s+off|(?:time\s+(?:to|for)|you\s+can|you\s+may)\s+(?:go\s+)?(?:sleep|rest|nap|bed)"
-    r"|(?:put|send)\s+(?:[\w'-]+\s+){0,3}to\s+(?:sleep|bed)|(?:sleep|nap|snooze)\s+now)\b|^(?:sleep|nap|snooze)$"
+    r"|(?:put|send)\s+(?:[\w'-]+\s+){0,3}to\s+(?:sleep|bed)|(?:sleep|nap|snooze|rest)\s+now)\b|^(?:sleep|nap|snooze|rest)$"
+    r"|^(?:sleep\s+(?:well|tight)|sweet\s+dreams|get\s+some\s+(?:rest|sleep|shut-?eye)|bedtime|off\s+to\s+(?:bed|sleep)"
+    r"(?:\s+(?:you|with\s+you)(?:\s+go)?)?)$"
 )
 """Going to sleep, as a verb phrase: "go to sleep", "take a nap", "you can rest now" (a bare noun
 "sleep" is not an order: "I need sleep", "play sleep music")."""
@@ -144,6 +146,7 @@ _LOOK_FRONT = re.compile(
 _FACE_FRONT = re.compile(
     r"\b(?:face|turn|rotate|spin|swivel|point|twist)\w*\b(?:\s+\S+){0,4}?\s+(?:back\s+)?(?:to\s+|towards?\s+)?"
     r"(?:the\s+)?(?:front|forwards?|ahead|straight(?:\s+ahead)?|cent(?:er|re)|middle)\b"
+    r"(?!\s+(?!again\b|now\b|please\b|and\b|then\b|side\b|way\b|position\b)[a-z])"  # not "the front door"
     r"|\b(?:face|facing)\s+(?:forwards?|front|ahead|straight)\b"
 )
 """Back to where the robot faces when it starts: "face forward again", "turn your body back to the

@@ -22,7 +22,7 @@ _ACTIVITY_ROOMS: dict[str, str] = {
     **dict.fromkeys(["wash", "washing", "shower", "bathe", "bathing", "bath"], "bathroom"),
     **dict.fromkeys(["work", "working", "study", "studying"], "office"),
     **dict.fromkeys(["sit", "sitting", "relax", "relaxing", "lounge", "lounging", "family", "front"], "living"),
-    **dict.fromkeys(["play", "playing", "kid", "kids", "kid's", "kids'", "children", "children's", "child's"], "nursery"),
+    **dict.fromkeys(["play", "playing", "kid", "kids", "kid's", "kids'", "baby", "baby's", "babies", "children", "children's", "child's"], "nursery"),
     **dict.fromkeys(["park", "parking"], "garage"),
 }  # fmt: skip
 """An activity (or who uses the room) → the word descriptions use for that room."""

@@ -124,6 +124,13 @@ def spell_numbers(text: str) -> str:
     text = re.sub(
         r"\b(the|this|that|other|which|each|every|any|no) 1\b(?![.\d]|\s*(?:%|percent))", r"\1 one", text
     )
+    # "the kitchen one", "my bedroom one": a device said by its place, not a number
+    text = re.sub(
+        r"\b((?:the|this|that|my|our|your)\s+[a-z][a-z'-]*) 1\b(?=\s*(?:$|,|\b(?:and|then|in|by|on|off|over|"
+        r"next|near|beside|up|down|please)\b))",
+        r"\1 one",
+        text,
+    )
     text = re.sub(r"\b(\d+)\s+point\s+(\d+)\b", r"\1.\2", text, flags=re.I)
     # "2 and a half", "1 and 3 quarters"
     text = re.sub(

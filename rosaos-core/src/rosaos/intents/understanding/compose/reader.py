@@ -214,7 +214,18 @@ class Composer:
         index = 0
         while index < len(parsed):
             clause = parsed[index]
-            following = parsed[index + 1] if index + 1 < len(parsed) else None
+            after = index + 1
+            while (
+                clause.said is None
+                and clause.reference.named
+                and not clause.reference.unknown
+                and after + 1 < len(parsed)
+                and parsed[after].said is None
+                and not parsed[after].reference.named
+                and _commentary(parsed[after].text)
+            ):
+                after += 1  # "Reachy, we're done for today, go to sleep": a remark between
+            following = parsed[after] if after < len(parsed) else None
             if (
                 clause.said is None
                 and clause.reference.named
@@ -223,8 +234,9 @@ class Composer:
                 and not following.reference.named
             ):
                 merged.append(_Clause(f"{clause.text}, {following.text}", following.said, clause.reference))
-                index += 2
+                index = after + 1
                 continue
+            following = parsed[index + 1] if index + 1 < len(parsed) else None
             if (
                 clause.said is not None
                 and not clause.reference.named

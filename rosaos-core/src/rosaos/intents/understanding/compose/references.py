@@ -144,12 +144,18 @@ _SYNONYMS: tuple[frozenset[str], ...] = tuple(
         "office study", "bathroom washroom restroom loo", "ceiling overhead", "porch veranda",
         "garden yard backyard", "nursery kid kids children child playroom", "workbench bench", "dining diner", "den lounge",
         "entrance entry doorway", "speaker stereo", "dog puppy doggy doggo pup",
+        "bedside nightstand night-stand",
     )
 )  # fmt: skip
 """Words people use for the same thing ("the lamp by the couch" for a lamp next to the sofa)."""
 _KIN = {"lamp": "light", "bulb": "light", "lantern": "light"}
 """Nouns for the same kind of device, used only when a place or description word says which one."""
 MIN_PREFIX = 4
+_TAILS = ("side", "stand", "top", "well", "case", "way", "post", "board", "shelf", "light", "lamp")
+"""Second halves of compound words: "bed" is said for the bedside, "desk" for the desktop, "night"
+for the nightstand ("bedroom" is not one: a bed is in the bedroom, but "by the bed" is not every
+light there). A second half of five letters or more is said for the whole too ("chair" for the
+armchair)."""
 _REMEMBERED_WORDS = 4096
 
 
@@ -223,6 +229,14 @@ class References:
                 self._exact.setdefault(own, set()).add(known.name)
                 for end in range(MIN_PREFIX, len(own) + 1):
                     self._prefixes.setdefault(own[:end], set()).add(known.name)
+        self._compounds: dict[str, set[str]] = {}
+        for known in self._known:
+            for own in known.words:
+                for tail in _TAILS:
+                    if own.endswith(tail) and len(own) - len(tail) >= 3:
+                        self._compounds.setdefault(own[: -len(tail)].rstrip("-"), set()).add(known.name)
+                for start in range(3, len(own) - 4):  # "chair" for the armchair: its second half
+                    self._compounds.setdefault(own[start:], set()).add(known.name)
         self._said: dict[str, frozenset[str]] = {}
 
     def resolve(self, phrase: str) -> Reference:
@@ -316,7 +330,7 @@ class References:
             candidates = [known for known in candidates if scores[known.name] == best]
             # A place or description word said of a plural noun ("the bedroom lights") still
             # means every device it fits; without a noun, a place means what is there.
-            plural = plural or not heads
+            plural = plural or (not heads and "one" not in tokens)  # "the one by the bed": one
         return Reference(tuple(known.name for known in candidates), plural=plural, named=True, both=both)
 
     def _unknown_before(self, tokens: list[str], heads: list[int], others: list[tuple[int, str]]) -> bool:
@@ -370,7 +384,11 @@ class References:
         found = self._said.get(word)
         if found is None:
             said = singular(word)
-            names = set(self._exact.get(said, ()))
+            names = (
+                set(self._exact.get(said, ()))
+                | self._compounds.get(word, set())
+                | self._compounds.get(said, set())
+            )
             if len(said) >= MIN_PREFIX:
                 names |= self._prefixes.get(said, set())  # a known word that starts with it
                 for end in range(MIN_PREFIX, len(said)):  # a known word it starts with
