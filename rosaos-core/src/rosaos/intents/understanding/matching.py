@@ -38,8 +38,9 @@ from rosaos.intents.grammar.intents_file import IntentsFile
 from rosaos.intents.grammar.phrases import confirms, conjunctions, pronouns
 from rosaos.intents.grammar.vocabulary import ARTICLES, DeviceVocabulary
 from rosaos.intents.understanding.absent_kinds import AbsentKinds
+from rosaos.intents.understanding.compose.complaints import without_idle
 from rosaos.intents.understanding.compose.reader import Composer
-from rosaos.intents.understanding.compose.speech import normalise, remark, wished
+from rosaos.intents.understanding.compose.speech import normalise, remark, says_stop, wished
 from rosaos.intents.understanding.compose.spoken import tidy
 from rosaos.intents.understanding.fuzzy import FuzzyMatcher
 from rosaos.intents.understanding.generalize import understand
@@ -192,6 +193,8 @@ class IntentMatcher:
         absent = self._absent_kinds.refusal(text)
         if absent is not None:  # "the fan in the bedroom" with no fan: never the bedroom's lamp
             return MatchResult("no_match", text, reply=absent, refusal=True)
+        if says_stop(normalise(text)) and (kept := without_idle(text, self._names_device)) != text:
+            return self.match(kept, focus)  # "stop the music, I need to focus": only the stop
         wish = wished(text)
         if wish is not None:
             # A wish is read as its command; if that is not understood, the wish was about a
@@ -213,6 +216,10 @@ class IntentMatcher:
             self._template,
             self._compose_complete,
         )
+
+    def _names_device(self, text: str) -> bool:
+        reference = self._composer.references.resolve(text)
+        return reference.named and not reference.unknown
 
     def _compose(self, text: str, focus: Focus = None) -> MatchResult | None:
         return self._composer.read(text, focus, self._clause_reading)

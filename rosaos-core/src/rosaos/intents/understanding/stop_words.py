@@ -24,6 +24,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
+from rosaos.intents.understanding.compose.complaints import complaint, idle
 from rosaos.intents.understanding.compose.references import References
 from rosaos.intents.understanding.compose.speech import asks, remark
 
@@ -146,6 +147,8 @@ FILLERS = frozenset(
         "ask",
         "let",
         "to",
+        "there",
+        "easy",
     ]
 )
 """Words that carry no command: ignored around a stop (also the causative frame: "make the dog
@@ -225,8 +228,9 @@ def read_stop(text: str, refs: DeviceRefs) -> StopRequest | None:
     ]
     rest = [
         clause
-        for index, (kind, clause, _) in enumerate(clauses)
-        if kind == "other" or (kind == "name" and index > first)
+        for index, (kind, clause, found) in enumerate(clauses)
+        # a reason beside the stop ("…, I need to concentrate") is no command of its own
+        if (kind == "other" and not (_why(clause) and not found)) or (kind == "name" and index > first)
     ]
     return StopRequest(tuple(dict.fromkeys(devices)), " and ".join(rest))
 
@@ -240,10 +244,25 @@ def _only_exclaimed(clauses: list[tuple[str, str, list[str]]]) -> bool:
         for clause, found in stops
     )
     asked = any(
-        kind == "other" and not remark(clause) and not asks(clause) and not _count_stops(clause)
+        kind == "other"
+        # "whoa, that's way too loud" asks for a step; "whoa, too fast" is a stop with its reason
+        and (complaint(clause) is not None or not (remark(clause) or _TOO.match(clause)))
+        and not asks(clause)
+        and not _count_stops(clause)
         for kind, clause, _ in clauses
     )
     return exclaimed and asked
+
+
+_TOO = re.compile(
+    r"^(?:(?:that's|it's|this is|you're)\s+)?(?:(?:way|far|much|a bit|a little)\s+)?(?:too|so)\s+\w+$"
+)
+
+
+def _why(clause: str) -> bool:
+    """A clause beside a stop that only says why: a reason ("I need to concentrate", :func:`idle`)
+    or "too fast" (a complaint about no setting this engine changes)."""
+    return idle(clause) or (_TOO.match(clause) is not None and complaint(clause) is None)
 
 
 def _strip_interjections(words: list[str]) -> list[str]:

@@ -77,6 +77,18 @@ _RESUME = re.compile(
     r"|\bpick(?:\s+\w+){0,3}?\s+back\s+up\b|\bstart(?:\s+\w+){0,3}?\s+(?:again|back\s+up)\b"
     r"|\bkeep (?:it |the music )?going\b|\b(?:hit|press|push|tap) play\b"
 )
+_BACK_ON = re.compile(
+    r"\b(?:put|turn|switch|flick|get|have|bring|set)\b(?P<what>(?:\s+[\w']+){0,4}?)\s+back\s+on$"
+)
+"""On again, whatever the device: "put the music back on" resumes it, "turn the lamp back on"."""
+_BRING_BACK = re.compile(r"^(?:bring|get)\s+(?:back\s+(?P<before>.+)|(?P<after>.+?)\s+back)$")
+"""Music wanted back: "bring the music back", "bring back the tunes" (a player's resume; a robot
+brought back is a motion, and stays one)."""
+_LEARNER_SWITCH = re.compile(
+    r"^(?P<verb>open|close)\s+(?=(?:the|my|our|your|all|both|every|this|that|it|them)\b)"
+)
+"""A learner's "open the light" / "close the light" (on and off in many languages): the verb
+first, a device after it; "close to the stairs" or "come close" are no switch."""
 _REPLAY = re.compile(
     # "play it again", "play that song one more time", "start the song again": what is loaded,
     # again ("again" is a tag the speech layer has already peeled off).
@@ -185,6 +197,10 @@ _ON = re.compile(
     r"\b(?:turn|switch|put|power|flick|click|flip|get|leave)\s+on\b|\bon$|\bon\b(?!\s+(?:the|my|our|its|your|a|an|top|to)\b)"
     r"|\b(?:light up|power up|activate|enable|illuminate|fire up)\b"
 )
+_SHARE = re.compile(
+    r"\b(?:louder|quieter|brighter|dimmer|darker|softer|up|down|more|less|in|cut|halve\w*|double\w*)\b"
+)
+"""Words that make a fraction a share of the current level, not a level: "a third louder"."""
 _TOGGLE = re.compile(r"\b(?:toggle|flip)\b")
 
 SIZES: dict[str, dict[Size, float]] = {
@@ -242,6 +258,16 @@ def read_action(clause: str, colours: frozenset[str], genres: frozenset[str] = f
         return Said("repeat", rest=_cut(plain, _REPEAT, re.compile(r"\b(?:put|set|turn|on)\b")))
     if _PAUSE.search(plain):
         return Said("pause", rest=_cut(plain, _PAUSE, _PRESS))
+    back_on = _BACK_ON.search(plain)
+    if back_on:
+        return Said("switch_on", rest=back_on.group("what").strip())
+    brought = _BRING_BACK.match(plain)
+    if brought and re.search(r"\b(?:music|songs?|tunes?|tracks?|sound|audio|playlist|radio)\b", plain):
+        return Said("resume", rest=(brought.group("before") or brought.group("after")).strip())
+    learner = _LEARNER_SWITCH.match(plain)
+    if learner:
+        action = "switch_on" if learner.group("verb") == "open" else "switch_off"
+        return Said(action, rest=plain[learner.end() :].strip())
     if _RESUME.search(plain) or _REPLAY.match(clause):
         return Said("resume", rest=_cut(plain, _RESUME, _PRESS))
     spoken = _SAY.match(_MODAL_WHO.sub(r"have \g<who> ", clause))
@@ -415,6 +441,8 @@ def _light_or_sound(text: str, quantity: Quantity | None, size: Size, colours: f
         and quantity.unit in (None, "percent")
         and (_SET_WORD.search(f"{text} {quantity.text}") or quantity.is_fraction or family)
     ):
+        if quantity.is_fraction and _SHARE.search(text) and not re.search(r"\b(?:to|at|by)\b", text):
+            return None  # "a third louder", "cut it in half": a share of a level this reader cannot see
         value = quantity.value * 100 if quantity.is_fraction else quantity.value
         if re.search(r"\bby\b", text) and (_UP.search(text) or _DOWN.search(text)):
             change = -value if _DOWN.search(text) else value

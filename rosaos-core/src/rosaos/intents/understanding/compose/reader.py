@@ -29,6 +29,7 @@ from rosaos.events.plan import PlanStep
 from rosaos.intents.grammar.capabilities import Capabilities, Capability
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.understanding.compose.actions import Said, read_action, restate
+from rosaos.intents.understanding.compose.complaints import complaint, vague_level
 from rosaos.intents.understanding.compose.references import Reference, References
 from rosaos.intents.understanding.compose.scenes import Scene, read_scene
 from rosaos.intents.understanding.compose.speech import (
@@ -167,15 +168,20 @@ class Composer:
         return build_result(self.context, text, readings, focus is not None)
 
     def _clause(self, text: str) -> _Clause:
-        if remark(text):
+        said = None if remark(text) else read_action(text, self.colours, self.genres)
+        if said is None or (said.action == "level" and "change" in said.values):
+            said = vague_level(text) or said  # "really low", "nice and dim": a level, not a step
+        if remark(text) or (_settable(said) and complaint(text) is not None and vague_level(text) is None):
             # "the baby is napping", "I'm heading out": why, not what. Its words are neither an
-            # action ("out") nor a device this world lacks ("baby").
+            # action ("out") nor a device this world lacks ("baby"). "This light is too cold" is
+            # a complaint (a step the other way, :meth:`_need`), not a white to set.
             about = self.references.resolve(text)
             devices = () if about.unknown else about.devices
             return _Clause(text, None, Reference(), devices or self._felt(text))
-        said = read_action(text, self.colours, self.genres)
-        if said is None and _OCCASION.match(text):
-            return _Clause(text, None, Reference())  # "…, time to work": when, not what
+        if _OCCASION.match(text) and (
+            said is None or not any(self._capability(d, said) for d in self.capabilities)
+        ):
+            return _Clause(text, None, Reference())  # "…, time to work/sleep": when, not what
         reference = self.references.resolve(said.rest if said else text)
         return _Clause(text, said, reference)
 
@@ -385,6 +391,8 @@ class Composer:
         """A need or a complaint → the action that meets it, on the one device that fits."""
         if _NEED_LIGHT.search(text):
             said = Said("level", {"level": 100}, family="brightness")
+        elif (complained := complaint(text)) is not None:
+            said = complained  # "way too loud", "a bit dark", "too blue": a step the other way
         elif _TOO_BRIGHT.search(text):
             said = Said("level", {"change": -20}, family="brightness")
         elif _TOO_LOUD.search(text):
@@ -398,6 +406,8 @@ class Composer:
         if focus is not None:
             able = [device for device in able if device in focus]
         fitting = [device for device in able if device in reference.devices] if reference.named else []
+        if reference.named and not reference.unknown and not fitting:
+            return None  # "the dog is too loud", "too bright in the kitchen" (only a speaker there)
         if len(fitting) == 1 or (not fitting and len(able) == 1):
             [device] = fitting or able
             capability = self._capability(device, said)
@@ -406,6 +416,12 @@ class Composer:
         if len(able) > 1:
             return self.context.clarify(text, 0, RANK_DRIVER, fitting or able)
         return None
+
+
+def _settable(said: Said | None) -> bool:
+    """Whether ``said`` is at most a setting a complaint's words could be misread as ("too
+    cold" as a cold white): a play or a motion in the same clause is what is asked."""
+    return said is None or said.action in ("level", "colour", "colour_temperature")
 
 
 def _commentary(clause: str) -> bool:

@@ -178,6 +178,7 @@ def normalise(text: str) -> str:
     text = re.sub(r"[\"“”!?.]+(?=\s|$)", " ", text)
     text = re.sub(r"\s+", " ", text).strip()
     text = re.sub(r"\brise and shine\b", "wake up", text)  # an idiom: its "and" joins no two commands
+    text = re.sub(r"\bnice and (?=(?:bright|loud|dim|low|quiet|soft)\b)", "nice ", text)  # one level
     text = _HEDGE.sub(r"\1 \2", spell_numbers(text))
     text = _THERE.sub(r"\g<verb>\g<how> to your \g<side>", text)
     return name_places(_NOT_TOO.sub(_moderate, text))
