@@ -46,8 +46,9 @@ from rosaos.intents.grammar.vocabulary import sources_from_config
 from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.intents.understanding.matching import IntentMatcher
 from rosaos.intents.understanding.questions import read_question
+from rosaos.intents.understanding.small_talk import read_small_talk, small_talk_reply
 from rosaos.intents.understanding.stop_words import DeviceRefs
-from rosaos.models.kernel_actions import state_answer
+from rosaos.models.kernel_actions import help_text, state_answer
 from rosaos.models.process_model import LocalPlanModel
 from rosaos.plugins import DriverRegistry, load_drivers
 from rosaos.processes.jobs import GrantedDevice
@@ -168,9 +169,16 @@ def _kernel_answers(devices: dict[str, DeviceConfig], initial: dict[str, Any], t
     from the task's initial states, by the kernel's own words (``state_answer``). Empty when the
     states a task file sets do not say (a battery the simulator reports): the question's
     ``get_state`` plan is then run on the simulator instead."""
-    question = read_question(task.said, DeviceRefs(sources_from_config(devices, REGISTRY)))
-    if question is None or question.topic == "help" or task.expect:
+    vocabulary = sources_from_config(devices, REGISTRY)
+    refs = DeviceRefs(vocabulary)
+    question = read_question(task.said, refs)
+    if task.expect:
         return []
+    if question is None:  # small talk, answered in one line (``kernel_action_turn``'s rule)
+        chat = read_small_talk(task.said, lambda word: refs.resolve(word) is not None)
+        return [small_talk_reply(chat)] if chat is not None else []
+    if question.topic == "help":
+        return [help_text(vocabulary)]
     asked = question.devices or tuple(initial)
     return [
         answer for device in asked if (answer := state_answer(question, device, initial[device])) is not None

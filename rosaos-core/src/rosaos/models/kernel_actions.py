@@ -30,6 +30,7 @@ from rosaos.intents.grammar.state_words import battery, colour, doing, people_se
 from rosaos.intents.grammar.vocabulary import DeviceVocabulary
 from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.intents.understanding.questions import Question, read_question
+from rosaos.intents.understanding.small_talk import read_small_talk, small_talk_reply
 from rosaos.intents.understanding.stop_words import DeviceRefs, read_stop
 from rosaos.models.conversation import (
     ToolOutcome,
@@ -78,6 +79,9 @@ def kernel_action_turn(
     stop = read_stop(text, refs)
     question = None if stop is not None else read_question(text, refs)
     if stop is None and question is None:
+        chat = read_small_talk(text, lambda word: refs.resolve(word) is not None)
+        if chat is not None and not outcomes:  # "hi there, how's it going?": one line, nothing moves
+            return [TextPart(small_talk_reply(chat))]
         return _template_question(match(text), outcomes, state_tool)
     if outcomes:
         launched = [outcome for outcome in outcomes if outcome.call.tool_name == _tool(tools, LAUNCH_TOOL)]
@@ -134,7 +138,11 @@ def _template_question(
 
 def handles(text: str, refs: DeviceRefs) -> bool:
     """Whether :func:`kernel_action_turn` answers ``text`` itself (for prefer_local routing)."""
-    return read_stop(text, refs) is not None or read_question(text, refs) is not None
+    return (
+        read_stop(text, refs) is not None
+        or read_question(text, refs) is not None
+        or read_small_talk(text, lambda word: refs.resolve(word) is not None) is not None
+    )
 
 
 def _tool(tools: Sequence[str], name: str) -> str | None:

@@ -31,7 +31,7 @@ _KINDS: tuple[str, ...] = (
     "door", "garage door", "gate", "lock", "window", "skylight", "sprinkler", "irrigation",
     "lawnmower", "mower", "doorbell", "camera", "computer", "printer", "router", "plug",
     "socket", "outlet", "hair dryer", "pump", "fountain", "aquarium", "fish tank", "hot tub",
-    "sauna", "elevator",
+    "sauna", "elevator", "arm", "robot arm", "robotic arm", "drone", "quadcopter",
 )  # fmt: skip
 """Kinds of appliances a home or lab may have, singular (a plural "s" is read too). Not words
 that also name a quality or a time ("shade" of white, "alarm" for seven)."""

@@ -68,9 +68,11 @@ _FORMS: tuple[tuple[Topic, str], ...] = (
     ("playing", r"(?:who|what) (?:sings|plays|is singing|is playing) (?:this|that|it)(?: song| track)?"),
     ("is_playing", r"is (?:there )?(?:any )?(?:music|anything|something) (?:playing|on)" + _NOW),
     ("is_playing", rf"is {_REF} playing(?: anything| something| music)?{_NOW}"),
+    ("is_playing", r"is (?:the )?(?:music|song|playlist|track) (?:going|playing|on|running)" + _NOW),
+    ("is_playing", rf"is {_REF} (?:going|running|still going){_NOW}"),
     ("position", rf"(?:where is|where's|wheres|where are) {_REF}{_NOW}"),
     ("position", rf"(?:what is|what's|whats) {_REF}(?:'s)? (?:position|location)"),
-    ("position", rf"where (?:did|has) {_REF} (?:go|gone|get to|got to)"),
+    ("position", rf"where (?:did|has) {_REF} (?:go|gone|get to|got to|end up|ended up|wind up|wound up|land|landed|get|got)"),
     ("battery", rf"how much (?:battery|charge)(?: (?:does|has|is) {_REF}(?: have| got)?)?(?: left)?{_NOW}"),
     ("battery", rf"how (?:charged|full) is {_REF}{_NOW}"),
     ("battery", rf"(?:what's|whats|what is|how's|hows|how is) {_REF}(?:'s)? (?:battery|charge)(?: level)?"),
@@ -101,7 +103,7 @@ _FORMS: tuple[tuple[Topic, str], ...] = (
     ("volume", rf"how loud (?:is|are) {_REF}(?: set| playing| turned up)?(?: to| at)?"),
     ("volume", r"how loud (?:is|are) (?:it|this|that)(?: set| playing| turned up)?(?: to| at)?"),
     ("playing", r"(?:what|which|who)(?:'s| is| are)? .*\b(?:song|track|tune|music|playing|singing|artist|band|album|listening to|on the (?:radio|speaker|stereo))\b.*"),
-    ("help", r"what (?:can|could) (?:you|i) (?:do|say|ask|tell you to do)(?: here| for me| with you)?"),
+    ("help", r"(?:.+ )?what (?:kind of |kinds of |sort of |sorts of )?(?:things |stuff )?(?:can|could) (?:you|i) (?:do|say|ask|tell you to do)(?: here| for me| with you)?"),
     ("help", r"(?:help|what do you do|what are you able to do|what commands do you know)"),
 )  # fmt: skip
 FORMS: tuple[tuple[Topic, re.Pattern[str]], ...] = tuple(
@@ -130,8 +132,12 @@ def read_question(text: str, refs: DeviceRefs) -> Question | None:
     said = " ".join(_TIME_WORDS.sub(" ", said).replace(",", " ").split())
     # The discourse around a question ("hmm, …", "ok so …", "… then?") is the command reader's to strip.
     bare = command_words(said)
+    # "is the lamp on or did someone turn it off?": the first alternative is asked, the state answers both
+    first = said.split(" or ", 1)[0] if " or " in said else None
     for topic, form in FORMS:
         found = form.match(said) or (form.match(bare) if bare != said else None)
+        if found is None and first:
+            found = form.match(first)
         if found is None:
             continue
         ref = found.groupdict().get("ref")

@@ -131,6 +131,9 @@ _REMARK = re.compile(
     r"seems|sounds|smells|came|went|left|arrived|woke|fell|says|said|called|rang|knocked|is|are|was|were)\b"
     r"|(?:this|that|these|those)\s+(?:is|are|was|were)\b"
     r"|(?:thank you|thanks|much appreciated|appreciate it|cheers|love you|you're the best|good job|well done)\b"
+    # a remark to the robot addressed: "you look tired", "you've been good", "you were great today"
+    r"|you\s+(?:(?:look|seem|sound)\s+(?!(?:to|at|left|right|up|down|around|over|behind|for)\b)|were\b|did\s+(?:a\s+|so\s+)?(?:great|good|well|fine)\b)"
+    r"|you've\s+been\b"
     # a need before or after the command: "I need proper light for chopping", "I need to focus"
     r"|(?:i|we)\s+(?:really\s+|just\s+)?(?:need|want)\s+(?:to\s+(?!turn|switch|set|make|put|play|have|hear)\w+"
     r"|(?!(?:\w+\s+){0,3}(?:on|off)\b)(?:\w+\s+){1,3}(?:for|to)\b)"
@@ -253,7 +256,7 @@ def clauses(text: str) -> list[str]:
     """``text`` cut into clauses at commas, "and", "then"; each without its own discourse, and
     without the reason given for it ("…, because it's too bright": :func:`without_reason`)."""
     pieces = _SPLIT.split(without_reason(command_words(text)))
-    return [piece if _OCCASION.match(piece) else command_words(piece) for piece in pieces]
+    return [piece if _OCCASION.match(piece) or remark(piece) else command_words(piece) for piece in pieces]
 
 
 def without_reason(text: str) -> str:
