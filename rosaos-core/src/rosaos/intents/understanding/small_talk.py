@@ -70,7 +70,7 @@ def read_small_talk(text: str, is_name: Callable[[str], bool]) -> SmallTalk | No
     return kinds[0] if kinds else None
 
 
-def _part_kind(part: str, is_name: Callable[[str], bool]) -> SmallTalk | None | Literal[False]:
+def _part_kind(part: str, is_name: Callable[[str], bool]) -> SmallTalk | Literal[False] | None:
     """The kind of one part, said to whoever its names name ("thank you Reachy"); False: not small talk."""
     words = [word for word in part.split() if word not in _ADDRESS and not is_name(word)]
     for candidate in dict.fromkeys((part, " ".join(words))):
