@@ -127,3 +127,7 @@ def test_comparatives_read_as_the_comparative_meant() -> None:
     assert comparatives("too much loud, make more quiet") == "too loud, make quieter"
     assert comparatives("a little less bright") == "a little dimmer"
     assert comparatives("give me more light") == "give me more light"
+
+
+def test_rather_than_is_a_preference_not_a_correction() -> None:
+    assert corrected("set it to warm, rather than cool") == "set it to warm, rather than cool"

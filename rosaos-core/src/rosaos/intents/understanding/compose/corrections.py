@@ -20,7 +20,7 @@ _MARKER = (
     r"(?:no+\s+wait|no+|nope|wait|oh+|sorry|oops|i\s+mean|i\s+meant|actually|rather|or\s+rather"
     r"|make\s+that|scratch\s+that|u+h+|u+m+|e+r+m*)"
 )
-_REAL = r"(?:no+|nope|sorry|oops|i\s+mean|i\s+meant|actually|rather|make\s+that|scratch\s+that)"
+_REAL = r"(?:no+|nope|sorry|oops|i\s+mean|i\s+meant|actually|rather(?!\s+than)|make\s+that|scratch\s+that)"
 _CORRECTION = re.compile(
     rf"^(?P<first>.+?)(?:\s*[,;]|\s*\.\.\.|\s+-+|\s*!)\s*(?:{_MARKER}[\s,.!-]+)*{_REAL}\b[\s,.!-]*"
     rf"(?:{_MARKER}\b[\s,.!-]*)*(?P<fix>[\w'].*)$"
