@@ -25,7 +25,10 @@ def refs() -> DeviceRefs:
 @pytest.mark.parametrize(
     "said",
     ["stop", "Stop!", "halt", "freeze", "hold it", "stop everything", "whoa, whoa", "Oh man, stop it real quick",
-     "okay, enough", "please stop now", "don't move", "emergency stop", "STOP!!!", "stop moving"],
+     "okay, enough", "please stop now", "don't move", "emergency stop", "STOP!!!", "stop moving",
+     # a remark before the stop is no command it ends: the robot stops
+     "Okay, that's far enough, stop", "you've gone far enough, stop", "hmm, that's weird, stop",
+     "wow okay stop", "yikes, careful, stop"],
 )  # fmt: skip
 def test_a_bare_stop_said_any_way_stops_everything(said: str, refs: DeviceRefs) -> None:
     assert read_stop(said, refs) == StopRequest(())

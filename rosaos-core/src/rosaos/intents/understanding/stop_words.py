@@ -149,6 +149,16 @@ FILLERS = frozenset(
         "to",
         "there",
         "easy",
+        "wow",
+        "oops",
+        "whoops",
+        "yikes",
+        "ouch",
+        "careful",
+        "gosh",
+        "geez",
+        "ugh",
+        "eh",
     ]
 )
 """Words that carry no command: ignored around a stop (also the causative frame: "make the dog
@@ -218,7 +228,10 @@ def read_stop(text: str, refs: DeviceRefs) -> StopRequest | None:
     if _only_exclaimed(clauses):
         return None  # "whoa, the music is way too loud, turn it down": surprise, then a request
     first = next((index for index, (kind, _, _) in enumerate(clauses) if kind == "other"), len(clauses))
-    if any(kind == "stop" and not found for kind, _, found in clauses[first:]):
+    command = next(
+        (index for index, (kind, clause, _) in enumerate(clauses) if _commands(kind, clause)), None
+    )
+    if command is not None and any(kind == "stop" and not found for kind, _, found in clauses[command:]):
         return None  # "walk forward, then stop": the end of that command, not a stop of its own
     devices = [
         name
@@ -229,8 +242,10 @@ def read_stop(text: str, refs: DeviceRefs) -> StopRequest | None:
     rest = [
         clause
         for index, (kind, clause, found) in enumerate(clauses)
-        # a reason beside the stop ("…, I need to concentrate") is no command of its own
-        if (kind == "other" and not (_why(clause) and not found)) or (kind == "name" and index > first)
+        # a reason beside the stop ("…, I need to concentrate") is no command of its own, nor is
+        # a remark that says stop itself ("you've gone far enough, stop")
+        if (kind == "other" and not ((_why(clause) or _count_stops(clause)) and not found))
+        or (kind == "name" and index > first)
     ]
     return StopRequest(tuple(dict.fromkeys(devices)), " and ".join(rest))
 
@@ -257,6 +272,15 @@ def _only_exclaimed(clauses: list[tuple[str, str, list[str]]]) -> bool:
 _TOO = re.compile(
     r"^(?:(?:that's|it's|this is|you're)\s+)?(?:(?:way|far|much|a bit|a little)\s+)?(?:too|so)\s+\w+$"
 )
+
+
+def _commands(kind: str, clause: str) -> bool:
+    """Whether ``clause`` may be a command a later bare stop ends ("walk forward, then stop").
+
+    A remark or a reason is not ("okay, that's far enough, stop": the robot stops), nor a clause
+    that says stop itself ("you've gone far enough"): a bare stop after those is a stop of its own.
+    """
+    return kind == "other" and not remark(clause) and not idle(clause) and not _count_stops(clause)
 
 
 def _why(clause: str) -> bool:
