@@ -20,6 +20,8 @@ from __future__ import annotations
 
 import re
 
+from rosaos.intents.understanding.compose.corrections import comparatives, corrected
+
 _SPEECH_VERB = re.compile(
     r"\b(?:say|says|tell|announce|speak|repeat|shout|whisper|read\s+out)\b", re.IGNORECASE
 )
@@ -121,7 +123,7 @@ _SECOND_PERSON = [
 def tidy(text: str) -> str:
     """``text`` with hesitations dropped, a trailing volume made a step of its own, and reported
     speech said directly (see the module docstring). Unchanged when none of them is there."""
-    text = _reported(text)
+    text = _reported(comparatives(corrected(text)))  # "30, I mean 40"; "make more quiet"
     speech = _SPEECH_VERB.search(text)
     head, said = (text[: speech.end()], text[speech.end() :]) if speech else (text, "")
     head = _without_hesitations(head)
