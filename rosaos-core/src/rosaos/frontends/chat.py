@@ -19,7 +19,7 @@ from rich.console import Console
 
 from rosaos.cli.console import console as terminal
 from rosaos.config import ConfigError
-from rosaos.events.outcome import TurnOutcome, as_outcome
+from rosaos.events.reply_outcome import TurnOutcome, as_outcome
 from rosaos.kernel.api.kernel_client import KernelClient, KernelUnavailable
 
 POLL_SECONDS = 0.1

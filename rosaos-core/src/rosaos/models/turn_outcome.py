@@ -1,4 +1,4 @@
-"""The typed outcome of a kernel turn (:data:`rosaos.events.outcome.TurnOutcome`), from its messages.
+"""The typed outcome of a kernel turn (:data:`rosaos.events.reply_outcome.TurnOutcome`), from its messages.
 
 The offline engine knows why it launched nothing (not understood, refused, a question asked), so it
 marks its final text with it (:func:`marked`), in the part's ``provider_details`` under the
@@ -14,7 +14,7 @@ from collections.abc import Sequence
 
 from pydantic_ai.messages import ModelMessage, ModelResponse, TextPart
 
-from rosaos.events.outcome import TurnOutcome, as_outcome
+from rosaos.events.reply_outcome import TurnOutcome, as_outcome
 from rosaos.intents.understanding.match_result import MatchResult
 from rosaos.models.conversation import tool_outcomes
 
