@@ -27,6 +27,7 @@ from rosaos.devices.host_notices import HOST_BOARDS, with_host_notices
 from rosaos.devices.latch import add_latch
 from rosaos.devices.world import DeviceInstance
 from rosaos.drivers import SETS, DeviceBackend, DeviceError, no_safe_stop
+from rosaos.fastmcp_spans import spans_off
 from rosaos.notices.notice_board import NoticeBoard, notice_endpoint
 
 MCP_PATH = "/mcp"
@@ -50,6 +51,7 @@ async def open_device(instance: DeviceInstance, data_dir: Path) -> AsyncIterator
     Raises :class:`DeviceError` if the driver is a placeholder, the backend fails to start,
     or the instance is remote (it is served elsewhere).
     """
+    spans_off()  # every device server of this process: its spans go nowhere (rosaos/fastmcp_spans.py)
     spec = instance.spec
     if instance.is_remote:
         raise DeviceError(f"{instance.name} is remote ({instance.url}); it is served on its own host")

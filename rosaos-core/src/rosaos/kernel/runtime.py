@@ -30,6 +30,7 @@ from rosaos.devices.serve import bind_socket
 from rosaos.devices.world import World
 from rosaos.drivers import DeviceError
 from rosaos.events.plan import Plan
+from rosaos.fastmcp_spans import spans_off
 from rosaos.kernel.activity import ActivityLog
 from rosaos.kernel.api.app import create_app
 from rosaos.kernel.api.kernel_client import kernel_file, running_kernel_url
@@ -275,6 +276,7 @@ class Kernel:
         waits briefly for it (:class:`~rosaos.processes.manager.ProcessManager`)."""
         host = host or self.config.kernel.host
         port = self.config.kernel.port if port is None else port
+        spans_off()  # the kernel's in-process tool calls: no spans to build (rosaos/fastmcp_spans.py)
         self._token = load_or_create_token(self.data_dir)  # creates the data directory, owner-only
         sock = await _bind_or_explain(host, port, self._token)
         self.url = _base_url(sock)

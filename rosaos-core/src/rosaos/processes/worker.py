@@ -40,6 +40,7 @@ from pydantic_ai.usage import UsageLimits
 
 from rosaos.confirmations.confirming import ConfirmationDeclined, ConfirmingToolset, KernelAsker
 from rosaos.events.callback import ProcessStatus, WorkerCallback
+from rosaos.fastmcp_spans import spans_off
 from rosaos.models.process_model import LocalPlanModel
 from rosaos.models.select import ModelError, build_model
 from rosaos.models.tool_schemas import CompactToolsModel
@@ -455,6 +456,7 @@ def main() -> None:
         format=f"worker[{os.getpid()}] %(levelname)s %(name)s: %(message)s",
     )
     logging.getLogger("rosaos").setLevel(os.environ.get("ROSAOS_WORKER_LOG", "INFO").upper())
+    spans_off()  # FastMCP's per-request spans go nowhere here (rosaos/fastmcp_spans.py)
     protocol = ProtocolWriter()
     with contextlib.suppress(KeyboardInterrupt):
         asyncio.run(serve(protocol))
