@@ -4,8 +4,8 @@ FastMCP opens a span for every MCP request it serves or sends (``native`` mode, 
 building the span's attributes (method, server, session, auth) and attaching an OpenTelemetry
 context each time. rosaOS configures no OpenTelemetry SDK, so those spans go nowhere; on the
 offline command's path they were about a twentieth of a device host's Python calls per tool call
-(3,454 → 3,273 for the Tapo sim's ``turn_on``), and the kernel's in-process tool calls and the
-worker's device calls paid their share too (issue 26, part 8).
+(3,454 → 3,276 per ``turn_on`` or ``turn_off`` of the Tapo sim), and the kernel's in-process tool
+calls and the worker's device calls paid their share too (issue 26, part 8).
 
 :func:`spans_off` turns them off (``off``: FastMCP opens no span and propagates no trace context)
 where rosaOS starts FastMCP: the kernel, each worker, each device host. Someone who wires up an
