@@ -41,7 +41,7 @@ from rosaos.intents.understanding.stop_words import DeviceRefs, read_stop
 from rosaos.plugins import load_drivers
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from local_intent import world_devices  # noqa: E402
+from local_intent import world_devices
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_TASKS = [HERE.parents[1] / "shared" / "bench" / "tasks", HERE / "tasks", HERE / "tasks" / "fresh"]
@@ -99,7 +99,9 @@ def outcomes(paths: list[Path], language: str) -> Iterator[dict[str, Any]]:
                     "match_cached_same": cold == warm,
                     "stop": plain(read_stop(said, refs)),
                     "question": plain(read_question(said, refs)),
-                    "small_talk": plain(read_small_talk(said, lambda word: refs.resolve(word) is not None)),
+                    "small_talk": plain(
+                        read_small_talk(said, lambda word, refs=refs: refs.resolve(word) is not None)
+                    ),
                 }
 
 
