@@ -15,6 +15,11 @@ and their steps, reply, suggestion, refusal) and what the kernel's own readers m
     .venv/bin/python benchmarks/match_outcomes.py --out /tmp/after.jsonl
     diff /tmp/before.jsonl /tmp/after.jsonl   # must print nothing
 
+The script runs itself with ``PYTHONHASHSEED=0``: the fuzzy model's scores are float sums over
+word sets, whose order (and so the last bits of a sum, and which of two equal guesses wins) depends
+on the per-process hash seed, so one "Did you mean …?" suggestion could differ from run to run on
+the same code.
+
 Each sentence is matched twice, with the clause cache cleared before the first and kept for the
 second, and both are written: a cache must not change an outcome either.
 """
@@ -25,6 +30,7 @@ import argparse
 import dataclasses
 import enum
 import json
+import os
 import sys
 from collections.abc import Iterator
 from pathlib import Path
@@ -107,6 +113,8 @@ def outcomes(paths: list[Path], language: str) -> Iterator[dict[str, Any]]:
 
 def main() -> None:
     """Write the outcomes of every sentence as JSON lines."""
+    if os.environ.get("PYTHONHASHSEED") != "0":  # one set order for every run (module docstring)
+        os.execve(sys.executable, [sys.executable, *sys.argv], {**os.environ, "PYTHONHASHSEED": "0"})
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument(
         "--tasks", type=Path, action="append", help="task folder or file (repeatable; default: all three)"
