@@ -51,6 +51,7 @@ SLOW_TIERS = ("e2e", "browser", "slow")
 
 SPLIT: dict[str, int] = {
     "rosaos-core/tests/intents/test_bench_tasks.py::test_bench_task_runs_on_simulators": 4,
+    "rosaos-core/tests/intents/test_bench_tasks.py::test_bench_conversations_run_on_one_kernel_per_file": 4,
 }
 """Tests handed to the xdist workers in this many parts instead of with their module.
 
@@ -60,7 +61,8 @@ real time: 400 s in one module, which one worker ran alone while the other one r
 (and at the end of the run, as the module came after the e2e ones). In parts (every fourth
 parameter, so each part has robots, lamps and conversations) they go out first, and each worker's
 share of them runs beside the other's; a part costs its module's set-up again (the shared Reachy
-daemon, seconds)."""
+daemon, seconds). The conversation files (a kernel each, up to a minute) go out the same way, one
+file a part."""
 
 
 def _slow_modules_first(items: list[pytest.Item]) -> None:

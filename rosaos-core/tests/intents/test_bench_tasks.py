@@ -20,7 +20,8 @@ of home.yaml), or when it expects no change at all (ambiguous, unknown, question
 
 A task that is a conversation (several sentences: "the kitchen is at x 3.5, y 0", then "go to the
 kitchen") needs the kernel between its sentences (memory, processes), so it runs the way
-``rosaos bench`` runs it: on a real kernel over the simulators, and must pass.
+``rosaos bench`` runs it: the conversations of a file on one real kernel over the simulators, every
+simulator restarted from the task's state between tasks, and each must pass.
 """
 
 from __future__ import annotations
@@ -67,17 +68,36 @@ ROBOT_DRIVERS = {"ros", "reachy"}
 """Drivers whose simulators are physics run in real time (a drive, the Reachy daemon)."""
 
 
+TASK_FILES = [
+    load_task_file(path) for path in [*sorted(BENCH_TASKS.glob("*.yaml")), *sorted(OWN_TASKS.glob("*.yaml"))]
+]
+
+
+def _is_conversation(task: BenchTask) -> bool:
+    return len(task.utterances) > 1
+
+
 def _tasks(slow: tuple[pytest.MarkDecorator, ...] = ()) -> list[Any]:
-    """Every task as a test parameter; ``slow`` marks the conversations (they need a kernel) and
-    the tasks that move a robot (its simulator runs in real time): seconds each."""
+    """Every task of one sentence as a test parameter (conversations are run by file, in
+    :func:`test_bench_conversations_run_on_one_kernel_per_file`); ``slow`` marks the tasks that move
+    a robot (its simulator runs in real time): seconds each."""
     params = []
-    for path in [*sorted(BENCH_TASKS.glob("*.yaml")), *sorted(OWN_TASKS.glob("*.yaml"))]:
-        task_file = load_task_file(path)
+    for task_file in TASK_FILES:
         for task in task_file.tasks:
+            if _is_conversation(task):
+                continue
             robots = {task_file.world[device].driver for device in task.expect} & ROBOT_DRIVERS
-            marks = slow if len(task.utterances) > 1 or robots else ()
-            params.append(pytest.param(task_file, task, id=task.id, marks=marks))
+            params.append(pytest.param(task_file, task, id=task.id, marks=slow if robots else ()))
     return params
+
+
+def _conversation_files() -> list[Any]:
+    """Every task file that has conversations, as a test parameter (a kernel each: slow)."""
+    return [
+        pytest.param(task_file, id=task_file.path.stem, marks=pytest.mark.slow)
+        for task_file in TASK_FILES
+        if any(_is_conversation(task) for task in task_file.tasks)
+    ]
 
 
 def _covered(world: TaskFile, task: BenchTask, registry: DriverRegistry) -> str | None:
@@ -193,14 +213,26 @@ class _Quiet:
         pass
 
 
-async def _converse(world: TaskFile, task: BenchTask, tmp_path: Path) -> None:
-    """Run a conversation task on a kernel, as ``rosaos bench`` does; it must pass."""
-    if (reason := _covered(world, task, REGISTRY)) is not None:
-        pytest.skip(reason)
+async def _converse(world: TaskFile, tasks: list[BenchTask], tmp_path: Path) -> dict[str, str]:
+    """Run conversation tasks of one file on one kernel, as ``rosaos bench`` runs a file (each
+    from a clean start: conversation forgotten, every simulator restarted from the task's state);
+    why each one that did not pass failed, by task id."""
     config = RosaosConfig(data_dir=tmp_path / "data")
-    result = await run_file(TaskSelection(world, [task]), config, REGISTRY, 1, _Quiet())
-    [trial] = result.tasks[0].trials
-    assert trial.status == "pass", f"{task.said!r}: {trial.reason}; replies: {trial.replies}"
+    result = await run_file(TaskSelection(world, tasks), config, REGISTRY, 1, _Quiet())
+    assert [task.id for task in result.tasks] == [task.id for task in tasks]
+    failures = {}
+    for task, outcome in zip(tasks, result.tasks, strict=True):
+        if outcome.pending is not None:
+            failures[task.id] = f"{task.said!r}: pending: {outcome.pending}"
+        elif [trial.status for trial in outcome.trials] != ["pass"]:
+            failures[task.id] = (
+                "; ".join(
+                    f"{task.said!r}: {trial.status}: {trial.reason}; replies: {trial.replies}"
+                    for trial in outcome.trials
+                )
+                or f"{task.said!r}: no trial ran"
+            )
+    return failures
 
 
 @pytest.fixture(scope="module")
@@ -212,8 +244,6 @@ def shared_reachy(tmp_path_factory: pytest.TempPathFactory) -> Iterator[None]:
 
 @pytest.mark.parametrize(("world", "task"), _tasks())
 def test_bench_sentence_plans_the_expected_devices(world: TaskFile, task: BenchTask) -> None:
-    if len(task.utterances) > 1:
-        pytest.skip("a conversation: test_bench_task_runs_on_simulators runs it on a kernel")
     _match(world, task)
 
 
@@ -223,9 +253,6 @@ async def test_bench_task_runs_on_simulators(
 ) -> None:
     if task.id in TASK_FILE_ISSUES:
         pytest.xfail(TASK_FILE_ISSUES[task.id])
-    if len(task.utterances) > 1:
-        await _converse(world, task, tmp_path)
-        return
     result, devices, initial = _match(world, task)
     reachies = [devices[d] for p in result.processes for d in p.devices if devices[d].driver == "reachy"]
     if reachies and all(starts_awake(config.sim) for config in reachies):
@@ -239,3 +266,20 @@ async def test_bench_task_runs_on_simulators(
         assert not problems, f"{task.said!r} on {device}: {[str(p) for p in problems]}"
     if task.reply is not None:
         assert reply_matches(task.reply, replies), f"no reply matches {task.reply!r}: {replies}"
+
+
+@pytest.mark.parametrize("world", _conversation_files())
+async def test_bench_conversations_run_on_one_kernel_per_file(world: TaskFile, tmp_path: Path) -> None:
+    """Each conversation of the file passes on the file's kernel (a kernel per file, not per task:
+    a start is seconds; ``rosaos bench`` shares one the same way)."""
+    conversations = [
+        task for task in world.tasks if _is_conversation(task) and task.id not in TASK_FILE_ISSUES
+    ]
+    uncovered = {task.id: reason for task in conversations if (reason := _covered(world, task, REGISTRY))}
+    held = [task for task in conversations if task.id not in uncovered]
+    if not held:
+        pytest.skip(f"no conversation of {world.name} can be held to the offline engine yet: {uncovered}")
+    failures = await _converse(world, held, tmp_path)
+    assert not failures, f"{len(failures)} of {len(held)} conversations failed:\n" + "\n".join(
+        f"{task_id}: {why}" for task_id, why in failures.items()
+    )

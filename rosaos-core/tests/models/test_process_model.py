@@ -12,7 +12,7 @@ from pydantic_ai.messages import ToolCallPart
 from pydantic_ai.toolsets import AbstractToolset
 
 from rosaos.events.plan import Plan, PlanAnswer, PlanStep
-from rosaos.models.process_model import NO_PLAN_REPLY, LocalPlanModel, resolve_tool
+from rosaos.models.process_model import NO_PLAN_REPLY, LocalPlanModel, plan_reply, resolve_tool
 from rosaos.processes.jobs import GrantedDevice
 from rosaos.processes.prompts import DEFAULT_PROCESS_PROMPT, process_system_prompt
 
@@ -232,3 +232,28 @@ async def test_the_devices_are_read_from_instructions_too() -> None:
     result = await Agent(LocalPlanModel(plan=plan), instructions=prompt, toolsets=toolsets).run("Go.")
     assert (lamp["on"], result.output) == (True, "Done: on: true.")
     assert "last_spoken" not in reachy
+
+
+def test_a_command_whose_device_says_what_it_did_is_answered_with_those_words() -> None:
+    """ "Done: next song." says what was asked; the device's ``message`` says what happened."""
+    plan = Plan(steps=[PlanStep(device="speaker", tool="next_track")], reply="Done: next song.", failure="-")
+    said = {"message": "Playing Blue in Green by Miles Davis", "state": {"is_playing": True}}
+    assert plan_reply(plan, [said]) == "Done: next song. Playing Blue in Green by Miles Davis."
+    # Its JSON text, as some MCP servers return it, reads the same; the same words once.
+    volume = '{"message": "Volume 40% → 55%.", "state": {"volume": 55}}'
+    assert plan_reply(plan, [volume, volume]) == "Done: next song. Volume 40% → 55%."
+
+
+@pytest.mark.parametrize(
+    "result",
+    [{"on": True}, "ok", {"message": ""}, {"message": 7}, {"message": "x" * 500}],
+)
+def test_a_result_without_short_words_of_its_own_leaves_the_plain_reply(result: Any) -> None:
+    plan = Plan(steps=[PlanStep(device="lamp", tool="turn_on")], reply="Done: turn it on.", failure="-")
+    assert plan_reply(plan, [result]) == "Done: turn it on."
+
+
+def test_an_answer_to_a_question_is_not_padded_with_the_devices_words() -> None:
+    answer = PlanAnswer(when={"is_playing": True}, yes="Yes, it plays.", no="No, it is quiet.")
+    plan = Plan(steps=[PlanStep(device="speaker", tool="get_state")], reply="-", failure="-", answer=answer)
+    assert plan_reply(plan, [{"is_playing": True, "message": "Playing So What."}]) == "Yes, it plays."

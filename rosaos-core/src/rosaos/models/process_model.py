@@ -124,7 +124,7 @@ class LocalPlanModel(Model):
             reply = plan.failure.replace("{error}", content_text(failed.content))
         else:
             results = [outcome.content for outcome in outcomes[: len(plan.steps)]]
-            reply = unmet_output(plan, results) or final_reply(plan, results[-1])
+            reply = plan_reply(plan, results)
         return [TextPart(reply)]
 
 
@@ -134,6 +134,33 @@ def _progress(plan: Plan, outcomes: list[ToolOutcome]) -> tuple[int, ToolOutcome
         if not outcome.ok:
             return index, outcome
     return min(len(outcomes), len(plan.steps)), None
+
+
+DEVICE_WORDS_MAX = 120
+"""Longest ``message`` of a tool result that a reply repeats (a search's hit list is not one)."""
+
+
+def plan_reply(plan: Plan, results: Sequence[Any]) -> str:
+    """The reply after every step of ``plan`` returned ``results``.
+
+    A command's plain "Done: next song." says what was asked, not what happened. Where a device
+    says what it did in its result's ``message`` ("Playing Take Five by ….", "Volume 40% → 55%."),
+    the reply adds those words: a relative change or a skip is answered with its outcome.
+    """
+    reply = unmet_output(plan, results) or final_reply(plan, results[-1])
+    if reply != plan.reply:  # an answer, a filled state, a follow-up not met: already the outcome
+        return reply
+    said = [words for result in results if (words := _device_words(result)) is not None]
+    return " ".join([reply, *dict.fromkeys(said)])
+
+
+def _device_words(result: Any) -> str | None:
+    value = result_data(result)
+    words = value.get("message") if isinstance(value, dict) else None
+    if not isinstance(words, str) or not words.strip() or len(words) > DEVICE_WORDS_MAX:
+        return None
+    words = words.strip()
+    return words if words[-1] in ".!?" else f"{words}."
 
 
 def final_reply(plan: Plan, result: Any) -> str:

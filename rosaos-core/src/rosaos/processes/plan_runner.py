@@ -23,9 +23,8 @@ from pydantic_ai.usage import RunUsage
 from rosaos.confirmations.confirming import ConfirmationDeclined
 from rosaos.events.plan import Plan
 from rosaos.intents.grammar.phrases import phrase
-from rosaos.intents.planning.follow_ups import unmet_output
 from rosaos.models.conversation import content_text
-from rosaos.models.process_model import clamp_arguments, final_reply, resolve_tool
+from rosaos.models.process_model import clamp_arguments, plan_reply, resolve_tool
 
 
 async def run_plan(plan: Plan, toolsets: Sequence[AbstractToolset[Any]], model: Model, language: str) -> str:
@@ -58,4 +57,4 @@ async def run_plan(plan: Plan, toolsets: Sequence[AbstractToolset[Any]], model: 
         results.append(result)
     if not results:
         return plan.reply
-    return unmet_output(plan, results) or final_reply(plan, results[-1])
+    return plan_reply(plan, results)
