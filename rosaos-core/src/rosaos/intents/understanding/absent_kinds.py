@@ -96,10 +96,13 @@ class AbsentKinds:
         return None
 
     def _target_kind(self, words: list[str]) -> str | None:
+        present = set(words)  # a kind whose noun is not said cannot occur: skip its scan
         for kind in self._kinds:
             parts = kind.split()
             for plural in (False, True):
                 said = [*parts[:-1], parts[-1] + ("s" if plural else "")]
+                if said[-1] not in present:
+                    continue
                 for start in _occurrences(words, said):
                     end = start + len(said)
                     if end < len(words) and (words[end] in _BE or words[end] == "of"):

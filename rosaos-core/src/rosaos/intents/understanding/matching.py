@@ -461,7 +461,13 @@ class IntentMatcher:
 
         One device fits: its reading. Several: "which one?". None: None. A pronoun with nothing
         before it to refer to ("turn it off") is read the same way.
+
+        A clause that names a device (by name, kind or place) has not left it out: the literal
+        paths before this one read it. Skipping it saves a recognition per candidate position
+        and driver (most of the time a sentence no template matches took).
         """
+        if self.context.named_in(clause)[0]:
+            return None
         fits: list[str] = []
         unfit: set[str] = set()
         for device in self.devices:
