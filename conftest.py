@@ -56,8 +56,8 @@ SPLIT: dict[str, int] = {
 """Tests handed to the xdist workers in this many parts instead of with their module.
 
 ``--dist loadscope`` gives a whole module to one worker, so that its module-scoped set-up runs once.
-The bench tasks on simulators are 89 parameters of 2-20 s each, mostly a robot simulator moving in
-real time: 400 s in one module, which one worker ran alone while the other one ran everything else
+The bench tasks on simulators were 89 parameters of 2-20 s each (now over 100 robot tasks among
+440), mostly a robot simulator moving in real time: 400 s in one module, which one worker ran alone while the other one ran everything else
 (and at the end of the run, as the module came after the e2e ones). In parts (every fourth
 parameter, so each part has robots, lamps and conversations) they go out first, and each worker's
 share of them runs beside the other's; a part costs its module's set-up again (the shared Reachy

@@ -26,7 +26,6 @@ from __future__ import annotations
 import itertools
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
 from functools import cache
 
 from hassil import Intents, recognize_all
@@ -34,16 +33,17 @@ from hassil.intents import SlotList, TextSlotList
 from hassil.recognize import RecognizeResult
 
 from rosaos.intents.grammar.ha_intents import NO_AREA, load_ha_intents
-from rosaos.intents.grammar.intents_file import IntentsFile
-from rosaos.intents.grammar.phrases import confirms, conjunctions, pronouns
+from rosaos.intents.grammar.phrases import confirms, conjunctions
 from rosaos.intents.grammar.vocabulary import ARTICLES, DeviceVocabulary
 from rosaos.intents.understanding.absent_kinds import AbsentKinds
 from rosaos.intents.understanding.compose.complaints import without_idle
 from rosaos.intents.understanding.compose.reader import Composer
-from rosaos.intents.understanding.compose.speech import normalise, remark, says_stop, wished
+from rosaos.intents.understanding.compose.speech import normalise, says_stop, wished
 from rosaos.intents.understanding.compose.spoken import tidy
+from rosaos.intents.understanding.driver_grammars import driver_intents
 from rosaos.intents.understanding.fuzzy import FuzzyMatcher
 from rosaos.intents.understanding.generalize import understand
+from rosaos.intents.understanding.left_out import LeftOutDevices
 from rosaos.intents.understanding.match_result import MatchResult, ProcessPlan, build_result, no_match
 from rosaos.intents.understanding.ranges import refuse_bad_number
 from rosaos.intents.understanding.readings import (
@@ -55,6 +55,7 @@ from rosaos.intents.understanding.readings import (
     ha_reading,
 )
 from rosaos.intents.understanding.unknown_names import Grammar, UnknownNames
+from rosaos.intents.understanding.wildcard_checks import gives_reason, says_nothing
 
 __all__ = ["IntentMatcher", "MatchResult", "ProcessPlan"]
 
@@ -62,40 +63,17 @@ MAX_RESULTS_PER_SOURCE = 16
 """hassil can yield many equivalent parses; the first ones are the most literal."""
 MAX_PIECES = 6
 """Sentences cut into more pieces than this are not split (each split costs recognitions)."""
-MAX_ELIDED_POSITION = 3
-"""A left-out device name is tried after each of a clause's first words, up to this many: the
-verb, and a particle ("turn off", "set to"); templates name the device right there."""
 CACHE_SIZE = 512
 
 
-@dataclass(frozen=True)
-class _DriverIntents:
-    driver: str
-    file: IntentsFile
-    intents: Intents
-    devices: list[str]
-    device_list: TextSlotList
-    area_list: TextSlotList
-
-    @property
-    def device_list_names(self) -> list[str]:
-        """The spoken names ``{device}`` takes for this driver."""
-        return [str(value.value_out) for value in self.device_list.values]
-
-    @property
-    def lists(self) -> dict[str, SlotList]:
-        """The slot lists the engine fills for this driver's templates."""
-        return {"device": self.device_list, "area": self.area_list}
-
-
-class IntentMatcher:
+class IntentMatcher(LeftOutDevices):
     """Matches sentences against the intents of one world's devices, in one language."""
 
     def __init__(self, devices: Sequence[DeviceVocabulary], language: str = "en") -> None:
         self.language = language
         self.devices = {device.name: device for device in devices}
         self.context = ReadingContext(self.devices, language)
-        self._drivers = self._driver_intents()
+        self._drivers = driver_intents(self.devices, self.language)
         mapped = {name for mapping in self.context.mappings.values() for name in mapping.intents}
         domains = {mapping.domain for mapping in self.context.mappings.values()}
         targets = {"name"} | ({"area"} if self.context.areas else set())
@@ -133,27 +111,6 @@ class IntentMatcher:
         self._unknown_names = UnknownNames(self.context, grammars, self._recognize)
         self._composer = Composer(self.context, devices, language)
         self._absent_kinds = AbsentKinds(self.context)
-
-    def _driver_intents(self) -> list[_DriverIntents]:
-        by_driver: dict[str, list[DeviceVocabulary]] = {}
-        for device in self.devices.values():
-            by_driver.setdefault(device.driver, []).append(device)
-        drivers = []
-        for driver, devices in by_driver.items():
-            file = devices[0].intents_file(self.language)
-            if file is None:
-                continue
-            spoken = {name for device in devices for name in device.spoken_names(self.language)}
-            device_list = TextSlotList.from_tuples(
-                [(name, name) for name in sorted(spoken)], allow_template=False
-            )
-            areas = {area for device in devices for area in device.areas(self.language)}
-            area_list = TextSlotList.from_tuples(
-                [(area, area) for area in sorted(areas)], allow_template=False
-            )
-            names = [device.name for device in devices]
-            drivers.append(_DriverIntents(driver, file, file.intents(), names, device_list, area_list))
-        return drivers
 
     def clear_cache(self) -> None:
         """Forget cached clause readings (benchmarks time full recognitions)."""
@@ -359,7 +316,7 @@ class IntentMatcher:
         """A wildcard that swallowed a conjunction ("play jazz and turn on the lamp"), or one that
         says no words of its own ("play it again": what plays, not a search for "it again")."""
         return any(
-            len(self._splitter.split(text)) > 1 or _says_nothing(text) or _gives_reason(reading.clause, text)
+            len(self._splitter.split(text)) > 1 or says_nothing(text) or gives_reason(reading.clause, text)
             for text in reading.wildcards
         )
 
@@ -403,126 +360,6 @@ class IntentMatcher:
             return None
 
         return rest(0, None)
-
-    def _same_command(self, clause: str, device: str, command: str, focus: Focus) -> Reading | None:
-        """``clause`` is only another device's name: ``command`` (which acted on ``device``) again,
-        for that device. "Turn off the kitchen light and the desk lamp" turns off both."""
-        named, leftover = self.context.named_in(clause)
-        if len(named) != 1 or any(word not in self._filler for word in leftover):
-            return None
-        [other] = named
-        said = next(
-            (
-                name
-                for name in sorted(self.devices[device].spoken_names(self.language), key=len, reverse=True)
-                if re.search(rf"(?<!\w){re.escape(name)}(?!\w)", command, re.IGNORECASE)
-            ),
-            None,
-        )
-        if said is None or other == device:
-            return None
-        spoken = self.devices[other].spoken_names(self.language)[0]
-        again = re.sub(rf"(?<!\w){re.escape(said)}(?!\w)", spoken, command, count=1, flags=re.IGNORECASE)
-        return self._exactly_for(other, [again], focus)
-
-    def _elided(self, clause: str, device: str, focus: Focus) -> Reading | None:
-        """``clause`` read as a command to ``device`` that does not name it, or None.
-
-        "drive it forward" becomes "drive turtlebot forward"; "drive forward" is tried as "drive
-        turtlebot forward", "drive forward turtlebot", ... The reading must be exact and about
-        ``device`` alone.
-        """
-        words = clause.split()
-        name = self.devices[device].spoken_names(self.language)[0]
-        refer = pronouns(self.language)
-        if any(word.lower() in refer for word in words):
-            candidates = [" ".join(name if word.lower() in refer else word for word in words)]
-        else:
-            last = min(MAX_ELIDED_POSITION, len(words))
-            # Position 0 last: "look around for a person" → "turtlebot, look around for a person".
-            positions = [*range(1, last + 1), 0]
-            candidates = [" ".join([*words[:at], name, *words[at:]]) for at in positions]
-        found = self._exactly_for(device, candidates, focus)
-        return replace(found, clause=clause) if found is not None else None
-
-    def _exactly_for(self, device: str, sentences: list[str], focus: Focus) -> Reading | None:
-        """The first of ``sentences`` that reads as an exact command to ``device`` alone, or None
-        (also when the user's answer to "which one?" ruled ``device`` out)."""
-        if focus is not None and device not in focus:
-            return None
-        for sentence in sentences:
-            found = self._best(sentence, frozenset({device}), device)
-            if found is not None and found.actionable and set(found.calls) == {device}:
-                return found
-        return None
-
-    def _elided_anywhere(self, clause: str, focus: Focus) -> Reading | None:
-        """``clause`` as a command that leaves out its device, read against every device.
-
-        One device fits: its reading. Several: "which one?". None: None. A pronoun with nothing
-        before it to refer to ("turn it off") is read the same way.
-
-        A clause that names a device (by name, kind or place) has not left it out: the literal
-        paths before this one read it. Skipping it saves a recognition per candidate position
-        and driver (most of the time a sentence no template matches took).
-        """
-        if self.context.named_in(clause)[0]:
-            return None
-        fits: list[str] = []
-        unfit: set[str] = set()
-        for device in self.devices:
-            driver = self.devices[device].driver
-            if driver in unfit or (focus is not None and device not in focus):
-                continue
-            if self._elided(clause, device, focus) is not None:
-                fits.append(device)
-            elif not any(self.devices[other].driver == driver for other in fits):
-                # Devices of one driver share its templates (only the name differs), so one
-                # that does not fit rules the driver out: a recognition per driver, not per device.
-                unfit.add(driver)
-        if len(fits) == 1:
-            return self._elided(clause, fits[0], focus)
-        if fits:
-            return self.context.clarify(clause, 0, 0, fits)
-        return None
-
-
-_BACK_REFERENCE = frozenset(
-    [
-        "it",
-        "that",
-        "this",
-        "the",
-        "same",
-        "song",
-        "track",
-        "tune",
-        "one",
-        "again",
-        "more",
-        "time",
-        "once",
-        "over",
-        "please",
-    ]
-)
-
-
-def _says_nothing(wildcard: str) -> bool:
-    """Whether a wildcard's text only points back at what is there ("it again", "that song")."""
-    words = re.findall(r"[\w']+", wildcard.lower())
-    return bool(words) and all(word in _BACK_REFERENCE for word in words)
-
-
-def _gives_reason(clause: str, wildcard: str) -> bool:
-    """Whether a wildcard ran on past a comma into a reason ("put on something ambient, I need
-    to focus"): the search is the words before it. A title with a comma ("Hello, Goodbye")
-    names no subject and verb after it."""
-    said = " ".join(re.findall(r"[\w']+", normalise(wildcard)))
-    return any(
-        remark(part.strip()) and said.endswith(" ".join(re.findall(r"[\w']+", part)))
-        for part in normalise(clause).split(",")[1:]
-    )
 
 
 def _leaned_on(reading: Reading | None) -> tuple[str, str] | None:

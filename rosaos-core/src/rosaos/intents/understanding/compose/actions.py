@@ -10,9 +10,11 @@ sentence; the words it used are taken out (:attr:`Said.rest`), and what is left 
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field, replace
-from typing import Any
+from dataclasses import replace
 
+from rosaos.intents.understanding.compose.level_words import OFF as _OFF
+from rosaos.intents.understanding.compose.level_words import read_colour as _colour
+from rosaos.intents.understanding.compose.level_words import read_light_or_sound as _light_or_sound
 from rosaos.intents.understanding.compose.quantities import (
     METRES_PER,
     Quantity,
@@ -21,6 +23,9 @@ from rosaos.intents.understanding.compose.quantities import (
     remove_vague,
     vague_size,
 )
+from rosaos.intents.understanding.compose.said import SIZES, Said
+from rosaos.intents.understanding.compose.said import TURN_VERB as _TURN_VERB
+from rosaos.intents.understanding.compose.said import cut as _cut
 from rosaos.intents.understanding.readings import search_words
 
 DET = r"(?:(?:the|its|his|her|their|your|my|our|a)\s+)?"
@@ -156,7 +161,6 @@ _RIGHT = re.compile(r"\b(?:right|clockwise)\b")
 _AROUND = re.compile(r"\b(?:around|round|about)\b")
 _COUNTS = {"once": 1, "twice": 2, "2 times": 2, "3 times": 3, "thrice": 3}
 _TIMES = re.compile(r"\b(?:once|twice|thrice|[23] times)\b")
-_TURN_VERB = re.compile(r"\b(?:turn|rotate|spin|pivot|swivel|face|twist)\w*\b")
 _MOVE_VERB = re.compile(
     r"\b(?:drive|go|goes|move|walk|roll|scoot|step|head|come|advance|creep|inch|travel|trot|run|zoom|"
     r"nudge|shuffle|wheel|get|bring|take|back|reverse|retreat)\w*\b"
@@ -165,70 +169,6 @@ _BACKWARD = re.compile(r"\b(?:back(?:\s+\w+){0,3}?\s+up|backwards?|back|reverse|
 _BACK_WORDS = re.compile(r"\b(?:backwards?|back|reverse|retreat|away from me)\b")
 """What :data:`_BACKWARD` matched, less the words between "back" and "up": "back the dog up"."""
 _FORWARD = re.compile(r"\b(?:forwards?|ahead|onwards?|closer|towards? me|straight)\b")
-_COOLER = re.compile(r"\b(?:cooler|colder|bluer|whiter|crisper|less warm|less yellow)\b")
-_WHITE = re.compile(r"\b(?:(?:shade|tone|kind)\s+of\s+)?(?:white|yellow|daylight)\b")
-_WARMER = re.compile(r"\b(?:warmer|cozier|cosier|yellower|softer white|less cool|less blue|more yellow)\b")
-_WARM = re.compile(r"\b(?:warm|cozy|cosy|candle-?like)\b")
-_COOL = re.compile(r"\b(?:cool|cold|crisp|icy)\b")
-WARM_KELVIN, COOL_KELVIN = 2700, 5500
-_VOLUME_WORD = re.compile(r"\b(?:volume|loud\w*|quiet\w*|soft\w*|sound|music|noise)\b")
-_LEVEL_NOUN = re.compile(r"\b(?:volume|loud\w*|quiet\w*|soft\w*|sound)\b")
-_BRIGHT_WORD = re.compile(r"\b(?:bright\w*|dim\w*|dark\w*|lighter|light level)\b")
-_UP = re.compile(
-    r"\b(?:up|brighter|brighten|lighter|louder|raise|increase|boost|crank|pump|more|higher|amp)\b"
-)
-_DOWN = re.compile(
-    r"\b(?:down|dim|dimmer|darker|quieter|softer|lower|decrease|reduce|less|tone|knock|turn down|"
-    r"dimmed|not so loud|not so bright)\b"
-)
-_MAX = re.compile(
-    r"\b(?:max(?:imum|ed|ed out)?|full(?:\s+(?:brightness|volume|blast|power))?|all the way up|100 percent"
-    r"|as (?:bright|loud|high|much) as (?:it|they|you) (?:goes|go|can go|gets|get|can)|highest(?: setting)?"
-    r"|top volume|top brightness)\b"
-)
-_MIN = re.compile(
-    r"\b(?:all the way down|min(?:imum)?|lowest(?: setting)?|as (?:dim|low|quiet|soft) as (?:it|they|you)"
-    r" (?:goes|go|can go|gets|get|can))\b"
-)
-"""The bottom of a level: the relative tool's floor (a bulb stays lit at 1 %, a speaker goes to 0)."""
-_SET_WORD = re.compile(r"\b(?:to|at)\s+[\d.]+|\b(?:brightness|volume|level|percent)\b|%")
-_OFF = re.compile(r"\b(?:off|kill|shut|out|extinguish|cut|deactivate|disable|power down)\b")
-_ON = re.compile(
-    r"\b(?:turn|switch|put|power|flick|click|flip|get|leave)\s+on\b|\bon$|\bon\b(?!\s+(?:the|my|our|its|your|a|an|top|to)\b)"
-    r"|\b(?:light up|power up|activate|enable|illuminate|fire up)\b"
-)
-_SHARE = re.compile(
-    r"\b(?:louder|quieter|brighter|dimmer|darker|softer|up|down|more|less|in|cut|halve\w*|double\w*)\b"
-)
-"""Words that make a fraction a share of the current level, not a level: "a third louder"."""
-_TOGGLE = re.compile(r"\b(?:toggle|flip)\b")
-
-SIZES: dict[str, dict[Size, float]] = {
-    "change": {"small": 10, "normal": 20, "large": 40},
-    "kelvin_change": {"small": 500, "normal": 700, "large": 1500},
-    "distance": {"small": 0.3, "normal": 0.5, "large": 1.0},
-    "angle": {"small": 30, "normal": 90, "large": 180},
-}
-
-
-@dataclass(frozen=True)
-class Said:
-    """One action a clause asks for: what, its values by meaning, and the words left over."""
-
-    action: str
-    values: dict[str, Any] = field(default_factory=dict)
-    rest: str = ""
-    family: str | None = None
-    """For ``level``: ``brightness`` or ``volume`` when the words say which; for ``face_front``,
-    ``body`` when only the body was meant."""
-    quantity: Quantity | None = None
-    """The number the values came from, to restate in the reply (:func:`restate`)."""
-
-
-def _cut(text: str, *patterns: re.Pattern[str]) -> str:
-    for pattern in patterns:
-        text = pattern.sub(" ", text)
-    return " ".join(text.split())
 
 
 def read_action(clause: str, colours: frozenset[str], genres: frozenset[str] = frozenset()) -> Said | None:
@@ -393,95 +333,7 @@ def _motion(text: str, quantity: Quantity | None, size: Size) -> Said | None:
     return None
 
 
-def _light_or_sound(text: str, quantity: Quantity | None, size: Size, colours: frozenset[str]) -> Said | None:
-    if quantity is not None and quantity.unit == "kelvin":
-        return Said(
-            "colour_temperature",
-            {"kelvin": quantity.value},
-            _cut(text, re.compile(r"\b(?:colou?r temperature|temperature)\b")),
-        )
-    coloured = _colour(text, colours)
-    if coloured is not None:
-        return coloured
-    if _WARMER.search(text):
-        return Said(
-            "colour_temperature",
-            {"kelvin_change": -SIZES["kelvin_change"][size]},
-            _cut(text, _WARMER, _WHITE),
-        )
-    if _COOLER.search(text):
-        return Said(
-            "colour_temperature", {"kelvin_change": SIZES["kelvin_change"][size]}, _cut(text, _COOLER, _WHITE)
-        )
-    if _WARM.search(text) and not _COOL.search(text):
-        return Said("colour_temperature", {"kelvin": WARM_KELVIN}, _cut(text, _WARM))
-    if _COOL.search(text) and not _WARM.search(text):
-        return Said("colour_temperature", {"kelvin": COOL_KELVIN}, _cut(text, _COOL))
-    family = "volume" if _VOLUME_WORD.search(text) and not _BRIGHT_WORD.search(text) else None
-    family = (
-        "brightness"
-        if _BRIGHT_WORD.search(text) and family is None and not _VOLUME_WORD.search(text)
-        else family
-    )
-    level_words = (
-        _MAX,
-        _MIN,
-        _UP,
-        _DOWN,
-        _LEVEL_NOUN,
-        _BRIGHT_WORD,
-        re.compile(r"\b(?:to|at|by|level|percent)\b|%"),
-    )
-    if _MAX.search(text):
-        return Said("level", {"level": 100}, _cut(text, *level_words), family)
-    if _MIN.search(text):
-        return Said("level", {"change": -100}, _cut(text, *level_words), family)
-    if (
-        quantity is not None
-        and quantity.unit in (None, "percent")
-        and (_SET_WORD.search(f"{text} {quantity.text}") or quantity.is_fraction or family)
-    ):
-        if quantity.is_fraction and _SHARE.search(text) and not re.search(r"\b(?:to|at|by)\b", text):
-            return None  # "a third louder", "cut it in half": a share of a level this reader cannot see
-        value = quantity.value * 100 if quantity.is_fraction else quantity.value
-        if re.search(r"\bby\b", text) and (_UP.search(text) or _DOWN.search(text)):
-            change = -value if _DOWN.search(text) else value
-            return Said("level", {"change": change}, _cut(text, *level_words), family)
-        if 0 <= value <= 100:
-            return Said("level", {"level": round(value)}, _cut(text, *level_words), family)
-        return None  # a level out of range is refused by the engine's range check, never clipped
-    down, up = _DOWN.search(text), _UP.search(text)
-    switched_on = up and not family and re.search(r"\b(?:light up|power up|fire up)\b", text)
-    if (down or up) and not (_OFF.search(text) and not down) and not switched_on:
-        change = SIZES["change"][size] * (-1 if down else 1)
-        return Said("level", {"change": change}, _cut(text, *level_words), family)
-    if _OFF.search(text):
-        return Said("switch_off", rest=_cut(text, _OFF, _TURN_VERB, re.compile(r"\b(?:switch|put|power)\b")))
-    if _ON.search(text):
-        return Said("switch_on", rest=_cut(text, _ON, _TURN_VERB, re.compile(r"\b(?:switch|put|power|on)\b")))
-    if _TOGGLE.search(text):
-        return Said("toggle", rest=_cut(text, _TOGGLE))
-    return None
-
-
 def _genre(text: str, genres: frozenset[str]) -> str | None:
     """The one kind of music ``text`` names, if any ("jazz" in "some jazz please")."""
     found = [genre for genre in genres if re.search(rf"\b{re.escape(genre)}\b", text)]
     return max(found, key=len) if found else None
-
-
-_SHADE = re.compile(r"\b(?:plain|pure|normal|regular|simple|nice|bright|back|colou?r|white)\b")
-"""Words around a colour name that say no more than it: "back to plain daylight white"."""
-
-
-def _colour(text: str, colours: frozenset[str]) -> Said | None:
-    """The colour ``text`` names (the longest name the world's lights know), if any; none for a
-    white said with a comparative ("a cooler white", "a warmer shade of white"): that changes the
-    white the light has, relative to it."""
-    if (_WARMER.search(text) or _COOLER.search(text)) and _WHITE.search(text):
-        return None
-    for colour in sorted(colours, key=len, reverse=True):
-        pattern = re.compile(rf"\b{re.escape(colour)}\b")
-        if pattern.search(text):
-            return Said("colour", {"colour": colour}, _cut(text, pattern, _SHADE))
-    return None

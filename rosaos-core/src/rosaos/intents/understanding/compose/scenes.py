@@ -14,7 +14,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from rosaos.intents.understanding.compose.actions import WARM_KELVIN, Said
+from rosaos.intents.understanding.compose.actions import Said
+from rosaos.intents.understanding.compose.level_words import WARM_KELVIN
 
 
 @dataclass(frozen=True)
