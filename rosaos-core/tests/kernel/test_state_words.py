@@ -23,6 +23,12 @@ def test_a_robot_without_a_dock_counts_from_where_it_started_and_degrees_are_deg
     )
 
 
+def test_a_robot_back_where_it_started_is_said_to_be_there() -> None:
+    """ "The dog is where it started", not "at where it started" (fresh-12's reply)."""
+    assert position({"x": 0.01, "y": 0.0, "yaw": 0.0}) == "where it started, facing ahead"
+    assert (position({"x": 0.01, "y": 0.0, "yaw": 0.0, "docked": False}) or "").startswith("by its dock")
+
+
 def test_battery_reads_a_fraction_or_a_percentage() -> None:
     assert battery({"battery": 0.913}) == "91%"
     assert battery({"battery": 55}) == "55%"

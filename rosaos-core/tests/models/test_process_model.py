@@ -242,6 +242,8 @@ def test_a_command_whose_device_says_what_it_did_is_answered_with_those_words() 
     # Its JSON text, as some MCP servers return it, reads the same; the same words once.
     volume = '{"message": "Volume 40% → 55%.", "state": {"volume": 55}}'
     assert plan_reply(plan, [volume, volume]) == "Done: next song. Volume 40% → 55%."
+    # A bare state word ("awake", the Reachy's) reads as a sentence of its own.
+    assert plan_reply(plan, [{"message": "awake"}]) == "Done: next song. Awake."
 
 
 @pytest.mark.parametrize(

@@ -160,6 +160,7 @@ def _device_words(result: Any) -> str | None:
     if not isinstance(words, str) or not words.strip() or len(words) > DEVICE_WORDS_MAX:
         return None
     words = words.strip()
+    words = words[0].upper() + words[1:]  # "awake" -> "Awake.": a sentence of its own
     return words if words[-1] in ".!?" else f"{words}."
 
 

@@ -61,7 +61,7 @@ def position(state: dict[str, Any]) -> str | None:
     x, y = float(state["x"]), float(state["y"])
     facing = _facing(state.get("yaw"))
     if math.hypot(x, y) < NEAR:
-        where = f"at {origin}" if origin == "where it started" else "by its dock, not docked"
+        where = origin if origin == "where it started" else "by its dock, not docked"
         return f"{where}, {facing}" if facing else where
     parts = []
     if abs(x) >= NEAR:
