@@ -162,7 +162,7 @@ class FuzzyMatcher:
             word: self._weigh(word, math.log(1 + count / seen)) for word, seen in frequency.items()
         }
         self._sets = [frozenset(skeleton.words) for skeleton in self._skeletons]
-        self._sizes = [sum(self._weight(word) for word in words) for words in self._sets]
+        self._sizes = [math.fsum(self._weight(word) for word in words) for words in self._sets]
         self._slots = [frozenset(word for word in words if word.startswith("{")) for words in self._sets]
         self._by_word: dict[str, list[int]] = {}
         """Content word → the skeletons that use it: only those can score (a word must be shared)."""
@@ -247,7 +247,9 @@ class FuzzyMatcher:
         if not tokens:
             return None
         spoken_devices = {spoken for token, spoken in tagged if token == "{device}"}
-        size = sum(self._weight(token) for token in tokens)
+        # fsum: exact, so the order of a frozenset (Python's per-process hash seed) cannot tip a
+        # tie between two skeletons one way in one run and the other way in the next.
+        size = math.fsum(self._weight(token) for token in tokens)
         best: tuple[float, int] | None = None
         # A name alone is not a command: a skeleton must share a word of its own with the sentence.
         candidates = sorted({index for token in tokens for index in self._by_word.get(token, ())})
@@ -257,7 +259,7 @@ class FuzzyMatcher:
                 continue  # a slot the sentence cannot fill
             if spoken_devices and not spoken_devices <= self._driver_names[skeleton.driver]:
                 continue  # a name this driver's devices do not answer to
-            shared = sum(self._weight(word) for word in words & tokens)
+            shared = math.fsum(self._weight(word) for word in words & tokens)
             precision, recall = shared / size, shared / self._sizes[index]
             score = 2 * precision * recall / (precision + recall)
             if best is None or score > best[0]:
