@@ -87,7 +87,9 @@ async def test_talking_over_a_long_answer_stops_it_and_is_a_new_command(tmp_path
         )
         assert await robot.say(LONG_ANSWER)  # as a reply is said: speak, and mute until it ends
         speaking = await device_state(kernel, "reachy")
-        assert speaking["speaking"] is True and speaking["speaking_until"] > time.time() + 8
+        # Still speaking when the user begins (the barge-in itself is checked below); not "8 s
+        # left": under load the state is read seconds after the speech began (CI run 21).
+        assert speaking["speaking"] is True and speaking["speaking_until"] > time.time() + USER_BEGINS + 1
 
         stats = await pipeline.run()
 

@@ -290,6 +290,10 @@ def _become_worker(
         os.setsid()
         signal.set_wakeup_fd(-1)
         signal.signal(signal.SIGCHLD, signal.SIG_DFL)
+        # Python's own SIGINT handling, whoever started this server: one started by a process that
+        # ignored SIGINT (a job put in the background by a shell) would pass that on to every worker
+        # it forks, where a spawned worker of a kernel that catches SIGINT gets Python's handler.
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         sock.close()
         for fd in close:
             os.close(fd)
