@@ -13,7 +13,7 @@ anyone remembering to mark it:
 
 ``./scripts/test --quick`` runs ``-m "not e2e and not browser and not slow"``; CI runs everything,
 the modules with slow tests first (:func:`_slow_modules_first`), and a test with many long
-parameters in parts both workers take (:data:`SPLIT`).
+parameters in parts every worker takes (:data:`SPLIT`).
 """
 
 from __future__ import annotations
@@ -72,7 +72,7 @@ def _slow_modules_first(items: list[pytest.Item]) -> None:
     Under xdist (``--dist loadscope --no-loadscope-reorder``, see ``scripts/test``) modules are
     handed to the workers in this order. The slow modules are few and long (a real ``rosaos up``
     each, a minute or more for some); collected last, as ``tests/`` is, the last of them ran alone
-    while the other worker had nothing left, and xdist's own reordering (most tests first) put them
+    while the other workers had nothing left, and xdist's own reordering (most tests first) put them
     last too. Longest first leaves the many short modules to fill in around them.
     """
     rank: dict[str, int] = {}
@@ -83,7 +83,7 @@ def _slow_modules_first(items: list[pytest.Item]) -> None:
 
     def order(item: pytest.Item) -> int:
         if _split_function(item.nodeid) in SPLIT:
-            return -1  # the longest work of all, in parts that both workers take (SPLIT)
+            return -1  # the longest work of all, in parts that every worker takes (SPLIT)
         return rank[getattr(getattr(item, "module", None), "__name__", "")]
 
     items.sort(key=order)
