@@ -2,8 +2,10 @@
 
 from __future__ import annotations
 
+import asyncio
 import logging
 import math
+import time
 from typing import Any
 
 import pytest
@@ -167,6 +169,48 @@ async def test_a_barge_in_listens_again_at_once_and_stops_the_robot() -> None:
     link.unmute()
     assert not link.muted(1e9)
     assert await link.stop_speaking() is True and stops == [True]
+
+
+async def test_a_state_read_while_the_barge_in_stop_is_on_its_way_does_not_mute_again() -> None:
+    # A busy machine: the driver answers get_state (still speaking) before it has run stop_speaking.
+    mcp = FastMCP("reachy")
+    speaking = {"speaking": True, "speaking_until": 9e9, "last_spoken": "a long answer"}
+    stop_may_finish = asyncio.Event()
+    polls_while_stopping: list[int] = []
+    two_polls = asyncio.Event()
+
+    @mcp.tool
+    def speak(text: str) -> dict[str, Any]:
+        return {"spoken": text, "seconds": 20.0, "speaking_until": 9e9}
+
+    @mcp.tool
+    def get_state() -> dict[str, Any]:
+        if not stop_may_finish.is_set():
+            polls_while_stopping.append(1)
+            if len(polls_while_stopping) >= 2:  # the first one's answer has been looked at
+                two_polls.set()
+        return dict(speaking)
+
+    @mcp.tool
+    async def stop_speaking() -> dict[str, Any]:
+        await stop_may_finish.wait()
+        speaking.update(speaking=False, speaking_until=None)
+        return {"stopped": True, "cut_off": "a long answer"}
+
+    link = ReachyLink(DeviceClient.in_process(mcp))
+    await link.say("a long answer")
+    link.unmute()
+    stopping = asyncio.create_task(link.stop_speaking())
+    following = asyncio.create_task(link.follow())
+    try:
+        await asyncio.wait_for(two_polls.wait(), 60)
+        assert not link.muted(time.time()), "a state asked before the robot stopped muted it again"
+        stop_may_finish.set()
+        assert await stopping is True
+        assert not link.muted(time.time())
+    finally:
+        following.cancel()
+        await asyncio.gather(following, return_exceptions=True)
 
 
 async def test_stopping_a_robot_without_the_tool_is_reported_not_raised() -> None:

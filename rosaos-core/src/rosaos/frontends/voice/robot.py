@@ -120,7 +120,11 @@ class ReachyLink:
         self._last_spoken: str | None = None
         self._failed: set[str] = set()
         self._unmuted_at = 0.0
-        """Wall time of the last barge-in: a ``get_state`` asked before it is stale."""
+        """Wall time of the last barge-in, or of its ``stop_speaking``'s answer: a ``get_state``
+        asked before it is stale."""
+        self._stops_in_flight = 0
+        """``stop_speaking`` calls not answered yet: meanwhile ``get_state`` may still show the
+        sentence being cut off (a busy machine answered one after the barge-in: CI, 3 workers)."""
 
     async def woke(self, doa: float | None, seconds: float) -> None:
         args: dict[str, Any] = {"on": True, "seconds": round(max(1.0, min(120.0, seconds)), 1)}
@@ -166,7 +170,7 @@ class ReachyLink:
     async def _poll(self) -> None:
         asked = time.time()
         state = await self.device.get_state()
-        if asked >= self._unmuted_at:  # else it may still show the sentence just cut off
+        if asked >= self._unmuted_at and not self._stops_in_flight:  # else: the sentence just cut off
             self.observe(state, time.time())
 
     def unmute(self) -> None:
@@ -174,11 +178,15 @@ class ReachyLink:
         self.muted_until = 0.0
 
     async def stop_speaking(self) -> bool:
+        self._stops_in_flight += 1
         try:
             report = await self.device.call("stop_speaking", {})
         except self._errors as error:
             log.warning("reachy could not stop speaking: %s", error)
             return False
+        finally:
+            self._stops_in_flight -= 1
+            self._unmuted_at = max(self._unmuted_at, time.time())
         stopped = report.get("stopped") if isinstance(report, dict) else getattr(report, "stopped", False)
         return bool(stopped)
 
