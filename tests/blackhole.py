@@ -7,16 +7,22 @@ as they do when a firewall drops packets and TCP keeps retransmitting. New conne
 accepted and then left unanswered. :meth:`Blackhole.heal` resumes forwarding, and what was held
 is delivered, as TCP's retransmissions would deliver it.
 
-It runs its own event loop in a thread, so synchronous tests (which drive ``rosaos`` subprocesses)
-can use it as well as async ones.
+It runs in a process of its own (:func:`blackhole` starts this file as a script and steers it
+through its stdin): in a thread of the test's process it forwarded bytes only when the test's own
+polling let go of the interpreter, and on a loaded machine a worker's keepalive through it took
+longer than the deadman's silence limit (1.6 s, with three pytest workers and two busy loops on
+two cores): the link looked cut before the test cut it.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import subprocess
+import sys
 import threading
 from collections.abc import Iterator
+from pathlib import Path
 
 
 class Blackhole:
@@ -114,11 +120,71 @@ class Blackhole:
             writer.write_eof()
 
 
+class BlackholeProcess:
+    """A :class:`Blackhole` in a child process: ``port``, :meth:`silence` and :meth:`heal` as its own."""
+
+    def __init__(self, child: subprocess.Popen[str]) -> None:
+        self._child = child
+        self.port = int(self._answer())
+
+    def silence(self) -> None:
+        """Drop the link: no byte goes through in either direction; nothing is closed."""
+        self._tell("silence")
+
+    def heal(self) -> None:
+        """Bring the link back: held bytes go through, and forwarding resumes."""
+        self._tell("heal")
+
+    def _tell(self, command: str) -> None:
+        assert self._child.stdin is not None
+        self._child.stdin.write(command + "\n")
+        self._child.stdin.flush()
+        if self._answer() != "done":
+            raise RuntimeError(f"the blackhole proxy did not {command}")
+
+    def _answer(self) -> str:
+        assert self._child.stdout is not None
+        line = self._child.stdout.readline().strip()
+        if not line:
+            raise RuntimeError(f"the blackhole proxy ended (exit code {self._child.poll()})")
+        return line
+
+
 @contextlib.contextmanager
-def blackhole(target_port: int) -> Iterator[Blackhole]:
-    """A started :class:`Blackhole` to ``target_port``, closed at the end of the block."""
-    proxy = Blackhole(target_port).start()
+def blackhole(target_port: int) -> Iterator[BlackholeProcess]:
+    """A started blackhole proxy to ``target_port`` in a process of its own, stopped at the end."""
+    child = subprocess.Popen(
+        [sys.executable, str(Path(__file__)), str(target_port)],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
     try:
-        yield proxy
+        yield BlackholeProcess(child)
     finally:
-        proxy.close()
+        with contextlib.suppress(OSError):
+            assert child.stdin is not None
+            child.stdin.close()  # end of commands: the proxy closes every connection and exits
+        try:
+            child.wait(10)
+        except subprocess.TimeoutExpired:
+            child.kill()
+            child.wait()
+
+
+def _serve(target_port: int) -> None:
+    """The child: print the port, then obey ``silence`` and ``heal`` lines until stdin ends."""
+    proxy = Blackhole(target_port).start()
+    print(proxy.port, flush=True)
+    for line in sys.stdin:
+        command = line.strip()
+        if command == "silence":
+            proxy.silence()
+        elif command == "heal":
+            proxy.heal()
+        print("done", flush=True)
+    proxy.close()
+
+
+if __name__ == "__main__":
+    _serve(int(sys.argv[1]))
