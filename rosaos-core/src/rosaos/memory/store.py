@@ -125,6 +125,8 @@ class MemoryStore:
     def __init__(self, path: Path) -> None:
         self.path = path
         self._local = threading.local()
+        self._note_writes = 0
+        """Bumped by this store's own note writes, which its connection's ``data_version`` does not see."""
         path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
         fresh = not path.exists()
         with self.connect() as db:
@@ -225,15 +227,32 @@ class MemoryStore:
                 "INSERT OR REPLACE INTO notes VALUES (?, ?, ?, ?, ?)",
                 (note.kind, note.key, note.value, note.said, note.saved_at),
             )
+        self._note_writes += 1
         return note
 
     def notes(self, kind: NoteKind | None = None) -> list[Note]:
-        """Every note (or every one of ``kind``), oldest first."""
+        """Every note (or every one of ``kind``), oldest first.
+
+        The kernel reads them on every event (aliases at intake and in the engine, the summary in
+        its instructions), and they change only when someone says to remember or forget: so the
+        last reading is kept per thread and used again while nothing was written. A write by this
+        store bumps its counter; one by another connection (another thread, ``rosaos memory`` in
+        another process) changes SQLite's ``PRAGMA data_version`` on this one.
+        """
         query, args = "SELECT * FROM notes ORDER BY saved_at", ()
         if kind is not None:
             query, args = "SELECT * FROM notes WHERE kind = ? ORDER BY saved_at", (kind,)  # type: ignore[assignment]
         with self.connect() as db:
-            return [Note(**dict(row)) for row in db.execute(query, args)]
+            version = (self._note_writes, db.execute("PRAGMA data_version").fetchone()[0])
+            read: dict[NoteKind | None, tuple[tuple[int, int], list[Note]]] = self._local.__dict__.setdefault(
+                "notes", {}
+            )
+            kept = read.get(kind)
+            if kept is not None and kept[0] == version:
+                return list(kept[1])
+            notes = [Note(**dict(row)) for row in db.execute(query, args)]
+        read[kind] = (version, notes)
+        return list(notes)
 
     def forget_notes(self, matching: str) -> list[Note]:
         """Delete the notes whose key, value or sentence contains every word of ``matching``."""
@@ -246,6 +265,7 @@ class MemoryStore:
         with self.connect() as db:
             for note in gone:
                 db.execute("DELETE FROM notes WHERE kind = ? AND key = ?", (note.kind, note.key))
+        self._note_writes += 1
         return gone
 
     def aliases(self) -> dict[str, str]:
@@ -262,6 +282,7 @@ class MemoryStore:
             places = db.execute("DELETE FROM places").rowcount
             notes = db.execute("DELETE FROM notes").rowcount
             db.execute("DELETE FROM sightings")
+        self._note_writes += 1
         return places, notes
 
 
