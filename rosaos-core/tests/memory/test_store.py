@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import stat
+import threading
 import time
 from pathlib import Path
 
@@ -64,18 +65,18 @@ def test_notes_replace_by_kind_and_key_and_forget_matches_words(tmp_path: Path) 
     assert store.clear() == (0, 1)
 
 
-def test_notes_read_again_see_every_write_by_this_store_another_thread_or_another_store(tmp_path: Path) -> None:
+def test_notes_read_again_see_every_write_here_in_a_thread_or_by_another_store(tmp_path: Path) -> None:
     # The kernel keeps its last reading of the notes (it reads them on every event); a name given
     # a moment ago, here or by `rosaos memory` in another process, must still count at once.
-    import threading
-
     kernel = MemoryStore.open(tmp_path)
     assert kernel.aliases() == {}
     kernel.save_note("alias", "rex", "the dog", "call the dog rex")
     assert kernel.aliases() == {"rex": "the dog"}
     MemoryStore.open(tmp_path).save_note("alias", "robbie", "the turtlebot", "call the turtlebot robbie")
     assert kernel.aliases() == {"rex": "the dog", "robbie": "the turtlebot"}
-    writer = threading.Thread(target=lambda: kernel.save_note("preference", "reading light", "40 percent", "x"))
+    writer = threading.Thread(
+        target=lambda: kernel.save_note("preference", "reading light", "40 percent", "x")
+    )
     writer.start()
     writer.join()
     assert [note.key for note in kernel.notes()] == ["rex", "robbie", "reading light"]
