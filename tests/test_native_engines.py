@@ -25,11 +25,10 @@ ENGINES = {
         "from rosaos.frontends.voice.vad import SileroClassifier\n"
         "SileroClassifier().probability(np.zeros(512, dtype=np.float32))\n"
     ),
-    "pyttsx3 + espeak-ng (Reachy's offline text-to-speech)": (
-        "import pathlib, tempfile, pyttsx3\n"
-        "path = pathlib.Path(tempfile.mkdtemp()) / 'hi.wav'\n"
-        "engine = pyttsx3.init('espeak'); engine.save_to_file('hello', str(path)); engine.runAndWait()\n"
-        "assert path.stat().st_size > 1000\n"
+    "libespeak-ng (Reachy's offline text-to-speech where the espeak-ng command is missing)": (
+        "from rosaos_reachy.espeak_library import synthesize\n"
+        "pcm, sample_rate = synthesize('hello', 170, None)\n"
+        "assert len(pcm) > 1000 and sample_rate > 0\n"
     ),
     "MuJoCo (the Reachy Mini simulator)": (
         "import mujoco\n"

@@ -104,7 +104,7 @@ async def test_stop_motion_holds_the_dance_where_it_was(robot: Robot) -> None:
 async def test_speak_writes_espeak_audio_and_sets_last_spoken(robot: Robot) -> None:
     started = time.time()
     report = await robot.call("speak", text="Good morning to everyone")
-    assert report["engine"] == "local"  # no cloud keys: pyttsx3 with espeak-ng
+    assert report["engine"] == "local"  # no cloud keys: espeak-ng
     assert report["output"] == "file"
     path = robot.ctx.data_dir / report["file"]
     with wave.open(str(path)) as wav:

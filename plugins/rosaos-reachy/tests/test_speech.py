@@ -96,10 +96,29 @@ async def test_local_voice_and_rate_are_used() -> None:
 async def test_without_the_espeak_command_the_library_speaks_with_each_speakers_rate(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    monkeypatch.setenv("PATH", str(tmp_path))  # no espeak-ng command: pyttsx3 over libespeak-ng
+    monkeypatch.setenv("PATH", str(tmp_path))  # no espeak-ng command: libespeak-ng in this process
     slow = await LocalTts(ReachySettings(local_rate=100)).synthesize("one two three")
     fast = await LocalTts(ReachySettings(local_rate=300)).synthesize("one two three")
     assert wav_duration(slow) > 1.5 * wav_duration(fast)
+
+
+async def test_without_the_espeak_command_a_speakers_voice_does_not_stay_for_the_next(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("PATH", str(tmp_path))
+    before = wav_duration(await LocalTts(ReachySettings()).synthesize("one two three"))
+    german = wav_duration(await LocalTts(ReachySettings(local_voice="de")).synthesize("one two three"))
+    after = wav_duration(await LocalTts(ReachySettings()).synthesize("one two three"))
+    assert german > 1.05 * before  # the voice is heard: German says "one two three" more slowly
+    assert after == pytest.approx(before, rel=0.01)  # and does not stay for the next speaker
+
+
+async def test_without_the_espeak_command_an_unknown_voice_is_named(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setenv("PATH", str(tmp_path))
+    with pytest.raises(TtsError, match="no voice 'xx-nowhere'"):
+        await LocalTts(ReachySettings(local_voice="xx-nowhere")).synthesize("hello")
 
 
 async def test_asking_for_a_robot_speaker_that_is_not_there_says_so(tmp_path: Path) -> None:

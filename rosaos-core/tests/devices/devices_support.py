@@ -26,6 +26,8 @@ from typer.testing import CliRunner
 from rosaos import hookimpl
 from rosaos.cli import app
 from rosaos.config import DeviceConfig, RosaosConfig
+from rosaos.devices.run_files import DeviceStatus, RunFile, run_file_path
+from rosaos.devices.supervisor import DeviceSupervisor
 from rosaos.devices.world import World, build_world
 from rosaos.drivers import DeviceBackend, DeviceContext, DeviceError, DeviceSettings, DriverSpec
 from rosaos.plugins import DriverRegistry, load_drivers
@@ -148,6 +150,40 @@ async def eventually(check: Callable[[], Awaitable[bool] | bool], within: float 
         if time.monotonic() > deadline:
             raise AssertionError(f"condition not met within {within} s")
         await asyncio.sleep(0.05)
+
+
+class HealthWitness:
+    """A supervisor's ``on_status_change``: each change, and at each "healthy" report what the
+    run file then says of that instance's host pid.
+
+    The supervisor writes a host's pid before it calls the host's instances healthy, so whoever
+    hears "healthy" finds the serving process in the file. Read at the moment of the report, so
+    the check waits for nothing and cannot pass by luck of timing.
+    """
+
+    def __init__(self, supervisor: DeviceSupervisor) -> None:
+        self.supervisor = supervisor
+        self.changes: list[tuple[str, DeviceStatus, DeviceStatus]] = []
+        self.healthy: list[tuple[str, str | None, str | None]] = []
+        """``(instance, "pid-N" from the run file, the reported host's server_epoch "pid-M")``."""
+
+    def __call__(self, name: str, old: DeviceStatus, new: DeviceStatus, error: str | None) -> None:
+        self.changes.append((name, old, new))
+        if new == "healthy":
+            epoch = self.supervisor.directory()[name].server_epoch
+            self.healthy.append((name, self._recorded(name), epoch))
+
+    def _recorded(self, name: str) -> str | None:
+        try:
+            runtime = RunFile.model_validate_json(run_file_path(self.supervisor.data_dir).read_text())
+        except FileNotFoundError:
+            return None
+        entry = runtime.devices.get(name)
+        return None if entry is None or entry.pid is None else f"pid-{entry.pid}"
+
+    def reported_before_recorded(self) -> list[tuple[str, str | None, str | None]]:
+        """The "healthy" reports made while the run file lacked that host's pid (should be none)."""
+        return [report for report in self.healthy if report[1] != report[2]]
 
 
 def pid_alive(pid: int) -> bool:

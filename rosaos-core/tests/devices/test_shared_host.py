@@ -12,11 +12,19 @@ from typing import Any
 import pytest
 
 from rosaos.devices.client import DeviceClient
-from rosaos.devices.run_files import DeviceStatus, run_file_path
+from rosaos.devices.run_files import run_file_path
 from rosaos.devices.supervisor import DeviceSupervisor
 from rosaos.plugins import load_drivers
 
-from .devices_support import drivers_for_tests, eventually, pid_alive, plugin, requires_tapo, world_of
+from .devices_support import (
+    HealthWitness,
+    drivers_for_tests,
+    eventually,
+    pid_alive,
+    plugin,
+    requires_tapo,
+    world_of,
+)
 
 TOKEN = "shared-host-test-token"
 FAST: dict[str, Any] = {"health_interval": 0.2, "health_timeout": 2.0, "backoff_base": 0.1, "stop_grace": 2.0}
@@ -59,9 +67,10 @@ async def test_a_killed_shared_host_restarts_its_instances_and_says_so(data_dir:
         kitchen_light={"driver": "tapo"},
         desk_lamp={"driver": "tapo"},
     )
-    changes: list[tuple[str, DeviceStatus, DeviceStatus]] = []
-    async with DeviceSupervisor(world, data_dir, TOKEN, **FAST) as supervisor:
-        supervisor.on_status_change = lambda name, old, new, error: changes.append((name, old, new))
+    supervisor = DeviceSupervisor(world, data_dir, TOKEN, **FAST)
+    witness = HealthWitness(supervisor)
+    supervisor.on_status_change = witness
+    async with supervisor:
         old_pid = pids(data_dir)["kitchen_light"]
         assert old_pid is not None
         urls = {name: e.url for name, e in supervisor.directory().items()}
@@ -77,11 +86,15 @@ async def test_a_killed_shared_host_restarts_its_instances_and_says_so(data_dir:
         assert {name: e.url for name, e in supervisor.directory().items()} == urls  # same ports again
         # ...but a new server, which knows no session a worker kept (processes/worker.py)
         assert {e.server_epoch for e in supervisor.directory().values()} == {f"pid-{new['kitchen_light']}"}
+    changes = witness.changes
     for name in ("kitchen_light", "desk_lamp"):
         assert (name, "healthy", "restarting") in changes
         assert changes.index((name, "healthy", "restarting")) < max(
             i for i, change in enumerate(changes) if change[0] == name and change[2] == "healthy"
         )
+    reported = [name for name, _, _ in witness.healthy]
+    assert reported.count("kitchen_light") >= 2 and reported.count("desk_lamp") >= 2  # start, restart...
+    assert witness.reported_before_recorded() == []  # ...with the host's pid in the run file by then
 
 
 async def test_a_real_instance_gets_a_host_of_its_own(data_dir: Path) -> None:
@@ -133,9 +146,10 @@ async def test_a_background_simulator_joins_the_running_shared_host_without_hold
         kitchen_light={"driver": "tapo", "sim": {"on": False}},
         music={"driver": "spotify"},
     )
-    changes: list[tuple[str, DeviceStatus, DeviceStatus]] = []
-    async with DeviceSupervisor(world, data_dir, TOKEN, defer_background=True, **FAST) as supervisor:
-        supervisor.on_status_change = lambda name, old, new, error: changes.append((name, old, new))
+    supervisor = DeviceSupervisor(world, data_dir, TOKEN, defer_background=True, **FAST)
+    witness = HealthWitness(supervisor)
+    supervisor.on_status_change = witness
+    async with supervisor:
         directory = supervisor.directory()
         assert (directory["kitchen_light"].status, directory["music"].status) == ("healthy", "starting")
         await asyncio.sleep(0.5)
@@ -154,13 +168,8 @@ async def test_a_background_simulator_joins_the_running_shared_host_without_hold
         await eventually(
             lambda: all(e.status == "healthy" and e.restarts == 1 for e in supervisor.directory().values())
         )
-        # The run file follows the status a moment later (CI run 21 read it in between).
-        await eventually(lambda: _one_host_serves_both(data_dir))
         again = pids(data_dir)
         assert again["kitchen_light"] == again["music"] not in (None, served["music"])
-    assert ("music", "healthy", "restarting") in changes
-
-
-def _one_host_serves_both(data_dir: Path) -> bool:
-    served = set(pids(data_dir).values())
-    return None not in served and len(served) == 1
+    assert ("music", "healthy", "restarting") in witness.changes
+    assert {name for name, _, _ in witness.healthy} == {"kitchen_light", "music"}
+    assert witness.reported_before_recorded() == []  # the joined one too, each time

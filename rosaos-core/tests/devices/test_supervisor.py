@@ -19,6 +19,7 @@ from rosaos.devices.world import World
 from rosaos.drivers import DeviceError
 
 from .devices_support import (
+    HealthWitness,
     closed_port_url,
     drivers_for_tests,
     eventually,
@@ -46,7 +47,9 @@ async def shared(tmp_path_factory: pytest.TempPathFactory) -> AsyncIterator[Devi
     if not tapo_installed():
         pytest.skip("needs the rosaos-tapo driver installed")
     data_dir = tmp_path_factory.mktemp("shared") / "data"
-    async with DeviceSupervisor(tapo_world(data_dir), data_dir, TOKEN, **FAST) as running:
+    supervisor = DeviceSupervisor(tapo_world(data_dir), data_dir, TOKEN, **FAST)
+    supervisor.on_status_change = HealthWitness(supervisor)
+    async with supervisor as running:
         yield running
 
 
@@ -120,9 +123,12 @@ async def test_a_killed_host_is_restarted_at_the_same_url(shared: DeviceSupervis
     os.kill(old_pid, signal.SIGKILL)
     await restarted_and_healthy(shared, before.restarts)
     assert shared.directory()["kitchen_light"].url == before.url
-    # The run file gets the new host's pid a moment after the status turns healthy (CI run 24).
-    await eventually(lambda: runtime(shared.data_dir)["kitchen_light"]["pid"] is not None)
     assert runtime(shared.data_dir)["kitchen_light"]["pid"] not in (None, old_pid)
+    # Its pid was in the run file when it was called healthy, at the first start and now.
+    witness = shared.on_status_change
+    assert isinstance(witness, HealthWitness)
+    assert [name for name, _, _ in witness.healthy].count("kitchen_light") >= 2
+    assert witness.reported_before_recorded() == []
     assert before.url is not None
     assert (await DeviceClient(before.url, TOKEN).get_state())["on"] is False
 

@@ -3,7 +3,7 @@
 - :class:`ElevenLabsTts`: ElevenLabs' REST API (raw 16 kHz PCM, wrapped as WAV here).
 - :class:`OpenAISpeechTts`: any OpenAI-compatible ``POST /audio/speech``; Groq's is one of them.
 - :class:`LocalTts`: espeak-ng, entirely offline. Always available on Debian with the
-  ``espeak-ng`` package; pyttsx3 over libespeak-ng is the fallback where the command is missing.
+  ``espeak-ng`` package; libespeak-ng in process is the fallback where the command is missing.
 """
 
 from __future__ import annotations
@@ -13,15 +13,16 @@ import io
 import shutil
 import subprocess
 import tempfile
-import threading
 import wave
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
-from typing import Any, Protocol
+from typing import Protocol
 
 import httpx
 
+from rosaos_reachy import espeak_library
+from rosaos_reachy.espeak_library import EspeakLibraryError
 from rosaos_reachy.settings import ELEVENLABS_BASE_URL, GROQ_BASE_URL, ReachySettings, env_secret
 
 
@@ -140,11 +141,9 @@ class LocalTts:
     """espeak-ng: offline, instant, robotic.
 
     The ``espeak-ng`` command is run once per sentence, with this speaker's rate and voice on its
-    command line (about 10 ms for a sentence, as fast as the library in process). In process,
-    libespeak-ng keeps one rate and voice for the whole process and pyttsx3 hands every caller the
-    same engine, so two speakers could hear each other's settings (CI run 11: a rate-100 and a
-    rate-300 sentence came out the same length); the library is used only where the command is
-    missing, one sentence at a time, on one thread.
+    command line (about 10 ms for a sentence). Where the command is missing, libespeak-ng speaks
+    in this process (:mod:`rosaos_reachy.espeak_library`), with the rate and voice set again before
+    each sentence: the library keeps one of each for the whole process.
     """
 
     name = "local"
@@ -153,7 +152,6 @@ class LocalTts:
         self.voice = settings.local_voice
         self.rate = settings.local_rate
         self._thread = ThreadPoolExecutor(max_workers=1, thread_name_prefix="rosaos-tts")
-        self._engine: Any = None
 
     def unavailable(self) -> str | None:
         return None  # tried last; synthesize says what is missing
@@ -162,15 +160,16 @@ class LocalTts:
         return await asyncio.get_running_loop().run_in_executor(self._thread, self._synthesize, text)
 
     def _synthesize(self, text: str) -> bytes:
+        program = shutil.which("espeak-ng") or shutil.which("espeak")
+        if program is None:
+            try:
+                pcm, sample_rate = espeak_library.synthesize(text, self.rate, self.voice)
+            except EspeakLibraryError as error:
+                raise TtsError(f"no espeak-ng command, and {error}: apt-get install espeak-ng") from None
+            return wav_from_pcm(pcm, sample_rate)
         with tempfile.TemporaryDirectory(prefix="rosaos-tts-") as tmp:
             path = Path(tmp) / "speech.wav"
-            program = shutil.which("espeak-ng") or shutil.which("espeak")
-            if program is not None:
-                self._espeak_cli(program, text, path)
-            else:
-                problem = self._pyttsx3(text, path)
-                if problem is not None:
-                    raise TtsError(f"no espeak-ng command, and {problem}: apt-get install espeak-ng")
+            self._espeak_cli(program, text, path)
             data = path.read_bytes()
         wav_duration(data)
         return data
@@ -183,30 +182,6 @@ class LocalTts:
         result = subprocess.run([*command, "--", text], capture_output=True, timeout=60, check=False)
         if result.returncode != 0 or not path.is_file():
             raise TtsError(f"espeak-ng failed: {result.stderr.decode(errors='replace').strip()}")
-
-    def _pyttsx3(self, text: str, path: Path) -> str | None:
-        with _LIBRARY_LOCK:
-            try:
-                import pyttsx3  # imported here: it loads libespeak-ng at import
-
-                if self._engine is None:
-                    self._engine = pyttsx3.init("espeak")
-                engine = self._engine
-                engine.setProperty("rate", self.rate)
-                if self.voice:
-                    engine.setProperty("voice", self.voice)
-                engine.save_to_file(text, str(path))
-                engine.runAndWait()
-            except Exception as error:  # a missing libespeak-ng shows up as OSError/RuntimeError
-                self._engine = None
-                return f"pyttsx3: {type(error).__name__}: {error}"
-        if not path.is_file() or path.stat().st_size <= 44:
-            return "pyttsx3 wrote no audio"
-        return None
-
-
-_LIBRARY_LOCK = threading.Lock()
-"""libespeak-ng is one engine per process: one sentence at a time across every speaker."""
 
 
 def build_engines(settings: ReachySettings) -> list[TtsEngine]:

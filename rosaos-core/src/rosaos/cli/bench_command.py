@@ -146,7 +146,7 @@ def _run_dir() -> Path:
 def _stdout_to(path: Path) -> Iterator[None]:
     """Send whatever the run prints to stdout into ``path``: the table and the JSON own stdout.
 
-    The simulators run in this process, and some libraries print (pyttsx3: "Audio saved to ...").
+    The simulators run in this process, and some libraries print to stdout.
     Redirected at the file descriptor too, so threads and child programs are covered.
     """
     sys.stdout.flush()

@@ -24,7 +24,8 @@ except those whose driver starts in the background (``DriverSpec.background_star
 
 The run file ``<data_dir>/run/devices.json`` tells other commands (``rosaos devices list``,
 ``rosaos devices check``) which instances are being served, and where. It is rewritten when a
-status changes, not on every probe.
+status changes, not on every probe. It has a host's pid before that host's instances are
+reported healthy: whoever hears "healthy" and reads the file finds the process serving them.
 ``rosaos serve-device`` records its one instance in ``<data_dir>/run/serve-device/<name>.json``.
 """
 
@@ -167,6 +168,8 @@ class DeviceSupervisor:
         self._token_file = token_path(data_dir)
         self._owns_runtime_file = False
         self._save_later: asyncio.Task[None] | None = None
+        self._saved_pids: dict[str, int | None] = {}
+        """Each instance's host pid as the run file last written has it (see :meth:`_record_pids`)."""
 
     async def __aenter__(self) -> DeviceSupervisor:
         try:
@@ -461,6 +464,7 @@ class DeviceSupervisor:
 
         The budget is the start-up one: a host that has just said it serves is slow, not broken,
         when a busy machine delays its first answer."""
+        await self._record_pids(group)
         if all(hosted.status == "healthy" for hosted in group):  # answered while the others started
             await self._save()
             return
@@ -531,6 +535,7 @@ class DeviceSupervisor:
 
     async def _mark_healthy(self, group: list[_Hosted]) -> None:
         changed = [hosted for hosted in group if hosted.status != "healthy"]
+        await self._record_pids(changed)
         for hosted in changed:
             self._set(hosted, "healthy", error=None)
         if changed:
@@ -564,6 +569,24 @@ class DeviceSupervisor:
         await asyncio.gather(*(host.stop(self.stop_grace) for host in hosts.values()))
 
     # --- status and the run file -------------------------------------------------------------
+
+    async def _record_pids(self, group: list[_Hosted]) -> None:
+        """Write the run file now if it lacks one of these hosts' pids: before they are called healthy.
+
+        Otherwise a reader told "healthy" (the kernel's status listener, ``rosaos devices list``)
+        could find the instance in the file without its process, and a kernel killed between the
+        report and the write would leave a serving host that the file does not name (CI runs 21
+        and 24: tests read the file in that gap).
+        """
+        unrecorded = [
+            hosted
+            for hosted in group
+            if hosted.host is not None
+            and hosted.url is not None
+            and self._saved_pids.get(hosted.instance.name) != hosted.host.pid
+        ]
+        if unrecorded:
+            await self._save()
 
     def _set(
         self, hosted: _Hosted, status: DeviceStatus, *, error: str | None = None, **changes: Any
@@ -608,14 +631,16 @@ class DeviceSupervisor:
                 },
             )
             await asyncio.to_thread(write_atomic, self.runtime_file, runtime.model_dump_json(indent=2))
+            self._saved_pids = {name: entry.pid for name, entry in runtime.devices.items()}
 
 
 class _Arrivals:
     """A shared host's instances, made grantable one by one as their ready lines arrive.
 
     The first one to arrive gets the host's one real call (``get_state``); once that answered,
-    each later instance is healthy as soon as it says it serves: they share the process that
-    just answered, and a hundred more MCP sessions would only slow the start down.
+    each later instance is healthy as soon as it says it serves and the run file has the host's
+    pid: they share the process that just answered, and a hundred more MCP sessions would only
+    slow the start down. Ready lines that arrive while the file is written wait for the next write.
     """
 
     def __init__(self, supervisor: DeviceSupervisor, group: list[_Hosted]) -> None:
@@ -623,31 +648,42 @@ class _Arrivals:
         self._group = {hosted.instance.name: hosted for hosted in group}
         self.answered = asyncio.Event()
         self._asking: asyncio.Task[None] | None = None
+        self._arrived: list[_Hosted] = []
+        self._announcing: asyncio.Task[None] | None = None
 
     async def ready(self, host: HostProcess, name: str, url: str) -> None:
         hosted = self._group.get(name)
         if hosted is None:
             return
         hosted.host, hosted.port = host, urlsplit(url).port
-        status: DeviceStatus = "healthy" if self.answered.is_set() else hosted.status
-        error = None if self.answered.is_set() else hosted.error
-        self._supervisor._set(hosted, status, error=error, url=url)
-        if self.answered.is_set():
-            hosted.settled.set()
+        self._supervisor._set(hosted, hosted.status, error=hosted.error, url=url)
         if self._asking is None:
             self._asking = asyncio.create_task(self._ask(hosted), name=f"first answer of {name}")
-        self._supervisor._save_soon()
+        if self.answered.is_set():
+            self._arrived.append(hosted)
+            if self._announcing is None or self._announcing.done():
+                self._announcing = asyncio.create_task(self._announce(), name="healthy in the shared host")
+        else:
+            self._supervisor._save_soon()
+
+    async def _announce(self) -> None:
+        """Mark the instances that arrived since the last write healthy (the pid written first)."""
+        while self._arrived:
+            arrived, self._arrived = self._arrived, []
+            await self._supervisor._mark_healthy(arrived)
+            for hosted in arrived:
+                hosted.settled.set()
 
     async def _ask(self, hosted: _Hosted) -> None:
         if await self._supervisor._real_call(hosted, self._supervisor.start_timeout) is not None:
             return  # the whole batch gets its real call again once it has started
         self.answered.set()
-        for other in self._group.values():
-            if other.url is not None and other.host is hosted.host:
-                if other.status != "healthy":
-                    self._supervisor._set(other, "healthy", error=None)
-                other.settled.set()
-        await self._supervisor._save()
+        served = [
+            other for other in self._group.values() if other.url is not None and other.host is hosted.host
+        ]
+        await self._supervisor._mark_healthy(served)
+        for other in served:
+            other.settled.set()
 
     async def close(self, cancel: bool = False) -> None:
         """Wait for the first answer (bounded by the start-up budget), or cancel it (start failed)."""
@@ -655,7 +691,11 @@ class _Arrivals:
             return
         if cancel:
             self._asking.cancel()
+            if self._announcing is not None:
+                self._announcing.cancel()
         await asyncio.gather(self._asking, return_exceptions=True)
+        if self._announcing is not None:  # no ready line comes after the batch has started
+            await asyncio.gather(self._announcing, return_exceptions=True)
 
 
 def _names(group: list[_Hosted]) -> str:
