@@ -65,7 +65,7 @@ def test_notes_replace_by_kind_and_key_and_forget_matches_words(tmp_path: Path) 
     assert store.clear() == (0, 1)
 
 
-def test_notes_read_again_see_every_write_here_in_a_thread_or_by_another_store(tmp_path: Path) -> None:
+def test_notes_and_places_read_again_see_every_write_here_in_a_thread_or_elsewhere(tmp_path: Path) -> None:
     # The kernel keeps its last reading of the notes (it reads them on every event); a name given
     # a moment ago, here or by `rosaos memory` in another process, must still count at once.
     kernel = MemoryStore.open(tmp_path)
@@ -82,5 +82,10 @@ def test_notes_read_again_see_every_write_here_in_a_thread_or_by_another_store(t
     assert [note.key for note in kernel.notes()] == ["rex", "robbie", "reading light"]
     kernel.forget_notes("rex")
     assert kernel.aliases() == {"robbie": "the turtlebot"}
+    assert kernel.places() == []
+    MemoryStore.open(tmp_path).save_place(kitchen())
+    assert [place.name for place in kernel.places()] == ["the kitchen"]
+    kernel.rename_place("the kitchen", "the galley")
+    assert [place.name for place in kernel.places()] == ["the galley"]
     MemoryStore.open(tmp_path).clear()
-    assert kernel.notes() == [] and kernel.aliases() == {}
+    assert kernel.notes() == [] and kernel.aliases() == {} and kernel.places() == []
