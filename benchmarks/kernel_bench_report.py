@@ -56,6 +56,10 @@ def report(results: dict[str, Any]) -> None:
         table.add_row(
             "kernel loop handle() per event, p50 / p95 ms", f"{ms(handle['p50'])} / {ms(handle['p95'])}"
         )
+        if "kernel_cpu_ms_per_event" in t:
+            table.add_row(
+                "kernel process CPU per event (API to handled), ms", f"{t['kernel_cpu_ms_per_event']:.2f}"
+            )
         console.print(table)
 
     table = Table(title="Memory and start-up")

@@ -115,5 +115,34 @@ async def test_a_failing_effect_leaves_the_event_queued_and_says_so_on_the_updat
     await eventually(lambda: _error_published(updates, "lease table unavailable"))
 
 
+async def test_the_event_update_is_written_with_the_event_and_reaches_a_follower(
+    store: EventStore, updates: UpdateStream
+) -> None:
+    # One trip to the database per event: the update is committed in the append's transaction,
+    # then handed to the followers, who see it live, once, under the event's id.
+    intake = Intake(store, updates)
+    follower = updates.follow(after_id=await updates.last_id())
+    queued = await intake.submit(typed("turn on the lamp"))
+    update = await anext(follower)
+    await follower.aclose()
+    assert (update.kind, update.event_id, update.text) == (
+        "event",
+        queued.id,
+        "[User typed] turn on the lamp",
+    )
+    assert [u.id for u in await updates.recent() if u.event_id == queued.id] == [update.id]
+
+
+async def test_an_event_whose_update_cannot_be_written_is_still_queued(
+    store: EventStore, updates: UpdateStream
+) -> None:
+    # The update is written in a savepoint of its own: its failure never un-queues the event.
+    intake = Intake(store, updates)
+    await store.database.execute("DROP TABLE updates")
+    queued = await intake.submit(typed("hello"))
+    assert await store.get(queued.id) is not None
+    assert await store.pending_count() == 1
+
+
 async def _error_published(updates: UpdateStream, text: str) -> bool:
     return any(u.kind == "error" and text in u.text for u in await updates.recent())

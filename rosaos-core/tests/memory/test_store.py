@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import stat
+import threading
 import time
 from pathlib import Path
 
@@ -62,3 +63,29 @@ def test_notes_replace_by_kind_and_key_and_forget_matches_words(tmp_path: Path) 
     assert store.aliases() == {"rex": "the turtlebot"}
     assert [n.said for n in store.forget_notes("my name is sam")] == ["my name is Sam"]
     assert store.clear() == (0, 1)
+
+
+def test_notes_and_places_read_again_see_every_write_here_in_a_thread_or_elsewhere(tmp_path: Path) -> None:
+    # The kernel keeps its last reading of the notes (it reads them on every event); a name given
+    # a moment ago, here or by `rosaos memory` in another process, must still count at once.
+    kernel = MemoryStore.open(tmp_path)
+    assert kernel.aliases() == {}
+    kernel.save_note("alias", "rex", "the dog", "call the dog rex")
+    assert kernel.aliases() == {"rex": "the dog"}
+    MemoryStore.open(tmp_path).save_note("alias", "robbie", "the turtlebot", "call the turtlebot robbie")
+    assert kernel.aliases() == {"rex": "the dog", "robbie": "the turtlebot"}
+    writer = threading.Thread(
+        target=lambda: kernel.save_note("preference", "reading light", "40 percent", "x")
+    )
+    writer.start()
+    writer.join()
+    assert [note.key for note in kernel.notes()] == ["rex", "robbie", "reading light"]
+    kernel.forget_notes("rex")
+    assert kernel.aliases() == {"robbie": "the turtlebot"}
+    assert kernel.places() == []
+    MemoryStore.open(tmp_path).save_place(kitchen())
+    assert [place.name for place in kernel.places()] == ["the kitchen"]
+    kernel.rename_place("the kitchen", "the galley")
+    assert [place.name for place in kernel.places()] == ["the galley"]
+    MemoryStore.open(tmp_path).clear()
+    assert kernel.notes() == [] and kernel.aliases() == {} and kernel.places() == []

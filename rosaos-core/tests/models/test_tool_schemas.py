@@ -97,6 +97,29 @@ async def test_the_wrapped_model_is_sent_compact_tools() -> None:
     assert "plan" in full.parameters_json_schema["properties"]
 
 
+async def test_a_tool_whose_definition_changed_is_sent_compacted_anew() -> None:
+    # The compact forms are kept between requests; a definition that changed under the same name
+    # (a device added to an enum, a new description) must not be sent in its old form.
+    seen: list[ToolDefinition] = []
+
+    def respond(messages: list[ModelMessage], info: AgentInfo) -> ModelResponse:
+        seen.extend(info.function_tools)
+        return ModelResponse(parts=[TextPart("ok")])
+
+    def tool(description: str, devices: list[str]) -> ToolDefinition:
+        schema = {"type": "object", "properties": {"device": {"enum": devices}}}
+        return ToolDefinition(name="stop", description=description, parameters_json_schema=schema)
+
+    model = CompactToolsModel(FunctionModel(respond))
+    for definition in (tool("Stop.", ["dog"]), tool("Stop.", ["dog"]), tool("Stop now.", ["dog", "lamp"])):
+        await model.request([], None, ModelRequestParameters(function_tools=[definition]))
+    assert [(t.description, t.parameters_json_schema["properties"]["device"]["enum"]) for t in seen] == [
+        ("Stop.", ["dog"]),
+        ("Stop.", ["dog"]),
+        ("Stop now.", ["dog", "lamp"]),
+    ]
+
+
 async def test_a_hidden_tool_is_not_offered_and_the_others_are() -> None:
     # Issue 22: list_devices and list_places say what the prompt and recall already give an LLM.
     seen: list[str] = []

@@ -24,7 +24,7 @@ import asyncio
 import json
 import sqlite3
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -95,8 +95,15 @@ class EventStore:
         """Close the database. Everything appended is already committed."""
         await self.database.close()
 
-    async def append(self, event: NewEvent) -> Appended:
-        """Commit ``event`` and return its id; a known idempotency key returns the first id instead."""
+    async def append(
+        self, event: NewEvent, also: Callable[[sqlite3.Connection, int], None] | None = None
+    ) -> Appended:
+        """Commit ``event`` and return its id; a known idempotency key returns the first id instead.
+
+        ``also(connection, id)`` runs in the same transaction once a new event is inserted (not for
+        a duplicate): the intake writes the event's update there, in the same trip to the database
+        thread.
+        """
         payload = event.payload.model_dump_json()
         key = event.idempotency_key
 
@@ -117,6 +124,8 @@ class EventStore:
                 "RETURNING id",
                 (time.time(), event.kind, event.source, payload, key),
             ).fetchall()
+            if also is not None:
+                also(connection, inserted[0][0])
             return Appended(inserted[0][0], duplicate=False)
 
         appended = await self.database.run(insert)

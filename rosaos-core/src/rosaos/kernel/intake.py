@@ -6,7 +6,9 @@ pool reporting a process's end, orphan recovery at start-up, the notice watcher 
 
 1. **append** it to the event store (committed before anything else happens; a known idempotency
    key answers the first event instead, which is what the later steps then see);
-2. **publish** it on the updates stream, once (not again for a duplicate);
+2. **publish** it on the updates stream, once (not again for a duplicate): its ``event`` update is
+   written in the append's own transaction (one trip to the database thread) and handed to the
+   followers once committed;
 3. **side effects**: the effects registered for its kind, in order (:meth:`Intake.on`).
 
 Step 3 is the spot for whatever must happen when an event arrives rather than when the kernel
@@ -66,14 +68,15 @@ class Intake:
         committed, a failure to publish or in an effect is logged, so a caller never retries an
         event that is already queued.
         """
-        appended = await self._store.append(event)
+        update = self._updates.event_update(event)
+        appended = await self._store.append(event, also=update.write)
         queued = Queued(appended.id, event)
         if appended.duplicate:
             first = await self._first(appended.id, event)
             queued = Queued(appended.id, first, duplicate=True, conflict=appended.conflict)
         else:
             try:
-                await self._updates.publish_event(appended.id, event)
+                update.offer()
             except Exception:
                 log.exception("could not publish the update for event %s", appended.id)
         for effect in self._effects.get(event.kind, ()):

@@ -14,6 +14,7 @@ from __future__ import annotations
 import asyncio
 import contextlib
 import json
+import logging
 import sqlite3
 import time
 from collections.abc import AsyncIterator, Sequence
@@ -48,6 +49,7 @@ CREATE TABLE IF NOT EXISTS updates (
 );
 """
 _COLUMNS = "id, time, kind, text, data, event_id"
+log = logging.getLogger(__name__)
 
 
 class Update(BaseModel):
@@ -175,25 +177,12 @@ class UpdateStream:
             (event_id, [(kind, text, json.dumps(data or {}, default=str)) for kind, text, data in items])
             for event_id, items in groups
         ]
+        ids = await self._database.run(lambda connection: _insert(connection, encoded, at, mark_handled))
+        self._offer(ids, encoded, at)
+        return ids
 
-        def commit(connection: sqlite3.Connection) -> list[int]:
-            ids = []
-            for event_id, rows in encoded:
-                for kind, text, data in rows:
-                    ids.append(
-                        int(
-                            connection.execute(
-                                "INSERT INTO updates (time, kind, text, data, event_id) "
-                                "VALUES (?, ?, ?, ?, ?) RETURNING id",
-                                (at, kind, text, data, event_id),
-                            ).fetchall()[0][0]
-                        )
-                    )
-                if mark_handled and event_id is not None:
-                    mark_handled_in(connection, event_id)
-            return ids
-
-        ids = await self._database.run(commit)
+    def _offer(self, ids: list[int], encoded: _Encoded, at: float) -> None:
+        """Hand committed updates to every follower, without waiting for any."""
         flat = [(event_id, row) for event_id, rows in encoded for row in rows]
         for update_id, (event_id, (kind, text, data)) in zip(ids, flat, strict=True):
             update = Update(
@@ -206,12 +195,19 @@ class UpdateStream:
             )
             for follower in list(self._followers):
                 follower.offer(update)
-        return ids
+
+    def event_update(self, event: NewEvent) -> EventUpdate:
+        """The ``event`` update of ``event``, to write in the transaction that appends it.
+
+        The intake passes :meth:`EventUpdate.write` to :meth:`EventStore.append`, so a ``POST /chat``
+        makes one trip to the database thread, not two (issue 26's enqueue rate), and the update is
+        committed with the event it describes.
+        """
+        return EventUpdate(self, event)
 
     async def publish_event(self, event_id: int, event: NewEvent) -> int:
-        """Publish the ``event`` update for an event just appended to the store."""
-        data = {"kind": event.kind, "source": event.source, "payload": event.payload.model_dump(mode="json")}
-        return await self.publish("event", describe_event(event), data, event_id=event_id)
+        """Publish the ``event`` update for an event already appended to the store."""
+        return await self.publish("event", describe_event(event), _event_data(event), event_id=event_id)
 
     async def after(self, update_id: int, limit: int = 100) -> list[Update]:
         """Up to ``limit`` updates with an id above ``update_id``, oldest first."""
@@ -271,6 +267,69 @@ class UpdateStream:
     def follower_count(self) -> int:
         """How many clients follow the stream now."""
         return len(self._followers)
+
+
+class EventUpdate:
+    """An ``event`` update written with its event's append (:meth:`UpdateStream.event_update`)."""
+
+    def __init__(self, stream: UpdateStream, event: NewEvent) -> None:
+        self._stream = stream
+        self._at = time.time()
+        self._row: tuple[UpdateKind, str, str] = (
+            "event",
+            describe_event(event),
+            json.dumps(_event_data(event), default=str),
+        )
+        self._written: tuple[int, int] | None = None
+
+    def write(self, connection: sqlite3.Connection, event_id: int) -> None:
+        """On the database thread, inside the append's transaction: insert the update.
+
+        In a savepoint of its own: an update that cannot be written is logged and left out, and the
+        event is still queued, as when publishing failed after the append.
+        """
+        connection.execute("SAVEPOINT event_update")
+        try:
+            [update_id] = _insert(connection, [(event_id, [self._row])], self._at, mark_handled=False)
+        except sqlite3.Error:
+            connection.execute("ROLLBACK TO event_update")
+            log.exception("could not write the update for event %s", event_id)
+            return
+        finally:
+            connection.execute("RELEASE event_update")
+        self._written = (event_id, update_id)
+
+    def offer(self) -> None:
+        """Once the append is committed: hand the update to the followers (if it was written)."""
+        if self._written is not None:
+            event_id, update_id = self._written
+            self._stream._offer([update_id], [(event_id, [self._row])], self._at)
+
+
+_Encoded = Sequence[tuple[int | None, Sequence[tuple[str, str, str]]]]
+"""Updates ready for the table: per event id, (kind, text, JSON data) rows."""
+
+
+def _insert(connection: sqlite3.Connection, encoded: _Encoded, at: float, mark_handled: bool) -> list[int]:
+    """Insert ``encoded`` (and mark each event handled if asked); the new ids, in order."""
+    ids = []
+    for event_id, rows in encoded:
+        for kind, text, data in rows:
+            ids.append(
+                int(
+                    connection.execute(
+                        "INSERT INTO updates (time, kind, text, data, event_id) VALUES (?, ?, ?, ?, ?) RETURNING id",
+                        (at, kind, text, data, event_id),
+                    ).fetchall()[0][0]
+                )
+            )
+        if mark_handled and event_id is not None:
+            mark_handled_in(connection, event_id)
+    return ids
+
+
+def _event_data(event: NewEvent) -> dict[str, Any]:
+    return {"kind": event.kind, "source": event.source, "payload": event.payload.model_dump(mode="json")}
 
 
 def _drain(queue: asyncio.Queue[Update]) -> None:

@@ -21,12 +21,14 @@ import re
 import sqlite3
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, Any, Literal, TypeVar
 
 from pydantic import BaseModel, ConfigDict, Field
+
+T = TypeVar("T")
 
 MEMORY_FILE = "memory.db"
 NAME_MAX = 80
@@ -125,6 +127,9 @@ class MemoryStore:
     def __init__(self, path: Path) -> None:
         self.path = path
         self._local = threading.local()
+        self._writes = 0
+        """Bumped by this store's own writes of notes and places, which its connection's
+        ``data_version`` does not see (see :meth:`_kept`)."""
         path.parent.mkdir(mode=0o700, parents=True, exist_ok=True)
         fresh = not path.exists()
         with self.connect() as db:
@@ -163,6 +168,7 @@ class MemoryStore:
                 (place.key, place.name, place.device, place.frame, place.anchor, place.x, place.y, place.yaw,
                  place.saved_at),
             )  # fmt: skip
+        self._writes += 1
         return place
 
     def place(self, name: str) -> Place | None:
@@ -172,9 +178,8 @@ class MemoryStore:
         return _place(row) if row is not None else None
 
     def places(self) -> list[Place]:
-        """Every place, by name."""
-        with self.connect() as db:
-            return [_place(row) for row in db.execute("SELECT * FROM places ORDER BY key")]
+        """Every place, by name (kept until a write: :meth:`_kept`)."""
+        return self._kept("places", "SELECT * FROM places ORDER BY key", (), _place)
 
     def rename_place(self, name: str, new_name: str) -> Place:
         """Rename a place; refuses a name already taken."""
@@ -199,6 +204,7 @@ class MemoryStore:
         place = self.require_place(name)
         with self.connect() as db:
             db.execute("DELETE FROM places WHERE key = ?", (place.key,))
+        self._writes += 1
         return place
 
     def require_place(self, name: str) -> Place:
@@ -225,15 +231,37 @@ class MemoryStore:
                 "INSERT OR REPLACE INTO notes VALUES (?, ?, ?, ?, ?)",
                 (note.kind, note.key, note.value, note.said, note.saved_at),
             )
+        self._writes += 1
         return note
 
     def notes(self, kind: NoteKind | None = None) -> list[Note]:
-        """Every note (or every one of ``kind``), oldest first."""
-        query, args = "SELECT * FROM notes ORDER BY saved_at", ()
-        if kind is not None:
-            query, args = "SELECT * FROM notes WHERE kind = ? ORDER BY saved_at", (kind,)  # type: ignore[assignment]
+        """Every note (or every one of ``kind``), oldest first (kept until a write: :meth:`_kept`)."""
+        if kind is None:
+            return self._kept("notes", "SELECT * FROM notes ORDER BY saved_at", (), _note)
+        return self._kept(
+            f"notes {kind}", "SELECT * FROM notes WHERE kind = ? ORDER BY saved_at", (kind,), _note
+        )
+
+    def _kept(
+        self, key: str, query: str, args: tuple[str, ...], build: Callable[[sqlite3.Row], T]
+    ) -> list[T]:
+        """The rows of ``query``, built, from this thread's last reading if nothing was written since.
+
+        The kernel reads the notes and places on every event (aliases at the stop reading and in
+        the engine, the summary in its instructions), and they change only when someone says to
+        remember or forget. A write by this store bumps its counter; one by another connection
+        (another thread, ``rosaos memory`` in another process) changes SQLite's
+        ``PRAGMA data_version`` on this one. Either way the next read goes to the file.
+        """
         with self.connect() as db:
-            return [Note(**dict(row)) for row in db.execute(query, args)]
+            version = (self._writes, db.execute("PRAGMA data_version").fetchone()[0])
+            kept: dict[str, tuple[tuple[int, int], list[Any]]] = self._local.__dict__.setdefault("kept", {})
+            last = kept.get(key)
+            if last is not None and last[0] == version:
+                return list(last[1])
+            rows = [build(row) for row in db.execute(query, args)]
+        kept[key] = (version, rows)
+        return list(rows)
 
     def forget_notes(self, matching: str) -> list[Note]:
         """Delete the notes whose key, value or sentence contains every word of ``matching``."""
@@ -246,6 +274,7 @@ class MemoryStore:
         with self.connect() as db:
             for note in gone:
                 db.execute("DELETE FROM notes WHERE kind = ? AND key = ?", (note.kind, note.key))
+        self._writes += 1
         return gone
 
     def aliases(self) -> dict[str, str]:
@@ -262,7 +291,12 @@ class MemoryStore:
             places = db.execute("DELETE FROM places").rowcount
             notes = db.execute("DELETE FROM notes").rowcount
             db.execute("DELETE FROM sightings")
+        self._writes += 1
         return places, notes
+
+
+def _note(row: sqlite3.Row) -> Note:
+    return Note(**dict(row))
 
 
 def _place(row: sqlite3.Row) -> Place:

@@ -188,6 +188,21 @@ class CompactToolsModel(WrapperModel):
     def __init__(self, wrapped: Model | str, hidden: frozenset[str] = frozenset()) -> None:
         super().__init__(wrapped)
         self.hidden = hidden
+        self._compacted: dict[str, tuple[ToolDefinition, ToolDefinition]] = {}
+        """Per tool name, the last definition compacted and its compact form: the tools rarely
+        change between requests, and compacting every schema again cost more than the rest of a
+        no-op request (issue 26's enqueue rate). An equal definition (compared in C) reuses it."""
+
+    def _compact(self, parameters: ModelRequestParameters) -> ModelRequestParameters:
+        tools = []
+        for tool in parameters.function_tools:
+            if tool.name in self.hidden:
+                continue
+            kept = self._compacted.get(tool.name)
+            if kept is None or kept[0] != tool:
+                kept = self._compacted[tool.name] = (tool, compact_tool(tool))
+            tools.append(kept[1])
+        return dataclasses.replace(parameters, function_tools=tools)
 
     async def request(
         self,
@@ -196,9 +211,7 @@ class CompactToolsModel(WrapperModel):
         model_request_parameters: ModelRequestParameters,
     ) -> ModelResponse:
         messages = without_engine_only_arguments(messages, engine_only_arguments(model_request_parameters))
-        return await self.wrapped.request(
-            messages, model_settings, compact_parameters(model_request_parameters, self.hidden)
-        )
+        return await self.wrapped.request(messages, model_settings, self._compact(model_request_parameters))
 
     @asynccontextmanager
     async def request_stream(
@@ -209,6 +222,6 @@ class CompactToolsModel(WrapperModel):
         run_context: RunContext[Any] | None = None,
     ) -> AsyncIterator[StreamedResponse]:
         messages = without_engine_only_arguments(messages, engine_only_arguments(model_request_parameters))
-        parameters = compact_parameters(model_request_parameters, self.hidden)
+        parameters = self._compact(model_request_parameters)
         async with self.wrapped.request_stream(messages, model_settings, parameters, run_context) as stream:
             yield stream
