@@ -144,7 +144,7 @@ def test_places_and_aliases_survive_a_kill_and_a_changed_frame_is_refused(rosaos
             here = state(api, "turtlebot")
             widest = max(widest, abs(here.get("y") or 0.0))
             done = [u["text"] for u in updates(api) if u["kind"] == "kernel_reply" and u["event_id"] > going]
-            if any("I'm at the kitchen" in text or "couldn't" in text for text in done):
+            if any("I'm at the kitchen" in text or "Sorry" in text for text in done):
                 break
             time.sleep(0.3)
         assert any("I'm at the kitchen" in text for text in done), done

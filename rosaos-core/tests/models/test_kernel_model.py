@@ -126,7 +126,7 @@ async def test_a_callback_output_is_the_reply(kernel: Kernel) -> None:
 async def test_a_failed_callback_uses_the_plan_failure_text(kernel: Kernel, model: LocalIntentModel) -> None:
     [process] = model.match("Turn on the kitchen light").processes
     event = callback(4, status="error", task=process.summary, plan=process.plan, error="the bulb is offline")
-    assert await kernel.say(event) == "Sorry, I couldn't turn on the kitchen light: the bulb is offline"
+    assert await kernel.say(event) == 'Sorry, "turn on the kitchen light" failed: the bulb is offline'
 
 
 async def test_a_failed_callback_without_a_plan_still_says_what_failed(kernel: Kernel) -> None:

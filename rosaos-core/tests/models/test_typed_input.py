@@ -123,7 +123,7 @@ def test_a_callback_is_answered_from_its_plan_not_from_its_task_words(model: Loc
     event = callback(4, status="error", task="(any words)", plan=process.plan, error="the bulb is offline")
     [reply] = model.respond([event_request(event, "[Process callback] process=4 status=ok")], TOOLS)
     assert isinstance(reply, TextPart)
-    assert reply.content == "Sorry, I couldn't turn on the kitchen light: the bulb is offline"
+    assert reply.content == 'Sorry, "turn on the kitchen light" failed: the bulb is offline'
 
 
 def test_a_fired_timer_is_read_from_its_fields(model: LocalIntentModel) -> None:

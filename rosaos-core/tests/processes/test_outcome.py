@@ -91,6 +91,13 @@ def test_an_only_call_that_failed_is_an_error_with_the_devices_words() -> None:
     assert outcome == ("error", "kitchen_light: turn_on failed: refused")
 
 
+def test_a_failed_call_is_told_in_the_drivers_words_without_fastmcps_head() -> None:
+    error = "Error calling tool 'next_track': nothing is loaded, so there is no next track"
+    calls = ToolCallLog([ToolCall("spotify", "next_track", False, error, 0.01, True)])
+    outcome = judge("ok", None, task="Next song.", devices=[LIGHT], calls=calls, model_ran=False)
+    assert outcome == ("error", "spotify: next_track failed: nothing is loaded, so there is no next track")
+
+
 def test_a_failure_made_good_by_a_retry_of_the_same_tool_ends_ok() -> None:
     calls = log(("kitchen_light", "turn_on", False, True), ("kitchen_light", "turn_on", True, True))
     outcome = judge(

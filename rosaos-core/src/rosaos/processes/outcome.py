@@ -24,6 +24,7 @@ from typing import NamedTuple
 
 from rosaos.processes.jobs import GrantedDevice, ProcessStatus
 from rosaos.processes.tool_calls import ToolCallLog
+from rosaos.receipts import error_text
 
 CHANGE_VERBS = frozenset(
     {
@@ -94,7 +95,7 @@ def judge(
         return Outcome(status, error)
     failed = calls.unresolved_failure()
     if failed is not None:  # the model may have written a polite sentence about it
-        return Outcome("error", f"{failed.device}: {failed.tool} failed: {failed.error}")
+        return Outcome("error", f"{failed.device}: {failed.tool} failed: {error_text(failed.error)}")
     if not model_ran:
         return Outcome(status, error)
     asked = {device.name for device in devices if device.tools is None}

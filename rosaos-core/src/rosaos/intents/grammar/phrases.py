@@ -14,7 +14,8 @@ PHRASES: dict[str, dict[str, str]] = {
         "ack": "On it: {clause}.",
         "ack_question": "Checking the {device}.",
         "done": "Done: {clause}.",
-        "failure": "Sorry, I couldn't {clause}: {error}",
+        # Quoted, not "I couldn't {clause}": a clause is often no verb ("next song", "a bit louder").
+        "failure": 'Sorry, "{clause}" failed: {error}',
         "failure_question": "Sorry, I couldn't check the {device}: {error}",
         "yes": "Yes, the {device} is {state}.",
         "no": "No, the {device} is {state}.",
