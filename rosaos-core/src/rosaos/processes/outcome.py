@@ -95,7 +95,7 @@ def judge(
         return Outcome(status, error)
     failed = calls.unresolved_failure()
     if failed is not None:  # the model may have written a polite sentence about it
-        return Outcome("error", f"{failed.device}: {failed.tool} failed: {error_text(failed.error)}")
+        return Outcome("error", f"{failed.device}: {failed.tool} failed: {error_text(failed.error or '')}")
     if not model_ran:
         return Outcome(status, error)
     asked = {device.name for device in devices if device.tools is None}
