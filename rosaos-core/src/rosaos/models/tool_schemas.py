@@ -126,16 +126,6 @@ def compact_tool(tool: ToolDefinition) -> ToolDefinition:
     )
 
 
-def compact_parameters(
-    parameters: ModelRequestParameters, hidden: frozenset[str] = frozenset()
-) -> ModelRequestParameters:
-    """The request's parameters with every function tool compacted, and those in ``hidden`` left out."""
-    return dataclasses.replace(
-        parameters,
-        function_tools=[compact_tool(t) for t in parameters.function_tools if t.name not in hidden],
-    )
-
-
 def engine_only_arguments(parameters: ModelRequestParameters) -> dict[str, frozenset[str]]:
     """Per tool, the names of its :data:`ENGINE_ONLY` parameters (from the full schemas)."""
     found: dict[str, frozenset[str]] = {}
